@@ -1,0 +1,10 @@
+//! gpurt: a Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes.
+//!
+//! Data flows one way: `scene` (readers, plain data) -> `bvh` -> `pack` (flat `#[repr(C)]`
+//! buffers) -> `gpu` (WGSL compute) or `cpu` (the reference) -> `film` (images, diffs).
+
+pub mod error;
+pub mod info;
+pub mod scene;
+
+pub use error::{Error, Result};

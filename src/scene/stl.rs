@@ -1,0 +1,166 @@
+//! STL reader, binary and ASCII, detected by content.
+//!
+//! Written here rather than with `stl_io` because errors must point at a line and column
+//! (ASCII) or a byte offset (binary), and because a binary file may begin with the word
+//! `solid`: the size must match `84 + 50 * count` for a file to be binary. Non-zero facet
+//! normals are kept as the triangle's shading normal.
+
+use glam::Vec3;
+
+use super::lex::Lexer;
+use super::{MaterialId, Triangle};
+use crate::error::{Error, Result};
+
+pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
+    if binary_size_matches(bytes) || !starts_with_solid(bytes) {
+        parse_binary(bytes, name)
+    } else {
+        parse_ascii(bytes, name)
+    }
+}
+
+fn binary_size_matches(b: &[u8]) -> bool {
+    b.len() >= 84
+        && 84 + 50 * u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64 == b.len() as u64
+}
+
+fn starts_with_solid(b: &[u8]) -> bool {
+    let start = b
+        .iter()
+        .position(|c| !c.is_ascii_whitespace())
+        .unwrap_or(b.len());
+    b[start..].starts_with(b"solid")
+}
+
+fn facet_normal(n: Vec3) -> Option<[Vec3; 3]> {
+    (n.is_finite() && n.length_squared() > 0.0).then(|| [n.normalize(); 3])
+}
+
+fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
+    let err = |offset: usize, msg: String| Error::Binary {
+        file: name.to_string(),
+        offset: offset as u64,
+        msg,
+    };
+    if b.len() < 84 {
+        return Err(err(
+            b.len(),
+            format!(
+                "expected an 84-byte binary STL header, found {} bytes (and no ASCII 'solid')",
+                b.len()
+            ),
+        ));
+    }
+    let count = u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64;
+    let need = 84 + 50 * count;
+    if need != b.len() as u64 {
+        return Err(err(
+            80,
+            format!(
+                "header says {count} triangles ({need} bytes), found a file of {} bytes",
+                b.len()
+            ),
+        ));
+    }
+    let f = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
+    let v3 = |o: usize| Vec3::new(f(o), f(o + 4), f(o + 8));
+    let mut tris = Vec::with_capacity(count as usize);
+    for i in 0..count as usize {
+        let o = 84 + 50 * i;
+        let v = [v3(o + 12), v3(o + 24), v3(o + 36)];
+        if !v.iter().all(|p| p.is_finite()) {
+            return Err(err(
+                o + 12,
+                format!("triangle {} has a non-finite vertex", i + 1),
+            ));
+        }
+        tris.push(Triangle {
+            v,
+            n: facet_normal(v3(o)),
+            material: MaterialId(0),
+        });
+    }
+    Ok(tris)
+}
+
+fn parse_ascii(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
+    let mut lx = Lexer::new(b, name);
+    let mut tris = Vec::new();
+    let expect = |lx: &mut Lexer, word: &[u8]| -> Result<()> {
+        let t = lx.expect_token(&format!("'{}'", String::from_utf8_lossy(word)))?;
+        if t.text == word {
+            Ok(())
+        } else {
+            Err(lx.error_at(
+                &t,
+                format!(
+                    "expected '{}', found {}",
+                    String::from_utf8_lossy(word),
+                    t.show()
+                ),
+            ))
+        }
+    };
+    let skip_rest_of_line = |lx: &mut Lexer, line: u32| {
+        while lx.peek().is_some_and(|t| t.line == line) {
+            lx.next_token();
+        }
+    };
+    while let Some(t) = lx.next_token() {
+        if t.text != b"solid" {
+            return Err(lx.error_at(&t, format!("expected 'solid', found {}", t.show())));
+        }
+        skip_rest_of_line(&mut lx, t.line); // the solid's name
+        loop {
+            let t = lx.expect_token("'facet' or 'endsolid'")?;
+            match t.text {
+                b"endsolid" => {
+                    skip_rest_of_line(&mut lx, t.line);
+                    break;
+                }
+                b"facet" => {
+                    expect(&mut lx, b"normal")?;
+                    let n = lx.vec3("facet normal")?;
+                    expect(&mut lx, b"outer")?;
+                    expect(&mut lx, b"loop")?;
+                    let mut v = [Vec3::ZERO; 3];
+                    for p in &mut v {
+                        expect(&mut lx, b"vertex")?;
+                        *p = lx.vec3("vertex coordinate")?;
+                    }
+                    expect(&mut lx, b"endloop")?;
+                    expect(&mut lx, b"endfacet")?;
+                    tris.push(Triangle {
+                        v,
+                        n: facet_normal(n),
+                        material: MaterialId(0),
+                    });
+                }
+                _ => {
+                    return Err(lx.error_at(
+                        &t,
+                        format!("expected 'facet' or 'endsolid', found {}", t.show()),
+                    ));
+                }
+            }
+        }
+    }
+    Ok(tris)
+}
+
+/// Encodes triangles as binary STL (used by tests and to write example meshes).
+pub fn write_binary(tris: &[Triangle], header: &[u8; 80]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(84 + 50 * tris.len());
+    out.extend_from_slice(header);
+    out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
+    for t in tris {
+        let n = t.n.map(|n| n[0]).unwrap_or(Vec3::ZERO);
+        for v in [n, t.v[0], t.v[1], t.v[2]] {
+            for c in v.to_array() {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        out.extend_from_slice(&[0, 0]);
+    }
+    out
+}
