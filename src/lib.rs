@@ -3,8 +3,14 @@
 //! Data flows one way: `scene` (readers, plain data) -> `bvh` -> `pack` (flat `#[repr(C)]`
 //! buffers) -> `gpu` (WGSL compute) or `cpu` (the reference) -> `film` (images, diffs).
 
+pub mod bvh;
+pub mod cpu;
 pub mod error;
+pub mod film;
+pub mod gpu_types;
 pub mod info;
+pub mod pack;
+pub mod render;
 pub mod scene;
 
 pub use error::{Error, Result};

@@ -1,19 +1,34 @@
 //! The `gpurt` command line: argument parsing, calling the library, printing errors.
+//! Exit codes: 0 success, 1 `diff` over its thresholds, 2 bad input or failure,
+//! 130 interrupted.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::{Duration, Instant};
 
-use clap::{Parser, Subcommand};
+use clap::{Parser, Subcommand, ValueEnum};
+use glam::Vec3;
+use gpurt::film::{self, Film, Thresholds};
+use gpurt::gpu_types::{self as gt, MAX_DEPTH};
+use gpurt::pack::{self, RenderOptions};
+use gpurt::render::{self, Prepared};
+use gpurt::{Error, cpu};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Parser)]
 #[command(
     name = "gpurt",
     version,
-    about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes"
+    about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes",
+    args_conflicts_with_subcommands = true
 )]
 struct Cli {
     #[command(subcommand)]
-    command: Command,
+    command: Option<Command>,
+    #[command(flatten)]
+    render: RenderArgs,
 }
 
 #[derive(Subcommand)]
@@ -25,12 +40,115 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Compare two images: max/mean difference, PSNR, pixels over 2/255, FLIP mean.
+    /// Exits 1 when a given threshold is exceeded, 2 on bad input.
+    Diff {
+        a: PathBuf,
+        b: PathBuf,
+        /// Write a heat map (A | B | magnified difference) here.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Largest acceptable FLIP mean.
+        #[arg(long)]
+        max_flip: Option<f64>,
+        /// Largest acceptable fraction of pixels differing by more than 2/255.
+        #[arg(long)]
+        max_bad: Option<f64>,
+    },
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Backend {
+    Cpu,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Aov {
+    Color,
+    Normal,
+    Depth,
+    Cost,
+}
+
+impl Aov {
+    fn code(self) -> u32 {
+        match self {
+            Aov::Color => gt::AOV_COLOR,
+            Aov::Normal => gt::AOV_NORMAL,
+            Aov::Depth => gt::AOV_DEPTH,
+            Aov::Cost => gt::AOV_COST,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl or .obj, optionally .gz.
+    scene: Option<PathBuf>,
+    /// Output image; the format follows the extension (png, ppm, bmp, exr).
+    /// Default: the scene's name with .png, in the current directory.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Image width (overrides the scene's resolution; the vertical angle stays).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    width: Option<u32>,
+    /// Image height.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    height: Option<u32>,
+    /// Maximum ray depth, the eye ray counting as 1.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    depth: u32,
+    /// Samples per pixel (stratified and jittered).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    spp: u32,
+    /// Ambient light: one grey level or r,g,b (default: the scene's `am`, else 0.1).
+    #[arg(long, value_parser = parse_colour)]
+    ambient: Option<Vec3>,
+    /// Seed of the sample hash.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Which renderer traces the rays.
+    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    backend: Backend,
+    /// Debug output instead of shaded colour.
+    #[arg(long, value_enum, default_value_t = Aov::Color)]
+    aov: Aov,
+    /// Print timings, rays traced, Mrays/s and peak memory.
+    #[arg(long)]
+    stats: bool,
+}
+
+fn parse_colour(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [g] if g.is_finite() && g >= 0.0 => Ok(Vec3::splat(g)),
+        [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
+        _ => Err("expected one non-negative number or three separated by commas".into()),
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match run(cli) {
+    let result = match cli.command {
+        Some(Command::Info { scene, json }) => info(&scene, json),
+        Some(Command::Diff {
+            a,
+            b,
+            output,
+            max_flip,
+            max_bad,
+        }) => diff(&a, &b, output.as_deref(), max_flip, max_bad),
+        None => render_command(cli.render),
+    };
+    match result {
         Ok(code) => code,
+        Err(Error::Interrupted) => {
+            eprintln!("gpurt: interrupted; no image written");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("gpurt: {e}");
             ExitCode::from(2)
@@ -38,16 +156,214 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> gpurt::Result<ExitCode> {
-    match cli.command {
-        Command::Info { scene, json } => {
-            let s = gpurt::scene::load(&scene)?;
-            if json {
-                println!("{}", gpurt::info::to_json(&s));
-            } else {
-                print!("{}", gpurt::info::to_text(&s));
-            }
-            Ok(ExitCode::SUCCESS)
+fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
+    let s = gpurt::scene::load(path)?;
+    if json {
+        println!("{}", gpurt::info::to_json(&s));
+    } else {
+        print!("{}", gpurt::info::to_text(&s));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn diff(
+    a: &Path,
+    b: &Path,
+    output: Option<&Path>,
+    max_flip: Option<f64>,
+    max_bad: Option<f64>,
+) -> gpurt::Result<ExitCode> {
+    let ia = film::load_rgb8(a)?;
+    let ib = film::load_rgb8(b)?;
+    let stats = film::diff(&ia, &ib, Thresholds::GPU_VS_CPU.tolerance_255)?;
+    println!("{stats}");
+    if let Some(out) = output {
+        film::save_rgb8(&film::heat_map(&ia, &ib)?, out)?;
+        println!("heat map written to {}", out.display());
+    }
+    let mut failed = false;
+    if let Some(m) = max_flip.filter(|&m| stats.flip_mean > m) {
+        println!("FLIP mean {:.4} exceeds {m}", stats.flip_mean);
+        failed = true;
+    }
+    if let Some(m) = max_bad.filter(|&m| stats.frac_over > m) {
+        println!(
+            "fraction of pixels over 2/255 {:.5} exceeds {m}",
+            stats.frac_over
+        );
+        failed = true;
+    }
+    Ok(if failed {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+/// `scene.nff.gz` -> `scene.png` (in the current directory).
+fn default_output(scene: &Path) -> PathBuf {
+    let name = scene
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let name = name.strip_suffix(".gz").unwrap_or(&name);
+    let stem = Path::new(name)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    PathBuf::from(format!("{stem}.png"))
+}
+
+/// A progress bar that appears only once a render has run for a second, and only on a
+/// terminal (indicatif draws nothing to a non-terminal stderr).
+struct Progress {
+    bar: ProgressBar,
+    start: Instant,
+    shown: AtomicBool,
+}
+
+impl Progress {
+    fn new(total: u64) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent}% ETA {eta}")
+                .expect("valid template"),
+        );
+        Progress {
+            bar,
+            start: Instant::now(),
+            shown: AtomicBool::new(false),
         }
+    }
+    fn advance(&self, n: u64) {
+        self.bar.inc(n);
+        if self.start.elapsed() > Duration::from_secs(1)
+            && !self.shown.swap(true, Ordering::Relaxed)
+        {
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
+    }
+    fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
+    let Some(scene_path) = args.scene.as_deref() else {
+        eprintln!("gpurt: no scene given; try `gpurt --help`");
+        return Ok(ExitCode::from(2));
+    };
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(scene_path));
+    check_extension(&output)?;
+    let start = Instant::now();
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // Ctrl-C stops the render; nothing is written. A second Ctrl-C is not needed.
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
+    let Prepared {
+        scene,
+        buffers,
+        parse_time,
+        build_time,
+    } = render::prepare(scene_path)?;
+    for w in &scene.warnings {
+        eprintln!("gpurt: warning: {w}");
+    }
+    let mut opts = RenderOptions::for_scene(&scene);
+    opts.width = args.width.unwrap_or(opts.width);
+    opts.height = args.height.unwrap_or(opts.height);
+    opts.spp = args.spp;
+    opts.max_depth = args.depth;
+    opts.ambient = args.ambient;
+    opts.aov = args.aov.code();
+    opts.seed = args.seed;
+    let globals = pack::globals(&scene, &buffers, &opts);
+
+    let progress = Progress::new(u64::from(opts.width) * u64::from(opts.height));
+    let pixels_done = AtomicU64::new(0);
+    let render_start = Instant::now();
+    let result = match args.backend {
+        Backend::Cpu => cpu::render(
+            &buffers,
+            &globals,
+            &|n| {
+                pixels_done.fetch_add(n, Ordering::Relaxed);
+                progress.advance(n);
+            },
+            &cancel,
+        ),
+    };
+    progress.finish();
+    let (film, counts) = result?;
+    let render_time = render_start.elapsed();
+    let out_film = if is_float_format(&output) {
+        film
+    } else {
+        render::display_film(&film, opts.aov)
+    };
+    save(&out_film, &output)?;
+    if args.stats {
+        let rays = counts.total();
+        let mrays = rays as f64 / render_time.as_secs_f64() / 1e6;
+        eprintln!("backend     cpu ({} threads)", rayon::current_num_threads());
+        eprintln!(
+            "image       {}x{}, {} spp, depth {}",
+            opts.width, opts.height, opts.spp, opts.max_depth
+        );
+        eprintln!(
+            "scene       {} prims in BVH ({} nodes, depth {}), {} planes, {} lights",
+            buffers.prims.len(),
+            buffers.nodes.len(),
+            buffers.bvh_depth,
+            buffers.planes.len(),
+            buffers.lights.len()
+        );
+        eprintln!("parse       {:.3} s", parse_time.as_secs_f64());
+        eprintln!(
+            "build       {:.3} s (BVH + packing)",
+            build_time.as_secs_f64()
+        );
+        eprintln!("render      {:.3} s", render_time.as_secs_f64());
+        eprintln!("total       {:.3} s", start.elapsed().as_secs_f64());
+        eprintln!(
+            "rays        {} ({} eye, {} shadow, {} reflected, {} refracted)",
+            rays, counts.eye, counts.shadow, counts.reflected, counts.refracted
+        );
+        eprintln!("speed       {mrays:.2} Mrays/s");
+        if let Some(m) = render::peak_memory() {
+            eprintln!("peak memory {:.1} MiB", m as f64 / (1 << 20) as f64);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn is_float_format(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+fn save(film: &Film, path: &Path) -> gpurt::Result<()> {
+    film.save(path)
+}
+
+/// Checked before rendering, so a long render never ends in "unknown format".
+fn check_extension(path: &Path) -> gpurt::Result<()> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if film::SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+        Ok(())
+    } else {
+        Err(Error::Image(format!(
+            "{}: unknown image format '{ext}' (supported: {})",
+            path.display(),
+            film::SUPPORTED_EXTENSIONS.join(", ")
+        )))
     }
 }

@@ -1,0 +1,233 @@
+//! BVH construction and flattening.
+//!
+//! `obvhs` builds a binary BVH (PLOC, then reinsertion and SAH leaf collapsing) over the
+//! bounds of every bounded primitive; this module flattens it into the depth-first
+//! `GpuNode` layout both renderers traverse (first child next to its parent, second child
+//! at `offset`, a split axis for near-first ordering) and reports the primitive order, so
+//! `pack` can lay primitives out leaf by leaf with no indirection.
+//!
+//! The traversal stack has a fixed size (`TRAVERSAL_STACK`); a tree deeper than that is
+//! rebuilt with a median split, whose depth is at most log2(n) + 1 and so always fits.
+
+use glam::{Vec3, Vec3A};
+use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
+
+use crate::gpu_types::{GpuNode, TRAVERSAL_STACK};
+use crate::scene::Bounds;
+
+/// Most primitives a leaf may hold.
+pub const MAX_LEAF_PRIMS: u32 = 4;
+
+/// A flattened BVH.
+#[derive(Clone, Debug, Default)]
+pub struct FlatBvh {
+    pub nodes: Vec<GpuNode>,
+    /// `order[i]` is the input index of the primitive stored at position `i`.
+    pub order: Vec<u32>,
+    /// Longest root-to-leaf path, in nodes.
+    pub depth: usize,
+}
+
+/// Builds a BVH over primitive bounds. An empty input gives an empty tree.
+pub fn build(bounds: &[Bounds]) -> FlatBvh {
+    if bounds.is_empty() {
+        return FlatBvh::default();
+    }
+    let aabbs: Vec<Aabb> = bounds
+        .iter()
+        .map(|b| Aabb {
+            min: Vec3A::from(b.min),
+            max: Vec3A::from(b.max),
+        })
+        .collect();
+    let flat = flatten(&build_obvhs(&aabbs), &aabbs);
+    if flat.depth < TRAVERSAL_STACK {
+        flat
+    } else {
+        median_split(bounds)
+    }
+}
+
+fn build_obvhs(aabbs: &[Aabb]) -> Bvh2 {
+    let params = BvhBuildParams {
+        max_prims_per_leaf: MAX_LEAF_PRIMS,
+        ..BvhBuildParams::medium_build()
+    };
+    let mut bvh = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        aabbs,
+        (0..aabbs.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    let mut reinsertion = obvhs::bvh2::reinsertion::ReinsertionOptimizer::default();
+    reinsertion.run(&mut bvh, params.reinsertion_batch_ratio, None);
+    obvhs::bvh2::leaf_collapser::collapse(
+        &mut bvh,
+        params.max_prims_per_leaf,
+        params.collapse_traversal_cost,
+    );
+    reinsertion.run(
+        &mut bvh,
+        params.reinsertion_batch_ratio * params.post_collapse_reinsertion_batch_ratio_multiplier,
+        None,
+    );
+    bvh
+}
+
+/// The axis along which `b` lies most clearly after `a`, and whether it lies before.
+fn split_axis(a: &Aabb, b: &Aabb) -> (u32, bool) {
+    let d = (b.min + b.max) - (a.min + a.max);
+    let axis = d.abs().max_position() as u32;
+    (axis, d[axis as usize] < 0.0)
+}
+
+fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
+    let mut out = FlatBvh {
+        nodes: Vec::with_capacity(bvh.nodes.len()),
+        order: Vec::with_capacity(aabbs.len()),
+        depth: 0,
+    };
+    // (obvhs node, output node whose `offset` must point here, depth)
+    let mut stack = vec![(0usize, None::<usize>, 1usize)];
+    while let Some((i, patch, depth)) = stack.pop() {
+        let n = &bvh.nodes[i];
+        let here = out.nodes.len();
+        if let Some(p) = patch {
+            out.nodes[p].offset = here as u32;
+        }
+        out.depth = out.depth.max(depth);
+        let mut node = GpuNode {
+            min: Vec3::from(n.aabb.min),
+            max: Vec3::from(n.aabb.max),
+            ..GpuNode::default()
+        };
+        if n.prim_count > 0 {
+            node.offset = out.order.len() as u32;
+            node.count_axis = n.prim_count;
+            let first = n.first_index as usize;
+            out.order
+                .extend_from_slice(&bvh.primitive_indices[first..first + n.prim_count as usize]);
+            out.nodes.push(node);
+        } else {
+            let (mut c0, mut c1) = (n.first_index as usize, n.first_index as usize + 1);
+            let (axis, swap) = split_axis(&bvh.nodes[c0].aabb, &bvh.nodes[c1].aabb);
+            if swap {
+                std::mem::swap(&mut c0, &mut c1);
+            }
+            node.count_axis = axis << 16;
+            out.nodes.push(node);
+            stack.push((c1, Some(here), depth + 1));
+            stack.push((c0, None, depth + 1));
+        }
+    }
+    out
+}
+
+/// A balanced tree by object median on the widest centroid axis: depth <= log2(n) + 1.
+fn median_split(bounds: &[Bounds]) -> FlatBvh {
+    let mut out = FlatBvh {
+        order: (0..bounds.len() as u32).collect(),
+        ..FlatBvh::default()
+    };
+    let centre = |i: u32| bounds[i as usize].center();
+    // (range start, range end, output node to patch, depth)
+    let mut stack = vec![(0usize, bounds.len(), None::<usize>, 1usize)];
+    while let Some((lo, hi, patch, depth)) = stack.pop() {
+        let here = out.nodes.len();
+        if let Some(p) = patch {
+            out.nodes[p].offset = here as u32;
+        }
+        out.depth = out.depth.max(depth);
+        let mut b = Bounds::EMPTY;
+        let mut cb = Bounds::EMPTY;
+        for &i in &out.order[lo..hi] {
+            b = b.union(bounds[i as usize]);
+            cb.grow(centre(i));
+        }
+        let mut node = GpuNode {
+            min: b.min,
+            max: b.max,
+            ..GpuNode::default()
+        };
+        if hi - lo <= MAX_LEAF_PRIMS as usize {
+            node.offset = lo as u32;
+            node.count_axis = (hi - lo) as u32;
+            out.nodes.push(node);
+            continue;
+        }
+        let axis = cb.extent().max_position();
+        let mid = (lo + hi) / 2;
+        out.order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
+            centre(a)[axis].total_cmp(&centre(b)[axis])
+        });
+        node.count_axis = (axis as u32) << 16;
+        out.nodes.push(node);
+        stack.push((mid, hi, Some(here), depth + 1));
+        stack.push((lo, mid, None, depth + 1));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_boxes(n: usize) -> Vec<Bounds> {
+        (0..n)
+            .map(|i| {
+                let p = Vec3::new((i * 7 % 13) as f32, (i * 5 % 11) as f32, i as f32 * 0.1);
+                Bounds {
+                    min: p,
+                    max: p + Vec3::splat(0.5),
+                }
+            })
+            .collect()
+    }
+
+    /// Every primitive appears once, every leaf's bounds contain its primitives and every
+    /// inner node's bounds contain its children.
+    fn check(bvh: &FlatBvh, bounds: &[Bounds]) {
+        let mut seen = vec![false; bounds.len()];
+        for &i in &bvh.order {
+            assert!(!std::mem::replace(&mut seen[i as usize], true));
+        }
+        assert!(seen.iter().all(|&s| s));
+        let inside = |n: &GpuNode, b: &Bounds| n.min.cmple(b.min).all() && n.max.cmpge(b.max).all();
+        for (i, n) in bvh.nodes.iter().enumerate() {
+            if n.count() > 0 {
+                for k in n.offset..n.offset + n.count() {
+                    assert!(inside(n, &bounds[bvh.order[k as usize] as usize]));
+                }
+            } else {
+                for c in [i + 1, n.offset as usize] {
+                    let c = &bvh.nodes[c];
+                    assert!(inside(
+                        n,
+                        &Bounds {
+                            min: c.min,
+                            max: c.max
+                        }
+                    ));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn obvhs_and_median_trees_are_well_formed() {
+        for n in [1, 2, 3, 5, 100, 1000] {
+            let b = unit_boxes(n);
+            let t = build(&b);
+            check(&t, &b);
+            let m = median_split(&b);
+            check(&m, &b);
+            assert!(m.depth <= (n as f64).log2().ceil() as usize + 1);
+        }
+    }
+
+    #[test]
+    fn empty_input_gives_empty_tree() {
+        assert!(build(&[]).nodes.is_empty());
+    }
+}

@@ -1,0 +1,175 @@
+//! CPU twin of `shaders/intersect.wgsl`: ray against sphere, triangle (Möller-Trumbore),
+//! cone, box and plane, and the geometric normal at a hit. Each bounded test returns both
+//! crossings `(t0, t1)`, nearest first, `NO_HIT` where there is none: closest-hit takes the
+//! first one past `tmin`, shadow rays count every crossing of the segment.
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::types::{NO_HIT, Ray};
+use crate::gpu_types::*;
+
+/// Replaces zero direction components so slab tests never compute 0 * inf.
+pub fn safe_inverse(d: Vec3) -> Vec3 {
+    let fix = |c: f32| if c.abs() < 1e-30 { 1e-30 } else { c };
+    Vec3::ONE / Vec3::new(fix(d.x), fix(d.y), fix(d.z))
+}
+
+/// Ray (unit direction) against a sphere, in the form that keeps precision for small
+/// spheres far from the origin (the chord's half-length from the closest approach).
+pub fn sphere(center: Vec3, radius: f32, ray: &Ray) -> Vec2 {
+    let oc = ray.origin - center;
+    let b = oc.dot(ray.dir);
+    let qc = oc - b * ray.dir;
+    let h = radius * radius - qc.dot(qc);
+    if h < 0.0 {
+        return Vec2::splat(NO_HIT);
+    }
+    let h = h.sqrt();
+    Vec2::new(-b - h, -b + h)
+}
+
+/// Möller-Trumbore, two-sided: `(t, u, v)` with `t = NO_HIT` on a miss.
+pub fn triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
+    let (e1, e2) = (p.p1, p.p2);
+    let pvec = ray.dir.cross(e2);
+    let det = e1.dot(pvec);
+    if det == 0.0 {
+        return Vec3::splat(NO_HIT);
+    }
+    let inv = 1.0 / det;
+    let tvec = ray.origin - p.p0;
+    let u = tvec.dot(pvec) * inv;
+    if !(0.0..=1.0).contains(&u) {
+        return Vec3::splat(NO_HIT);
+    }
+    let qvec = tvec.cross(e1);
+    let v = ray.dir.dot(qvec) * inv;
+    if v < 0.0 || u + v > 1.0 {
+        return Vec3::splat(NO_HIT);
+    }
+    Vec3::new(e2.dot(qvec) * inv, u, v)
+}
+
+/// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
+pub fn cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
+    let axis = p.p1 - p.p0;
+    let height = axis.length();
+    let a = axis / height;
+    let k = (p.f1 - p.f0) / height;
+    let co = ray.origin - p.p0;
+    let dv = ray.dir.dot(a);
+    let cv = co.dot(a);
+    let dp = ray.dir - dv * a;
+    let cp = co - cv * a;
+    let rr = p.f0 + k * cv;
+    let qa = dp.dot(dp) - k * k * dv * dv;
+    let qb = cp.dot(dp) - k * rr * dv;
+    let qc = cp.dot(cp) - rr * rr;
+    let mut t = Vec2::splat(NO_HIT);
+    if qa.abs() < 1e-12 {
+        // Ray parallel to a generating line: one crossing at most.
+        if qb != 0.0 {
+            t.x = -qc / (2.0 * qb);
+        }
+    } else {
+        let disc = qb * qb - qa * qc;
+        if disc < 0.0 {
+            return t;
+        }
+        let sq = disc.sqrt();
+        let r0 = (-qb - sq) / qa;
+        let r1 = (-qb + sq) / qa;
+        t = Vec2::new(r0.min(r1), r0.max(r1));
+    }
+    // Keep crossings between the two caps, where the radius is not negative.
+    let valid = |t: f32| {
+        let s = cv + t * dv;
+        t != NO_HIT && s >= 0.0 && s <= height && p.f0 + k * s >= 0.0
+    };
+    let (ok0, ok1) = (valid(t.x), valid(t.y));
+    if ok0 && ok1 {
+        t
+    } else if ok0 {
+        Vec2::new(t.x, NO_HIT)
+    } else if ok1 {
+        Vec2::new(t.y, NO_HIT)
+    } else {
+        Vec2::splat(NO_HIT)
+    }
+}
+
+/// Slab test against `[lo, hi]`: `(t_near, t_far)`, or `NO_HIT` when the slabs miss.
+pub fn slabs(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3) -> Vec2 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = t0.min(t1).max_element();
+    let far = t0.max(t1).min_element();
+    if near > far {
+        Vec2::splat(NO_HIT)
+    } else {
+        Vec2::new(near, far)
+    }
+}
+
+/// Whether the ray's interval `[tmin, tmax]` overlaps the box (BVH node test).
+pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> bool {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = t0.min(t1).max_element().max(tmin);
+    let far = t0.max(t1).min_element().min(tmax);
+    near <= far
+}
+
+/// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.
+pub fn prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
+    match p.kind() {
+        PRIM_SPHERE => sphere(p.p0, p.f0, ray).extend(0.0).extend(0.0),
+        PRIM_TRIANGLE => {
+            let h = triangle(p, ray);
+            Vec4::new(h.x, NO_HIT, h.y, h.z)
+        }
+        PRIM_CONE => cone(p, ray).extend(0.0).extend(0.0),
+        _ => slabs(p.p0, p.p1, ray.origin, inv_dir)
+            .extend(0.0)
+            .extend(0.0),
+    }
+}
+
+/// Ray against the plane `dot(n, x) = d`.
+pub fn plane(pl: &GpuPlane, ray: &Ray) -> f32 {
+    let denom = pl.normal.dot(ray.dir);
+    if denom == 0.0 {
+        return NO_HIT;
+    }
+    (pl.d - pl.normal.dot(ray.origin)) / denom
+}
+
+/// Outward geometric normal of a bounded primitive at the hit point `x`.
+pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
+    match p.kind() {
+        PRIM_SPHERE => (x - p.p0).normalize(),
+        PRIM_TRIANGLE => p.p1.cross(p.p2).normalize(),
+        PRIM_CONE => {
+            let axis = p.p1 - p.p0;
+            let height = axis.length();
+            let a = axis / height;
+            let k = (p.f1 - p.f0) / height;
+            let q = x - p.p0;
+            let radial = q - q.dot(a) * a;
+            (radial.normalize() - k * a).normalize()
+        }
+        _ => {
+            let c = 0.5 * (p.p0 + p.p1);
+            let local = (x - c) / (0.5 * (p.p1 - p.p0)).max(Vec3::splat(1e-30));
+            let m = local.abs();
+            let sign = |c: f32| if c >= 0.0 { 1.0 } else { -1.0 };
+            if m.x >= m.y && m.x >= m.z {
+                Vec3::X * sign(local.x)
+            } else if m.y >= m.z {
+                Vec3::Y * sign(local.y)
+            } else {
+                Vec3::Z * sign(local.z)
+            }
+        }
+    }
+}

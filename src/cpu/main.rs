@@ -1,0 +1,80 @@
+//! CPU twin of `shaders/main.wgsl`: one pixel = its camera rays (stratified, jittered
+//! samples and the thin lens, drawn from the shared hash), traced and averaged, or an AOV.
+
+use glam::{Vec2, Vec3};
+
+use super::shade::{surface, trace};
+use super::traverse::closest_hit;
+use super::types::{Bindings, NO_PRIM, Ray, RayCounts, rand, rng_seed};
+use crate::gpu_types::*;
+
+/// Camera ray through image point `(x, y)` (pixels, y down), shading.md's convention.
+pub fn camera_ray(g: &GpuGlobals, x: f32, y: f32, rng: &mut u32) -> Ray {
+    let sx = (x - 0.5 * g.width as f32) * g.pixel_pitch;
+    let sy = (0.5 * g.height as f32 - y) * g.pixel_pitch;
+    let dir = (g.cam_forward + sx * g.cam_right + sy * g.cam_up).normalize();
+    if g.aperture <= 0.0 {
+        return Ray {
+            origin: g.cam_pos,
+            dir,
+        };
+    }
+    // Thin lens: aim at the point on the focal plane, from a point on the lens disc.
+    let focus = g.cam_pos + dir * (g.focal / dir.dot(g.cam_forward));
+    let r = 0.5 * g.aperture * rand(rng).sqrt();
+    let phi = 2.0 * std::f32::consts::PI * rand(rng);
+    let origin = g.cam_pos + r * phi.cos() * g.cam_right + r * phi.sin() * g.cam_up;
+    Ray {
+        origin,
+        dir: (focus - origin).normalize(),
+    }
+}
+
+/// Offset of sample `s` of `n` inside the pixel: the centre for one sample, otherwise a
+/// jittered cell of a k x ceil(n/k) grid, k = ceil(sqrt(n)).
+pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
+    if n <= 1 {
+        return Vec2::splat(0.5);
+    }
+    let mut k = 1;
+    while k * k < n {
+        k += 1;
+    }
+    let rows = n.div_ceil(k);
+    let jx = rand(rng);
+    let jy = rand(rng);
+    Vec2::new(
+        ((s % k) as f32 + jx) / k as f32,
+        ((s / k) as f32 + jy) / rows as f32,
+    )
+}
+
+/// One pixel's value (colour or AOV) and the rays traced for it.
+pub fn render_pixel(b: &Bindings, px: u32, py: u32, counts: &mut RayCounts) -> Vec3 {
+    let g = b.globals;
+    let mut sum = Vec3::ZERO;
+    for s in 0..g.spp {
+        let mut rng = rng_seed(py * g.width + px, s, g.seed);
+        let off = sample_offset(s, g.spp, &mut rng);
+        let ray = camera_ray(g, px as f32 + off.x, py as f32 + off.y, &mut rng);
+        counts.eye += 1;
+        sum += if g.aov == AOV_COLOR {
+            trace(b, ray, &mut rng, counts)
+        } else {
+            aov(b, &ray)
+        };
+    }
+    sum / g.spp as f32
+}
+
+/// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
+fn aov(b: &Bindings, ray: &Ray) -> Vec3 {
+    let g = b.globals;
+    let hit = closest_hit(b, ray, g.hither, f32::INFINITY);
+    match g.aov {
+        AOV_COST => Vec3::splat(hit.cost as f32),
+        _ if hit.prim == NO_PRIM => Vec3::ZERO,
+        AOV_DEPTH => Vec3::splat(hit.t),
+        _ => 0.5 * (surface(b, ray, &hit).ns + Vec3::ONE),
+    }
+}

@@ -1,0 +1,70 @@
+//! The CPU reference renderer: the model the GPU must match, and the fallback where no
+//! adapter exists. It reads only `SceneBuffers` and `GpuGlobals`, never the scene tree,
+//! so it checks the packing and BVH layout as much as the shader.
+//!
+//! One module per WGSL file, same function names, same order of operations:
+//! `types`, `intersect`, `traverse`, `shade`, `main`.
+
+pub mod intersect;
+pub mod main;
+pub mod shade;
+pub mod traverse;
+pub mod types;
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::film::Film;
+use crate::gpu_types::GpuGlobals;
+use crate::pack::SceneBuffers;
+use types::Bindings;
+pub use types::RayCounts;
+
+/// Side of the square tiles rendered in parallel.
+pub const TILE: u32 = 16;
+
+/// Renders the whole image. `progress` is called with the number of pixels finished by
+/// each tile; `cancel` stops the render early with `Error::Interrupted`.
+pub fn render(
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<(Film, RayCounts)> {
+    let b = Bindings::new(buffers, globals);
+    let (w, h) = (globals.width, globals.height);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .collect();
+    let done: Vec<Option<(Vec<[f32; 3]>, RayCounts)>> = tiles
+        .par_iter()
+        .map(|&(x0, y0)| {
+            if cancel.load(Ordering::Relaxed) {
+                return None;
+            }
+            let mut counts = RayCounts::default();
+            let mut px = Vec::with_capacity((TILE * TILE) as usize);
+            for y in y0..(y0 + TILE).min(h) {
+                for x in x0..(x0 + TILE).min(w) {
+                    px.push(main::render_pixel(&b, x, y, &mut counts).to_array());
+                }
+            }
+            progress(px.len() as u64);
+            Some((px, counts))
+        })
+        .collect();
+    let mut film = Film::new(w, h);
+    let mut total = RayCounts::default();
+    for (&(x0, y0), tile) in tiles.iter().zip(done) {
+        let (px, counts) = tile.ok_or(Error::Interrupted)?;
+        total.add(&counts);
+        let tw = (x0 + TILE).min(w) - x0;
+        for (i, p) in px.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
+            film.pixels[(y * w + x) as usize] = p;
+        }
+    }
+    Ok((film, total))
+}

@@ -1,0 +1,194 @@
+//! CPU twin of `shaders/shade.wgsl`: the Whitted model of docs/shading.md, iterative with
+//! an explicit stack of pending rays, pushed and popped in the same order as the shader.
+
+use glam::Vec3;
+
+use super::intersect;
+use super::traverse::{closest_hit, transmission};
+use super::types::{Bindings, Hit, NO_PRIM, PLANE_FLAG, Ray, RayCounts, rand};
+use crate::gpu_types::*;
+
+/// A ray waiting to be traced, with the product of the Ks / T factors on its path.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pending {
+    origin: Vec3,
+    dir: Vec3,
+    weight: f32,
+    depth: u32,
+    tmin: f32,
+}
+
+/// Surface data at a hit.
+pub struct Surface {
+    pub point: Vec3,
+    /// Geometric normal facing the incoming ray.
+    pub ng: Vec3,
+    /// Shading normal facing the incoming ray.
+    pub ns: Vec3,
+    /// Whether the ray meets the outward side (it enters a solid).
+    pub entering: bool,
+    pub material: u32,
+}
+
+/// Hit point, normals (two-sided: flipped to face the ray) and material.
+pub fn surface(b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
+    let point = ray.origin + hit.t * ray.dir;
+    let (outward, mut ns, material) = if hit.prim & PLANE_FLAG != 0 {
+        let pl = &b.planes[(hit.prim & !PLANE_FLAG) as usize];
+        (pl.normal, pl.normal, pl.material)
+    } else {
+        let p = &b.prims[hit.prim as usize];
+        let ng = intersect::prim_normal(p, point);
+        let mut ns = ng;
+        if p.kind() == PRIM_TRIANGLE && p.f1 >= 0.0 {
+            let n = &b.tri_normals[p.f1 as usize];
+            ns = ((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2).normalize();
+        }
+        (ng, ns, p.material())
+    };
+    let entering = outward.dot(ray.dir) < 0.0;
+    let ng = if entering { outward } else { -outward };
+    if ns.dot(ray.dir) > 0.0 {
+        ns = -ns;
+    }
+    Surface {
+        point,
+        ng,
+        ns,
+        entering,
+        material,
+    }
+}
+
+/// Start of a secondary ray: off the surface along the geometric normal, on the side the
+/// ray leaves towards.
+pub fn offset_origin(s: &Surface, dir: Vec3, eps: f32) -> Vec3 {
+    if s.ng.dot(dir) >= 0.0 {
+        s.point + eps * s.ng
+    } else {
+        s.point - eps * s.ng
+    }
+}
+
+fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+    d - 2.0 * n.dot(d) * n
+}
+
+/// Direct light at a surface point: ambient plus, per light sample, Lambert and the Phong
+/// highlight, each scaled by the shadow ray's transmission.
+fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
+    let g = b.globals;
+    let m = &b.materials[s.material as usize];
+    let mut colour = g.ambient * m.kd * m.color;
+    let r = reflect(dir, s.ns);
+    for light in b.lights {
+        let samples = if light.kind == LIGHT_AREA {
+            light.nu * light.nv
+        } else {
+            1
+        };
+        let intensity = light.color / samples as f32;
+        for k in 0..samples {
+            let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
+                (light.pos, NO_HIT_DIST)
+            } else {
+                let mut lp = light.pos;
+                if light.kind == LIGHT_AREA {
+                    let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
+                    let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
+                    lp += su * light.u + sv * light.v;
+                }
+                let to = lp - s.point;
+                (to.normalize(), to.length())
+            };
+            let ndotl = s.ns.dot(l);
+            if ndotl <= 0.0 {
+                continue;
+            }
+            counts.shadow += 1;
+            let shadow_ray = Ray {
+                origin: offset_origin(s, l, g.epsilon),
+                dir: l,
+            };
+            let shadow = transmission(b, &shadow_ray, dist);
+            let rl = r.dot(l);
+            let highlight = if rl > 0.0 {
+                m.ks * rl.powf(m.shine)
+            } else {
+                0.0
+            };
+            colour += shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(highlight));
+        }
+    }
+    colour
+}
+
+/// Distance used for shadow rays towards directional lights.
+const NO_HIT_DIST: f32 = f32::INFINITY;
+
+/// Colour seen along an eye ray: Whitted shading with reflection and refraction.
+pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
+    let g = b.globals;
+    let mut stack = [Pending::default(); RAY_STACK];
+    stack[0] = Pending {
+        origin: eye.origin,
+        dir: eye.dir,
+        weight: 1.0,
+        depth: 1,
+        tmin: g.hither,
+    };
+    let mut sp = 1usize;
+    let mut colour = Vec3::ZERO;
+    while sp > 0 {
+        sp -= 1;
+        let ray_in = stack[sp];
+        let ray = Ray {
+            origin: ray_in.origin,
+            dir: ray_in.dir,
+        };
+        let hit = closest_hit(b, &ray, ray_in.tmin, f32::INFINITY);
+        if hit.prim == NO_PRIM {
+            colour += ray_in.weight * g.background;
+            continue;
+        }
+        let s = surface(b, &ray, &hit);
+        colour += ray_in.weight * direct(b, &s, ray.dir, rng, counts);
+        if ray_in.depth >= g.max_depth {
+            continue;
+        }
+        let m = &b.materials[s.material as usize];
+        if m.ks > 0.0 {
+            let dir = reflect(ray.dir, s.ns);
+            counts.reflected += 1;
+            stack[sp] = Pending {
+                origin: offset_origin(&s, dir, g.epsilon),
+                dir,
+                weight: ray_in.weight * m.ks,
+                depth: ray_in.depth + 1,
+                tmin: 0.0,
+            };
+            sp += 1;
+        }
+        if m.t > 0.0 {
+            let eta = if s.entering { 1.0 / m.ior } else { m.ior };
+            let cos_i = -s.ns.dot(ray.dir);
+            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+            // Total internal reflection sends the transmitted weight along the mirror ray.
+            let dir = if k < 0.0 {
+                reflect(ray.dir, s.ns)
+            } else {
+                (eta * ray.dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
+            };
+            counts.refracted += 1;
+            stack[sp] = Pending {
+                origin: offset_origin(&s, dir, g.epsilon),
+                dir,
+                weight: ray_in.weight * m.t,
+                depth: ray_in.depth + 1,
+                tmin: 0.0,
+            };
+            sp += 1;
+        }
+    }
+    colour
+}

@@ -1,0 +1,96 @@
+//! CPU twin of `shaders/types.wgsl`: rays, hits, the bindings as one borrowed struct, and
+//! the counter-based hash both renderers draw samples from.
+
+use glam::Vec3;
+
+use crate::gpu_types::*;
+use crate::pack::SceneBuffers;
+
+/// "No hit" distance.
+pub const NO_HIT: f32 = f32::INFINITY;
+/// Set in `Hit::prim` when the hit is a plane (index into `planes`).
+pub const PLANE_FLAG: u32 = 0x8000_0000;
+/// `Hit::prim` when nothing was hit.
+pub const NO_PRIM: u32 = 0xffff_ffff;
+
+/// The read-only bindings, as the shader sees them.
+#[derive(Clone, Copy)]
+pub struct Bindings<'a> {
+    pub globals: &'a GpuGlobals,
+    pub nodes: &'a [GpuNode],
+    pub prims: &'a [GpuPrim],
+    pub tri_normals: &'a [GpuTriNormals],
+    pub planes: &'a [GpuPlane],
+    pub materials: &'a [GpuMaterial],
+    pub lights: &'a [GpuLight],
+}
+
+impl<'a> Bindings<'a> {
+    pub fn new(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
+        Bindings {
+            globals,
+            nodes: &buffers.nodes,
+            prims: &buffers.prims,
+            tri_normals: &buffers.tri_normals,
+            planes: &buffers.planes,
+            materials: &buffers.materials,
+            lights: &buffers.lights,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+/// Closest hit: distance, what was hit, triangle barycentrics, and BVH nodes visited.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+    pub cost: u32,
+}
+
+/// PCG hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", 2020): wrapping u32
+/// arithmetic, so CPU and GPU produce identical bits.
+pub fn pcg_hash(v: u32) -> u32 {
+    let state = v.wrapping_mul(747796405).wrapping_add(2891336453);
+    let word = ((state >> ((state >> 28) + 4)) ^ state).wrapping_mul(277803737);
+    (word >> 22) ^ word
+}
+
+/// The random stream of one pixel sample.
+pub fn rng_seed(pixel: u32, sample: u32, seed: u32) -> u32 {
+    pcg_hash(pixel ^ pcg_hash(sample ^ pcg_hash(seed)))
+}
+
+/// Next uniform number in [0, 1) with 24 bits, advancing the stream.
+pub fn rand(state: &mut u32) -> f32 {
+    *state = pcg_hash(*state);
+    (*state >> 8) as f32 * (1.0 / 16777216.0)
+}
+
+/// Per-pixel count of the rays traced, by kind (the shader sums them into one).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    pub eye: u64,
+    pub shadow: u64,
+    pub reflected: u64,
+    pub refracted: u64,
+}
+
+impl RayCounts {
+    pub fn total(&self) -> u64 {
+        self.eye + self.shadow + self.reflected + self.refracted
+    }
+    pub fn add(&mut self, o: &RayCounts) {
+        self.eye += o.eye;
+        self.shadow += o.shadow;
+        self.reflected += o.reflected;
+        self.refracted += o.refracted;
+    }
+}

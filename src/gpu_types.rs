@@ -1,0 +1,198 @@
+//! Every struct that crosses to WGSL, defined once here and mirrored in `shaders/types.wgsl`
+//! (keep the two in sync: `tests/gpurt/layout.rs` checks sizes and field offsets against
+//! naga's reflection of the shader). All are `#[repr(C)]` + `Pod`, so `pack` can hand the
+//! vectors to wgpu as bytes, and the CPU reference renderer reads the very same values.
+//!
+//! Every `Vec3` is followed by a 4-byte scalar, which gives the WGSL `vec3<f32>` its
+//! 16-byte alignment without hidden padding.
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// Primitive kinds in the top bits of `GpuPrim::meta`.
+pub const PRIM_SPHERE: u32 = 0;
+pub const PRIM_TRIANGLE: u32 = 1;
+pub const PRIM_CONE: u32 = 2;
+pub const PRIM_BOX: u32 = 3;
+/// `meta = kind << PRIM_KIND_SHIFT | material`.
+pub const PRIM_KIND_SHIFT: u32 = 28;
+pub const PRIM_MATERIAL_MASK: u32 = (1 << PRIM_KIND_SHIFT) - 1;
+
+/// One bounded primitive, 48 bytes. What the fields hold depends on the kind:
+///
+/// | kind     | p0, f0                   | p1, f1                     | p2          |
+/// |----------|--------------------------|----------------------------|-------------|
+/// | sphere   | centre, radius           | -                          | -           |
+/// | triangle | v0, -                    | edge v1-v0, normal slot    | edge v2-v0  |
+/// | cone     | base centre, base radius | apex centre, apex radius   | -           |
+/// | box      | min, -                   | max, -                     | -           |
+///
+/// A triangle's "normal slot" indexes `tri_normals` as an exactly representable float
+/// (-1 when the triangle has no shading normals); `pack` refuses more than 2^24 slots.
+/// Triangles store the two edges because that is what Möller-Trumbore needs.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPrim {
+    pub p0: Vec3,
+    pub f0: f32,
+    pub p1: Vec3,
+    pub f1: f32,
+    pub p2: Vec3,
+    pub meta: u32,
+}
+
+impl GpuPrim {
+    pub fn kind(&self) -> u32 {
+        self.meta >> PRIM_KIND_SHIFT
+    }
+    pub fn material(&self) -> u32 {
+        self.meta & PRIM_MATERIAL_MASK
+    }
+}
+
+/// Shading normals of one triangle (`pp` vertex normals, STL facet normals, OBJ normals).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriNormals {
+    pub n0: Vec3,
+    pub _pad0: u32,
+    pub n1: Vec3,
+    pub _pad1: u32,
+    pub n2: Vec3,
+    pub _pad2: u32,
+}
+
+/// A flattened BVH node, 32 bytes (pbrt's `LinearBVHNode`). Nodes are in depth-first
+/// order: an inner node's first child is the next node, its second child is at `offset`.
+/// A leaf (`count > 0`) holds `count` primitives starting at `prims[offset]`.
+/// `axis` is the axis along which the first child lies before the second: rays with a
+/// negative direction on that axis visit the second child first.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuNode {
+    pub min: Vec3,
+    pub offset: u32,
+    pub max: Vec3,
+    /// `count | axis << 16`.
+    pub count_axis: u32,
+}
+
+impl GpuNode {
+    pub fn count(&self) -> u32 {
+        self.count_axis & 0xffff
+    }
+    pub fn axis(&self) -> u32 {
+        self.count_axis >> 16
+    }
+}
+
+/// An infinite plane `dot(normal, p) = d`; tested outside the BVH.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuPlane {
+    pub normal: Vec3,
+    pub d: f32,
+    pub material: u32,
+    pub _pad: [u32; 3],
+}
+
+/// NFF `f r g b Kd Ks Shine T ior`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub color: Vec3,
+    pub kd: f32,
+    pub ks: f32,
+    pub shine: f32,
+    pub t: f32,
+    pub ior: f32,
+}
+
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_DIRECTIONAL: u32 = 1;
+pub const LIGHT_AREA: u32 = 2;
+
+/// A light with its final intensity. Point: `pos`. Directional: `pos` is the unit direction
+/// towards the light. Area: the rectangle `pos + a*u + b*v`, sampled `nu x nv` times, each
+/// sample carrying `color / (nu*nv)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    pub pos: Vec3,
+    pub kind: u32,
+    pub u: Vec3,
+    pub nu: u32,
+    pub v: Vec3,
+    pub nv: u32,
+    pub color: Vec3,
+    pub _pad: u32,
+}
+
+/// AOV modes (`--aov`): what a pixel holds instead of shaded colour.
+pub const AOV_COLOR: u32 = 0;
+/// Shading normal facing the eye, mapped to colour `0.5 * (n + 1)`.
+pub const AOV_NORMAL: u32 = 1;
+/// Hit distance of the eye ray (0 on a miss).
+pub const AOV_DEPTH: u32 = 2;
+/// BVH nodes visited by the eye ray's closest-hit traversal.
+pub const AOV_COST: u32 = 3;
+
+/// Per-render constants (a uniform buffer).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuGlobals {
+    pub cam_pos: Vec3,
+    pub hither: f32,
+    pub cam_forward: Vec3,
+    /// Pixel pitch at unit distance: `2 tan(angle/2) / (H - 1)`.
+    pub pixel_pitch: f32,
+    pub cam_right: Vec3,
+    /// Thin-lens aperture diameter (0 = pinhole).
+    pub aperture: f32,
+    pub cam_up: Vec3,
+    pub focal: f32,
+    pub background: Vec3,
+    /// Secondary-ray offset along the geometric normal (see `pack::epsilon`).
+    pub epsilon: f32,
+    pub ambient: Vec3,
+    pub max_depth: u32,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u32,
+    pub n_nodes: u32,
+    pub n_planes: u32,
+    pub n_lights: u32,
+    pub aov: u32,
+}
+
+/// The image region one dispatch traces (a uniform buffer, rewritten per tile).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTile {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Fixed sizes of the per-pixel stacks in both renderers.
+/// The BVH builder guarantees a depth below `TRAVERSAL_STACK` (it falls back to a
+/// median split otherwise); the CLI refuses a `--depth` above `MAX_DEPTH`, and a Whitted
+/// path with depth limit D never holds more than D pending rays (each pop pushes at most
+/// two rays one level deeper), so `RAY_STACK = MAX_DEPTH` cannot overflow.
+pub const TRAVERSAL_STACK: usize = 64;
+pub const MAX_DEPTH: u32 = 16;
+pub const RAY_STACK: usize = MAX_DEPTH as usize;
+
+const _: () = {
+    assert!(size_of::<GpuPrim>() == 48);
+    assert!(size_of::<GpuTriNormals>() == 48);
+    assert!(size_of::<GpuNode>() == 32);
+    assert!(size_of::<GpuPlane>() == 32);
+    assert!(size_of::<GpuMaterial>() == 32);
+    assert!(size_of::<GpuLight>() == 64);
+    assert!(size_of::<GpuGlobals>() == 128);
+    assert!(size_of::<GpuTile>() == 16);
+    assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
+};

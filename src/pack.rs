@@ -1,0 +1,273 @@
+//! Scene + BVH -> `SceneBuffers`: the flat arrays both renderers read (one `Vec` per GPU
+//! binding), plus the per-render `GpuGlobals` built from the camera and render options.
+
+use glam::Vec3;
+
+use crate::bvh::{self, FlatBvh};
+use crate::error::{Error, Result};
+use crate::gpu_types::*;
+use crate::scene::{Bounds, Light, Scene};
+
+/// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
+/// surface, along the geometric normal; shading.md leaves the constant to us. It must clear
+/// the f32 rounding of hit points (about 1e-7 of the coordinates, which stay within the
+/// bounds) with a wide margin, and stay below the smallest features: balls-6, whose floor
+/// makes the diagonal 34, has spheres of radius 7e-4, which this keeps at 1.7e-4.
+pub const EPSILON_REL: f32 = 5e-6;
+
+/// Default ambient light (shading.md).
+pub const DEFAULT_AMBIENT: f32 = 0.1;
+
+/// The flat scene: what is uploaded to the GPU and what the CPU reference traverses.
+#[derive(Clone, Debug)]
+pub struct SceneBuffers {
+    pub nodes: Vec<GpuNode>,
+    /// Bounded primitives in BVH leaf order.
+    pub prims: Vec<GpuPrim>,
+    pub tri_normals: Vec<GpuTriNormals>,
+    pub planes: Vec<GpuPlane>,
+    pub materials: Vec<GpuMaterial>,
+    pub lights: Vec<GpuLight>,
+    /// Scene bounds (planes excluded) and the secondary-ray offset derived from them.
+    pub bounds: Bounds,
+    pub epsilon: f32,
+    pub bvh_depth: usize,
+}
+
+/// How to render: everything that is not the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    /// Overrides the scene's `am` and the default.
+    pub ambient: Option<Vec3>,
+    pub aov: u32,
+    pub seed: u32,
+}
+
+impl RenderOptions {
+    /// The scene's own resolution, 1 sample, depth 5, colour output.
+    pub fn for_scene(scene: &Scene) -> Self {
+        RenderOptions {
+            width: scene.camera.width,
+            height: scene.camera.height,
+            spp: 1,
+            max_depth: 5,
+            ambient: None,
+            aov: AOV_COLOR,
+            seed: 0,
+        }
+    }
+}
+
+fn kind_meta(kind: u32, material: u32) -> u32 {
+    kind << PRIM_KIND_SHIFT | material
+}
+
+/// Flattens a scene. Fails only on scenes beyond the layout's limits.
+pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
+    let too_big = |msg: String| Error::Scene {
+        file: scene.name.clone(),
+        msg,
+    };
+    if scene.materials.len() > PRIM_MATERIAL_MASK as usize {
+        return Err(too_big(format!(
+            "{} materials exceed the limit of {}",
+            scene.materials.len(),
+            PRIM_MATERIAL_MASK
+        )));
+    }
+    // Bounded primitives in one list: spheres, triangles, cones, boxes.
+    let mut prims = Vec::with_capacity(scene.bounded_count());
+    let mut bounds = Vec::with_capacity(scene.bounded_count());
+    let mut tri_normals = Vec::new();
+    for s in &scene.spheres {
+        prims.push(GpuPrim {
+            p0: s.center,
+            f0: s.radius,
+            meta: kind_meta(PRIM_SPHERE, s.material.0),
+            ..Default::default()
+        });
+        bounds.push(s.bounds());
+    }
+    for t in &scene.triangles {
+        let slot = match t.n {
+            Some([n0, n1, n2]) => {
+                tri_normals.push(GpuTriNormals {
+                    n0,
+                    n1,
+                    n2,
+                    ..Default::default()
+                });
+                (tri_normals.len() - 1) as f32
+            }
+            None => -1.0,
+        };
+        prims.push(GpuPrim {
+            p0: t.v[0],
+            p1: t.v[1] - t.v[0],
+            f1: slot,
+            p2: t.v[2] - t.v[0],
+            meta: kind_meta(PRIM_TRIANGLE, t.material.0),
+            ..Default::default()
+        });
+        bounds.push(t.bounds());
+    }
+    if tri_normals.len() > 1 << 24 {
+        return Err(too_big(format!(
+            "{} triangles with shading normals exceed the limit of 2^24",
+            tri_normals.len()
+        )));
+    }
+    for c in &scene.cones {
+        prims.push(GpuPrim {
+            p0: c.base,
+            f0: c.base_radius,
+            p1: c.apex,
+            f1: c.apex_radius,
+            meta: kind_meta(PRIM_CONE, c.material.0),
+            ..Default::default()
+        });
+        bounds.push(c.bounds());
+    }
+    for b in &scene.boxes {
+        prims.push(GpuPrim {
+            p0: b.min,
+            p1: b.max,
+            meta: kind_meta(PRIM_BOX, b.material.0),
+            ..Default::default()
+        });
+        bounds.push(b.bounds());
+    }
+    let FlatBvh {
+        nodes,
+        order,
+        depth,
+    } = bvh::build(&bounds);
+    let prims = order.iter().map(|&i| prims[i as usize]).collect();
+
+    let planes = scene
+        .planes
+        .iter()
+        .map(|p| GpuPlane {
+            normal: p.normal,
+            d: p.normal.dot(p.point),
+            material: p.material.0,
+            _pad: [0; 3],
+        })
+        .collect();
+    let materials = scene
+        .materials
+        .iter()
+        .map(|m| GpuMaterial {
+            color: m.color,
+            kd: m.kd,
+            ks: m.ks,
+            shine: m.shine,
+            t: m.t,
+            ior: m.ior,
+        })
+        .collect();
+    let lights = pack_lights(&scene.lights);
+    let scene_bounds = scene.bounds();
+    Ok(SceneBuffers {
+        nodes,
+        prims,
+        tri_normals,
+        planes,
+        materials,
+        lights,
+        bounds: scene_bounds,
+        epsilon: epsilon(scene),
+        bvh_depth: depth,
+    })
+}
+
+/// The secondary-ray offset: `EPSILON_REL` times the bounds diagonal (or the viewing
+/// distance for a scene of planes only).
+pub fn epsilon(scene: &Scene) -> f32 {
+    let b = scene.bounds();
+    let size = if b.is_empty() {
+        (scene.camera.at - scene.camera.from).length()
+    } else {
+        b.extent().length()
+    };
+    EPSILON_REL * size.max(1e-3)
+}
+
+/// Uncoloured lights get SPD's intensity `1/sqrt(number of lights)`.
+fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
+    let default = Vec3::splat(1.0 / (lights.len().max(1) as f32).sqrt());
+    lights
+        .iter()
+        .map(|l| match *l {
+            Light::Point { position, color } => GpuLight {
+                pos: position,
+                kind: LIGHT_POINT,
+                color: color.unwrap_or(default),
+                ..Default::default()
+            },
+            Light::Directional { direction, color } => GpuLight {
+                // Stored as the direction towards the light.
+                pos: -direction,
+                kind: LIGHT_DIRECTIONAL,
+                color: color.unwrap_or(default),
+                ..Default::default()
+            },
+            Light::Area {
+                corner,
+                u,
+                v,
+                color,
+                samples,
+            } => GpuLight {
+                pos: corner,
+                kind: LIGHT_AREA,
+                u,
+                nu: samples[0],
+                v,
+                nv: samples[1],
+                color,
+                _pad: 0,
+            },
+        })
+        .collect()
+}
+
+/// Per-render constants: the camera basis of shading.md and the options.
+pub fn globals(scene: &Scene, buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
+    let c = &scene.camera;
+    let forward = (c.at - c.from).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    // `angle` spans the centres of the top and bottom rows: H - 1 pixel pitches.
+    let rows = (opts.height.max(2) - 1) as f32;
+    let pixel_pitch = 2.0 * (c.angle.to_radians() * 0.5).tan() / rows;
+    GpuGlobals {
+        cam_pos: c.from,
+        hither: c.hither,
+        cam_forward: forward,
+        pixel_pitch,
+        cam_right: right,
+        aperture: c.aperture,
+        cam_up: up,
+        focal: c.focal_distance(),
+        background: scene.background,
+        epsilon: buffers.epsilon,
+        ambient: opts
+            .ambient
+            .or(scene.ambient)
+            .unwrap_or(Vec3::splat(DEFAULT_AMBIENT)),
+        max_depth: opts.max_depth,
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        seed: opts.seed,
+        n_nodes: buffers.nodes.len() as u32,
+        n_planes: buffers.planes.len() as u32,
+        n_lights: buffers.lights.len() as u32,
+        aov: opts.aov,
+    }
+}
