@@ -9,12 +9,12 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// Primitive kinds in the top bits of `GpuPrim::meta`.
+/// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
 pub const PRIM_TRIANGLE: u32 = 1;
 pub const PRIM_CONE: u32 = 2;
 pub const PRIM_BOX: u32 = 3;
-/// `meta = kind << PRIM_KIND_SHIFT | material`.
+/// `tag = kind << PRIM_KIND_SHIFT | material`.
 pub const PRIM_KIND_SHIFT: u32 = 28;
 pub const PRIM_MATERIAL_MASK: u32 = (1 << PRIM_KIND_SHIFT) - 1;
 
@@ -38,15 +38,15 @@ pub struct GpuPrim {
     pub p1: Vec3,
     pub f1: f32,
     pub p2: Vec3,
-    pub meta: u32,
+    pub tag: u32,
 }
 
 impl GpuPrim {
     pub fn kind(&self) -> u32 {
-        self.meta >> PRIM_KIND_SHIFT
+        self.tag >> PRIM_KIND_SHIFT
     }
     pub fn material(&self) -> u32 {
-        self.meta & PRIM_MATERIAL_MASK
+        self.tag & PRIM_MATERIAL_MASK
     }
 }
 

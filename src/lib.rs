@@ -7,6 +7,7 @@ pub mod bvh;
 pub mod cpu;
 pub mod error;
 pub mod film;
+pub mod gpu;
 pub mod gpu_types;
 pub mod info;
 pub mod pack;

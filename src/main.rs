@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -59,7 +59,12 @@ enum Command {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
+    /// WGSL compute through wgpu; falls back to the CPU when no adapter exists.
+    Gpu,
+    /// The CPU reference renderer.
     Cpu,
+    /// Both, reporting how much their images differ (the GPU image is written).
+    Both,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -108,8 +113,14 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the rays.
-    #[arg(long, value_enum, default_value_t = Backend::Cpu)]
+    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
     backend: Backend,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Say which adapter renders.
+    #[arg(short, long)]
+    verbose: bool,
     /// Debug output instead of shaded colour.
     #[arg(long, value_enum, default_value_t = Aov::Color)]
     aov: Aov,
@@ -284,23 +295,79 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     opts.seed = args.seed;
     let globals = pack::globals(&scene, &buffers, &opts);
 
-    let progress = Progress::new(u64::from(opts.width) * u64::from(opts.height));
-    let pixels_done = AtomicU64::new(0);
-    let render_start = Instant::now();
-    let result = match args.backend {
-        Backend::Cpu => cpu::render(
+    let pixels = u64::from(opts.width) * u64::from(opts.height);
+    let mut backend = args.backend;
+    let mut gpu = None;
+    if backend != Backend::Cpu {
+        match gpurt::gpu::open(args.adapter.as_deref()) {
+            Ok(ctx) => gpu = Some(ctx),
+            Err(Error::NoAdapter(why)) if backend == Backend::Gpu => {
+                eprintln!("gpurt: no GPU adapter{why}; rendering on the CPU");
+                backend = Backend::Cpu;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    if let (Some(ctx), true) = (&gpu, args.verbose || args.stats) {
+        eprintln!("adapter     {}", ctx.describe());
+    }
+    let mut report = Vec::new();
+    let mut cpu_film = None;
+    if backend != Backend::Gpu {
+        let progress = Progress::new(pixels);
+        let t = Instant::now();
+        let result = cpu::render(&buffers, &globals, &|n| progress.advance(n), &cancel);
+        progress.finish();
+        let (film, counts) = result?;
+        report.push(format!(
+            "cpu         {:.3} s, {} rays ({} eye, {} shadow, {} reflected, {} refracted), {:.2} Mrays/s, {} threads",
+            t.elapsed().as_secs_f64(),
+            counts.total(),
+            counts.eye,
+            counts.shadow,
+            counts.reflected,
+            counts.refracted,
+            counts.total() as f64 / t.elapsed().as_secs_f64() / 1e6,
+            rayon::current_num_threads()
+        ));
+        cpu_film = Some(film);
+    }
+    let mut gpu_film = None;
+    if let Some(ctx) = &gpu {
+        let renderer = gpurt::gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
+        report.push(format!(
+            "shader      {:.3} s (module + pipeline creation)",
+            renderer.compile_time.as_secs_f64()
+        ));
+        let progress = Progress::new(pixels);
+        let t = Instant::now();
+        let result = renderer.render(
+            &ctx.device,
+            &ctx.queue,
             &buffers,
             &globals,
-            &|n| {
-                pixels_done.fetch_add(n, Ordering::Relaxed);
-                progress.advance(n);
-            },
+            &|n| progress.advance(n),
             &cancel,
-        ),
-    };
-    progress.finish();
-    let (film, counts) = result?;
-    let render_time = render_start.elapsed();
+        );
+        progress.finish();
+        let (film, rays) = result?;
+        report.push(format!(
+            "gpu         {:.3} s, {} rays, {:.2} Mrays/s",
+            t.elapsed().as_secs_f64(),
+            rays,
+            rays as f64 / t.elapsed().as_secs_f64() / 1e6
+        ));
+        gpu_film = Some(film);
+    }
+    if let (Some(c), Some(g)) = (&cpu_film, &gpu_film) {
+        let stats = film::diff(
+            &render::display_film(c, opts.aov).to_rgb8(),
+            &render::display_film(g, opts.aov).to_rgb8(),
+            Thresholds::GPU_VS_CPU.tolerance_255,
+        )?;
+        eprintln!("cpu vs gpu  {stats}");
+    }
+    let film = gpu_film.or(cpu_film).expect("one backend rendered");
     let out_film = if is_float_format(&output) {
         film
     } else {
@@ -308,9 +375,6 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     };
     save(&out_film, &output)?;
     if args.stats {
-        let rays = counts.total();
-        let mrays = rays as f64 / render_time.as_secs_f64() / 1e6;
-        eprintln!("backend     cpu ({} threads)", rayon::current_num_threads());
         eprintln!(
             "image       {}x{}, {} spp, depth {}",
             opts.width, opts.height, opts.spp, opts.max_depth
@@ -328,13 +392,10 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
             "build       {:.3} s (BVH + packing)",
             build_time.as_secs_f64()
         );
-        eprintln!("render      {:.3} s", render_time.as_secs_f64());
+        for line in &report {
+            eprintln!("{line}");
+        }
         eprintln!("total       {:.3} s", start.elapsed().as_secs_f64());
-        eprintln!(
-            "rays        {} ({} eye, {} shadow, {} reflected, {} refracted)",
-            rays, counts.eye, counts.shadow, counts.reflected, counts.refracted
-        );
-        eprintln!("speed       {mrays:.2} Mrays/s");
         if let Some(m) = render::peak_memory() {
             eprintln!("peak memory {:.1} MiB", m as f64 / (1 << 20) as f64);
         }

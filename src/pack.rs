@@ -62,7 +62,7 @@ impl RenderOptions {
     }
 }
 
-fn kind_meta(kind: u32, material: u32) -> u32 {
+fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
@@ -87,7 +87,7 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
         prims.push(GpuPrim {
             p0: s.center,
             f0: s.radius,
-            meta: kind_meta(PRIM_SPHERE, s.material.0),
+            tag: kind_tag(PRIM_SPHERE, s.material.0),
             ..Default::default()
         });
         bounds.push(s.bounds());
@@ -110,7 +110,7 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
             p1: t.v[1] - t.v[0],
             f1: slot,
             p2: t.v[2] - t.v[0],
-            meta: kind_meta(PRIM_TRIANGLE, t.material.0),
+            tag: kind_tag(PRIM_TRIANGLE, t.material.0),
             ..Default::default()
         });
         bounds.push(t.bounds());
@@ -127,7 +127,7 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
             f0: c.base_radius,
             p1: c.apex,
             f1: c.apex_radius,
-            meta: kind_meta(PRIM_CONE, c.material.0),
+            tag: kind_tag(PRIM_CONE, c.material.0),
             ..Default::default()
         });
         bounds.push(c.bounds());
@@ -136,7 +136,7 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
         prims.push(GpuPrim {
             p0: b.min,
             p1: b.max,
-            meta: kind_meta(PRIM_BOX, b.material.0),
+            tag: kind_tag(PRIM_BOX, b.material.0),
             ..Default::default()
         });
         bounds.push(b.bounds());

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 
 use super::shade::{surface, trace};
 use super::traverse::closest_hit;
-use super::types::{Bindings, NO_PRIM, Ray, RayCounts, rand, rng_seed};
+use super::types::{Bindings, NO_HIT, NO_PRIM, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 
 /// Camera ray through image point `(x, y)` (pixels, y down), shading.md's convention.
@@ -70,7 +70,7 @@ pub fn render_pixel(b: &Bindings, px: u32, py: u32, counts: &mut RayCounts) -> V
 /// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
 fn aov(b: &Bindings, ray: &Ray) -> Vec3 {
     let g = b.globals;
-    let hit = closest_hit(b, ray, g.hither, f32::INFINITY);
+    let hit = closest_hit(b, ray, g.hither, NO_HIT);
     match g.aov {
         AOV_COST => Vec3::splat(hit.cost as f32),
         _ if hit.prim == NO_PRIM => Vec3::ZERO,

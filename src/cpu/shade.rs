@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::intersect;
 use super::traverse::{closest_hit, transmission};
-use super::types::{Bindings, Hit, NO_PRIM, PLANE_FLAG, Ray, RayCounts, rand};
+use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray, RayCounts, rand};
 use crate::gpu_types::*;
 
 /// A ray waiting to be traced, with the product of the Ks / T factors on its path.
@@ -90,7 +90,7 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
         let intensity = light.color / samples as f32;
         for k in 0..samples {
             let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
-                (light.pos, NO_HIT_DIST)
+                (light.pos, NO_HIT)
             } else {
                 let mut lp = light.pos;
                 if light.kind == LIGHT_AREA {
@@ -123,9 +123,6 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
     colour
 }
 
-/// Distance used for shadow rays towards directional lights.
-const NO_HIT_DIST: f32 = f32::INFINITY;
-
 /// Colour seen along an eye ray: Whitted shading with reflection and refraction.
 pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
     let g = b.globals;
@@ -146,7 +143,7 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
             origin: ray_in.origin,
             dir: ray_in.dir,
         };
-        let hit = closest_hit(b, &ray, ray_in.tmin, f32::INFINITY);
+        let hit = closest_hit(b, &ray, ray_in.tmin, NO_HIT);
         if hit.prim == NO_PRIM {
             colour += ray_in.weight * g.background;
             continue;

@@ -6,8 +6,8 @@ use glam::Vec3;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
 
-/// "No hit" distance.
-pub const NO_HIT: f32 = f32::INFINITY;
+/// "No hit" distance: the largest f32, since WGSL has no infinity literal.
+pub const NO_HIT: f32 = f32::MAX;
 /// Set in `Hit::prim` when the hit is a plane (index into `planes`).
 pub const PLANE_FLAG: u32 = 0x8000_0000;
 /// `Hit::prim` when nothing was hit.

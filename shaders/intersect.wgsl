@@ -1,0 +1,177 @@
+// intersect.wgsl: ray against sphere, triangle (Möller-Trumbore), cone, box and plane, and
+// the geometric normal at a hit (CPU twin: src/cpu/intersect.rs). Bounded tests return both
+// crossings (t0, t1), nearest first, NO_HIT where there is none.
+
+fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
+    let fixed = select(d, vec3<f32>(1e-30), abs(d) < vec3<f32>(1e-30));
+    return vec3<f32>(1.0) / fixed;
+}
+
+fn intersect_sphere(center: vec3<f32>, radius: f32, ray: Ray) -> vec2<f32> {
+    let oc = ray.origin - center;
+    let b = dot(oc, ray.dir);
+    let qc = oc - b * ray.dir;
+    var h = radius * radius - dot(qc, qc);
+    if (h < 0.0) {
+        return vec2<f32>(NO_HIT);
+    }
+    h = sqrt(h);
+    return vec2<f32>(-b - h, -b + h);
+}
+
+// Two-sided Möller-Trumbore: (t, u, v), t = NO_HIT on a miss.
+fn intersect_triangle(p: Prim, ray: Ray) -> vec3<f32> {
+    let e1 = p.p1;
+    let e2 = p.p2;
+    let pvec = cross(ray.dir, e2);
+    let det = dot(e1, pvec);
+    if (det == 0.0) {
+        return vec3<f32>(NO_HIT);
+    }
+    let inv = 1.0 / det;
+    let tvec = ray.origin - p.p0;
+    let u = dot(tvec, pvec) * inv;
+    if (!(u >= 0.0 && u <= 1.0)) {
+        return vec3<f32>(NO_HIT);
+    }
+    let qvec = cross(tvec, e1);
+    let v = dot(ray.dir, qvec) * inv;
+    if (v < 0.0 || u + v > 1.0) {
+        return vec3<f32>(NO_HIT);
+    }
+    return vec3<f32>(dot(e2, qvec) * inv, u, v);
+}
+
+fn cone_valid(t: f32, cv: f32, dv: f32, height: f32, r0: f32, k: f32) -> bool {
+    let s = cv + t * dv;
+    return t != NO_HIT && s >= 0.0 && s <= height && r0 + k * s >= 0.0;
+}
+
+fn intersect_cone(p: Prim, ray: Ray) -> vec2<f32> {
+    let axis = p.p1 - p.p0;
+    let height = length(axis);
+    let a = axis / height;
+    let k = (p.f1 - p.f0) / height;
+    let co = ray.origin - p.p0;
+    let dv = dot(ray.dir, a);
+    let cv = dot(co, a);
+    let dp = ray.dir - dv * a;
+    let cp = co - cv * a;
+    let rr = p.f0 + k * cv;
+    let qa = dot(dp, dp) - k * k * dv * dv;
+    let qb = dot(cp, dp) - k * rr * dv;
+    let qc = dot(cp, cp) - rr * rr;
+    var t = vec2<f32>(NO_HIT);
+    if (abs(qa) < 1e-12) {
+        if (qb != 0.0) {
+            t.x = -qc / (2.0 * qb);
+        }
+    } else {
+        let disc = qb * qb - qa * qc;
+        if (disc < 0.0) {
+            return t;
+        }
+        let sq = sqrt(disc);
+        let r0 = (-qb - sq) / qa;
+        let r1 = (-qb + sq) / qa;
+        t = vec2<f32>(min(r0, r1), max(r0, r1));
+    }
+    let ok0 = cone_valid(t.x, cv, dv, height, p.f0, k);
+    let ok1 = cone_valid(t.y, cv, dv, height, p.f0, k);
+    if (ok0 && ok1) {
+        return t;
+    } else if (ok0) {
+        return vec2<f32>(t.x, NO_HIT);
+    } else if (ok1) {
+        return vec2<f32>(t.y, NO_HIT);
+    }
+    return vec2<f32>(NO_HIT);
+}
+
+fn max_element(v: vec3<f32>) -> f32 {
+    return max(max(v.x, v.y), v.z);
+}
+
+fn min_element(v: vec3<f32>) -> f32 {
+    return min(min(v.x, v.y), v.z);
+}
+
+fn slabs(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>) -> vec2<f32> {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = max_element(min(t0, t1));
+    let far = min_element(max(t0, t1));
+    if (near > far) {
+        return vec2<f32>(NO_HIT);
+    }
+    return vec2<f32>(near, far);
+}
+
+fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = max(max_element(min(t0, t1)), tmin);
+    let far = min(min_element(max(t0, t1)), tmax);
+    return near <= far;
+}
+
+fn intersect_prim(p: Prim, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {
+    switch prim_kind(p) {
+        case PRIM_SPHERE: {
+            return vec4<f32>(intersect_sphere(p.p0, p.f0, ray), 0.0, 0.0);
+        }
+        case PRIM_TRIANGLE: {
+            let h = intersect_triangle(p, ray);
+            return vec4<f32>(h.x, NO_HIT, h.y, h.z);
+        }
+        case PRIM_CONE: {
+            return vec4<f32>(intersect_cone(p, ray), 0.0, 0.0);
+        }
+        default: {
+            return vec4<f32>(slabs(p.p0, p.p1, ray.origin, inv_dir), 0.0, 0.0);
+        }
+    }
+}
+
+fn intersect_plane(pl: Plane, ray: Ray) -> f32 {
+    let denom = dot(pl.normal, ray.dir);
+    if (denom == 0.0) {
+        return NO_HIT;
+    }
+    return (pl.d - dot(pl.normal, ray.origin)) / denom;
+}
+
+fn sign_of(c: f32) -> f32 {
+    return select(-1.0, 1.0, c >= 0.0);
+}
+
+fn prim_normal(p: Prim, x: vec3<f32>) -> vec3<f32> {
+    switch prim_kind(p) {
+        case PRIM_SPHERE: {
+            return normalize(x - p.p0);
+        }
+        case PRIM_TRIANGLE: {
+            return normalize(cross(p.p1, p.p2));
+        }
+        case PRIM_CONE: {
+            let axis = p.p1 - p.p0;
+            let height = length(axis);
+            let a = axis / height;
+            let k = (p.f1 - p.f0) / height;
+            let q = x - p.p0;
+            let radial = q - dot(q, a) * a;
+            return normalize(normalize(radial) - k * a);
+        }
+        default: {
+            let c = 0.5 * (p.p0 + p.p1);
+            let local = (x - c) / max(0.5 * (p.p1 - p.p0), vec3<f32>(1e-30));
+            let m = abs(local);
+            if (m.x >= m.y && m.x >= m.z) {
+                return vec3<f32>(sign_of(local.x), 0.0, 0.0);
+            } else if (m.y >= m.z) {
+                return vec3<f32>(0.0, sign_of(local.y), 0.0);
+            }
+            return vec3<f32>(0.0, 0.0, sign_of(local.z));
+        }
+    }
+}

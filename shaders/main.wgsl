@@ -1,0 +1,72 @@
+// main.wgsl: the compute entry point. One invocation per pixel of the current tile
+// (8x8 workgroups; the host dispatches one bounded tile at a time): camera rays
+// (stratified, jittered samples and the thin lens, from the shared hash), traced and
+// averaged, or an AOV (CPU twin: src/cpu/main.rs).
+
+fn camera_ray(x: f32, y: f32, rng: ptr<function, u32>) -> Ray {
+    let g = globals;
+    let sx = (x - 0.5 * f32(g.width)) * g.pixel_pitch;
+    let sy = (0.5 * f32(g.height) - y) * g.pixel_pitch;
+    let dir = normalize(g.cam_forward + sx * g.cam_right + sy * g.cam_up);
+    if (g.aperture <= 0.0) {
+        return Ray(g.cam_pos, dir);
+    }
+    // Thin lens: aim at the point on the focal plane, from a point on the lens disc.
+    let focus = g.cam_pos + dir * (g.focal / dot(dir, g.cam_forward));
+    let r = 0.5 * g.aperture * sqrt(rand(rng));
+    let phi = 2.0 * 3.14159265358979323846 * rand(rng);
+    let origin = g.cam_pos + r * cos(phi) * g.cam_right + r * sin(phi) * g.cam_up;
+    return Ray(origin, normalize(focus - origin));
+}
+
+fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
+    if (n <= 1u) {
+        return vec2<f32>(0.5);
+    }
+    var k = 1u;
+    while (k * k < n) {
+        k += 1u;
+    }
+    let rows = (n + k - 1u) / k;
+    let jx = rand(rng);
+    let jy = rand(rng);
+    return vec2<f32>((f32(s % k) + jx) / f32(k), (f32(s / k) + jy) / f32(rows));
+}
+
+fn aov(ray: Ray) -> vec3<f32> {
+    let hit = closest_hit(ray, globals.hither, NO_HIT);
+    if (globals.aov == AOV_COST) {
+        return vec3<f32>(f32(hit.cost));
+    }
+    if (hit.prim == NO_PRIM) {
+        return vec3<f32>(0.0);
+    }
+    if (globals.aov == AOV_DEPTH) {
+        return vec3<f32>(hit.t);
+    }
+    return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (id.x >= tile.width || id.y >= tile.height) {
+        return;
+    }
+    let px = tile.x + id.x;
+    let py = tile.y + id.y;
+    let g = globals;
+    var rays = 0u;
+    var sum = vec3<f32>(0.0);
+    for (var s = 0u; s < g.spp; s++) {
+        var rng = rng_seed(py * g.width + px, s, g.seed);
+        let off = sample_offset(s, g.spp, &rng);
+        let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+        rays += 1u;
+        if (g.aov == AOV_COLOR) {
+            sum += trace(ray, &rng, &rays);
+        } else {
+            sum += aov(ray);
+        }
+    }
+    output[id.y * tile.width + id.x] = PixelOut(sum / f32(g.spp), rays);
+}

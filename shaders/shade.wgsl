@@ -1,0 +1,148 @@
+// shade.wgsl: the Whitted model of docs/shading.md, iterative with an explicit stack of
+// pending rays, pushed and popped in the same order as the CPU (twin: src/cpu/shade.rs).
+
+struct Pending {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+    weight: f32,
+    depth: u32,
+    tmin: f32,
+}
+
+struct Surface {
+    point: vec3<f32>,
+    ng: vec3<f32>,
+    ns: vec3<f32>,
+    entering: bool,
+    material: u32,
+}
+
+fn surface(ray: Ray, hit: Hit) -> Surface {
+    let point = ray.origin + hit.t * ray.dir;
+    var outward: vec3<f32>;
+    var ns: vec3<f32>;
+    var material: u32;
+    if ((hit.prim & PLANE_FLAG) != 0u) {
+        let pl = planes[hit.prim & ~PLANE_FLAG];
+        outward = pl.normal;
+        ns = pl.normal;
+        material = pl.material;
+    } else {
+        let p = prims[hit.prim];
+        outward = prim_normal(p, point);
+        ns = outward;
+        if (prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {
+            let n = tri_normals[u32(p.f1)];
+            ns = normalize((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2);
+        }
+        material = prim_material(p);
+    }
+    let entering = dot(outward, ray.dir) < 0.0;
+    let ng = select(-outward, outward, entering);
+    if (dot(ns, ray.dir) > 0.0) {
+        ns = -ns;
+    }
+    return Surface(point, ng, ns, entering, material);
+}
+
+fn offset_origin(s: Surface, dir: vec3<f32>, eps: f32) -> vec3<f32> {
+    if (dot(s.ng, dir) >= 0.0) {
+        return s.point + eps * s.ng;
+    }
+    return s.point - eps * s.ng;
+}
+
+fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    return d - 2.0 * dot(n, d) * n;
+}
+
+fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    let m = materials[s.material];
+    var colour = globals.ambient * m.kd * m.color;
+    let r = reflect_dir(dir, s.ns);
+    for (var li = 0u; li < globals.n_lights; li++) {
+        let light = lights[li];
+        var samples = 1u;
+        if (light.kind == LIGHT_AREA) {
+            samples = light.nu * light.nv;
+        }
+        let intensity = light.color / f32(samples);
+        for (var k = 0u; k < samples; k++) {
+            var l: vec3<f32>;
+            var dist: f32;
+            if (light.kind == LIGHT_DIRECTIONAL) {
+                l = light.pos;
+                dist = NO_HIT;
+            } else {
+                var lp = light.pos;
+                if (light.kind == LIGHT_AREA) {
+                    let su = (f32(k % light.nu) + rand(rng)) / f32(light.nu);
+                    let sv = (f32(k / light.nu) + rand(rng)) / f32(light.nv);
+                    lp += su * light.u + sv * light.v;
+                }
+                let to = lp - s.point;
+                l = normalize(to);
+                dist = length(to);
+            }
+            let ndotl = dot(s.ns, l);
+            if (ndotl <= 0.0) {
+                continue;
+            }
+            *rays += 1u;
+            let shadow_ray = Ray(offset_origin(s, l, globals.epsilon), l);
+            let shadow = transmission(shadow_ray, dist);
+            let rl = dot(r, l);
+            var highlight = 0.0;
+            if (rl > 0.0) {
+                highlight = m.ks * pow(rl, m.shine);
+            }
+            colour += shadow * intensity * (m.kd * m.color * ndotl + vec3<f32>(highlight));
+        }
+    }
+    return colour;
+}
+
+fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    var stack: array<Pending, RAY_STACK>;
+    stack[0] = Pending(eye.origin, eye.dir, 1.0, 1u, globals.hither);
+    var sp = 1u;
+    var colour = vec3<f32>(0.0);
+    while (sp > 0u) {
+        sp -= 1u;
+        let ray_in = stack[sp];
+        let ray = Ray(ray_in.origin, ray_in.dir);
+        let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+        if (hit.prim == NO_PRIM) {
+            colour += ray_in.weight * globals.background;
+            continue;
+        }
+        let s = surface(ray, hit);
+        colour += ray_in.weight * direct(s, ray.dir, rng, rays);
+        if (ray_in.depth >= globals.max_depth) {
+            continue;
+        }
+        let m = materials[s.material];
+        if (m.ks > 0.0) {
+            let dir = reflect_dir(ray.dir, s.ns);
+            *rays += 1u;
+            stack[sp] = Pending(offset_origin(s, dir, globals.epsilon), dir, ray_in.weight * m.ks, ray_in.depth + 1u, 0.0);
+            sp += 1u;
+        }
+        if (m.t > 0.0) {
+            let eta = select(m.ior, 1.0 / m.ior, s.entering);
+            let cos_i = -dot(s.ns, ray.dir);
+            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+            // Total internal reflection sends the transmitted weight along the mirror ray.
+            var dir: vec3<f32>;
+            if (k < 0.0) {
+                dir = reflect_dir(ray.dir, s.ns);
+            } else {
+                dir = normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns);
+            }
+            *rays += 1u;
+            stack[sp] = Pending(offset_origin(s, dir, globals.epsilon), dir, ray_in.weight * m.t, ray_in.depth + 1u, 0.0);
+            sp += 1u;
+        }
+    }
+    return colour;
+}

@@ -1,0 +1,131 @@
+// traverse.wgsl: closest-hit and shadow (any-hit) traversal of the flattened BVH with a
+// fixed stack, near child first, plus the planes kept outside it
+// (CPU twin: src/cpu/traverse.rs).
+
+fn first_in(t: vec4<f32>, tmin: f32, tmax: f32) -> f32 {
+    if (t.x > tmin && t.x < tmax) {
+        return t.x;
+    } else if (t.y > tmin && t.y < tmax) {
+        return t.y;
+    }
+    return NO_HIT;
+}
+
+fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
+    var hit = Hit(tmax, NO_PRIM, 0.0, 0.0, 0u);
+    for (var i = 0u; i < globals.n_planes; i++) {
+        let t = intersect_plane(planes[i], ray);
+        if (t > tmin && t < hit.t) {
+            hit.t = t;
+            hit.prim = PLANE_FLAG | i;
+        }
+    }
+    if (globals.n_nodes == 0u) {
+        return hit;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let neg = ray.dir < vec3<f32>(0.0);
+    var stack: array<u32, TRAVERSAL_STACK>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = nodes[node];
+        hit.cost += 1u;
+        if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t)) {
+            let count = node_count(n);
+            if (count > 0u) {
+                for (var i = n.offset; i < n.offset + count; i++) {
+                    let p = prims[i];
+                    let t = intersect_prim(p, ray, inv_dir);
+                    let first = first_in(t, tmin, hit.t);
+                    if (first != NO_HIT) {
+                        hit.t = first;
+                        hit.prim = i;
+                        hit.u = t.z;
+                        hit.v = t.w;
+                    }
+                }
+            } else {
+                // Visit the child nearer along the split axis first.
+                if (neg[node_axis(n)]) {
+                    stack[sp] = node + 1u;
+                    node = n.offset;
+                } else {
+                    stack[sp] = n.offset;
+                    node += 1u;
+                }
+                sp += 1u;
+                continue;
+            }
+        }
+        if (sp == 0u) {
+            break;
+        }
+        sp -= 1u;
+        node = stack[sp];
+    }
+    return hit;
+}
+
+// Light reaching the end of the segment origin + t*dir, t in (0, tmax): an opaque occluder
+// blocks it, each crossing of a transmitting surface multiplies it by T * C.
+fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
+    var light = vec3<f32>(1.0);
+    for (var i = 0u; i < globals.n_planes; i++) {
+        let pl = planes[i];
+        let t = intersect_plane(pl, ray);
+        if (t > 0.0 && t < tmax) {
+            let m = materials[pl.material];
+            if (m.t <= 0.0) {
+                return vec3<f32>(0.0);
+            }
+            light *= m.t * m.color;
+        }
+    }
+    if (globals.n_nodes == 0u) {
+        return light;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    let neg = ray.dir < vec3<f32>(0.0);
+    var stack: array<u32, TRAVERSAL_STACK>;
+    var sp = 0u;
+    var node = 0u;
+    loop {
+        let n = nodes[node];
+        if (overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax)) {
+            let count = node_count(n);
+            if (count > 0u) {
+                for (var i = n.offset; i < n.offset + count; i++) {
+                    let p = prims[i];
+                    let t = intersect_prim(p, ray, inv_dir);
+                    let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
+                    if (crossings > 0u) {
+                        let m = materials[prim_material(p)];
+                        if (m.t <= 0.0) {
+                            return vec3<f32>(0.0);
+                        }
+                        for (var c = 0u; c < crossings; c++) {
+                            light *= m.t * m.color;
+                        }
+                    }
+                }
+            } else {
+                if (neg[node_axis(n)]) {
+                    stack[sp] = node + 1u;
+                    node = n.offset;
+                } else {
+                    stack[sp] = n.offset;
+                    node += 1u;
+                }
+                sp += 1u;
+                continue;
+            }
+        }
+        if (sp == 0u) {
+            break;
+        }
+        sp -= 1u;
+        node = stack[sp];
+    }
+    return light;
+}

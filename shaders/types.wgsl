@@ -1,0 +1,173 @@
+// types.wgsl: the structs shared with Rust (mirrors src/gpu_types.rs; keep in sync, the
+// layout test compares both through naga's reflection), the bindings, and the counter-based
+// hash both renderers draw samples from (CPU twin: src/cpu/types.rs).
+
+struct Prim {
+    p0: vec3<f32>,
+    f0: f32,
+    p1: vec3<f32>,
+    f1: f32,
+    p2: vec3<f32>,
+    tag: u32,
+}
+
+struct TriNormals {
+    n0: vec3<f32>,
+    _pad0: u32,
+    n1: vec3<f32>,
+    _pad1: u32,
+    n2: vec3<f32>,
+    _pad2: u32,
+}
+
+struct Node {
+    min: vec3<f32>,
+    offset: u32,
+    max: vec3<f32>,
+    count_axis: u32,
+}
+
+struct Plane {
+    normal: vec3<f32>,
+    d: f32,
+    material: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+struct Material {
+    color: vec3<f32>,
+    kd: f32,
+    ks: f32,
+    shine: f32,
+    t: f32,
+    ior: f32,
+}
+
+struct Light {
+    pos: vec3<f32>,
+    kind: u32,
+    u: vec3<f32>,
+    nu: u32,
+    v: vec3<f32>,
+    nv: u32,
+    color: vec3<f32>,
+    _pad: u32,
+}
+
+struct Globals {
+    cam_pos: vec3<f32>,
+    hither: f32,
+    cam_forward: vec3<f32>,
+    pixel_pitch: f32,
+    cam_right: vec3<f32>,
+    aperture: f32,
+    cam_up: vec3<f32>,
+    focal: f32,
+    background: vec3<f32>,
+    epsilon: f32,
+    ambient: vec3<f32>,
+    max_depth: u32,
+    width: u32,
+    height: u32,
+    spp: u32,
+    seed: u32,
+    n_nodes: u32,
+    n_planes: u32,
+    n_lights: u32,
+    aov: u32,
+}
+
+struct Tile {
+    x: u32,
+    y: u32,
+    width: u32,
+    height: u32,
+}
+
+// One traced pixel: its value and the number of rays traced for it.
+struct PixelOut {
+    color: vec3<f32>,
+    rays: u32,
+}
+
+const PRIM_SPHERE: u32 = 0u;
+const PRIM_TRIANGLE: u32 = 1u;
+const PRIM_CONE: u32 = 2u;
+const PRIM_BOX: u32 = 3u;
+const PRIM_KIND_SHIFT: u32 = 28u;
+const PRIM_MATERIAL_MASK: u32 = 0x0fffffffu;
+
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_DIRECTIONAL: u32 = 1u;
+const LIGHT_AREA: u32 = 2u;
+
+const AOV_COLOR: u32 = 0u;
+const AOV_NORMAL: u32 = 1u;
+const AOV_DEPTH: u32 = 2u;
+const AOV_COST: u32 = 3u;
+
+const TRAVERSAL_STACK: u32 = 64u;
+const RAY_STACK: u32 = 16u;
+
+// "No hit": the largest f32 (WGSL has no infinity literal; the CPU uses the same value).
+const NO_HIT: f32 = 3.40282347e+38;
+const PLANE_FLAG: u32 = 0x80000000u;
+const NO_PRIM: u32 = 0xffffffffu;
+
+@group(0) @binding(0) var<uniform> globals: Globals;
+@group(0) @binding(1) var<uniform> tile: Tile;
+@group(0) @binding(2) var<storage, read> nodes: array<Node>;
+@group(0) @binding(3) var<storage, read> prims: array<Prim>;
+@group(0) @binding(4) var<storage, read> tri_normals: array<TriNormals>;
+@group(0) @binding(5) var<storage, read> planes: array<Plane>;
+@group(0) @binding(6) var<storage, read> materials: array<Material>;
+@group(0) @binding(7) var<storage, read> lights: array<Light>;
+@group(0) @binding(8) var<storage, read_write> output: array<PixelOut>;
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+struct Hit {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+    cost: u32,
+}
+
+fn prim_kind(p: Prim) -> u32 {
+    return p.tag >> PRIM_KIND_SHIFT;
+}
+
+fn prim_material(p: Prim) -> u32 {
+    return p.tag & PRIM_MATERIAL_MASK;
+}
+
+fn node_count(n: Node) -> u32 {
+    return n.count_axis & 0xffffu;
+}
+
+fn node_axis(n: Node) -> u32 {
+    return n.count_axis >> 16u;
+}
+
+// PCG hash (Jarzynski & Olano 2020); u32 arithmetic wraps, as on the CPU.
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+fn rng_seed(pixel: u32, sample: u32, seed: u32) -> u32 {
+    return pcg_hash(pixel ^ pcg_hash(sample ^ pcg_hash(seed)));
+}
+
+// Next uniform number in [0, 1) with 24 bits, advancing the stream.
+fn rand(state: ptr<function, u32>) -> f32 {
+    *state = pcg_hash(*state);
+    return f32(*state >> 8u) * (1.0 / 16777216.0);
+}

@@ -1,0 +1,89 @@
+//! Finding an adapter and opening a device. Kept apart from rendering so tests (and other
+//! programs) can pass in a device of their own to `render_gpu`.
+
+use crate::error::{Error, Result};
+
+/// A device and queue with the adapter they came from.
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::Adapter,
+    pub info: wgpu::AdapterInfo,
+}
+
+impl GpuContext {
+    /// One line naming the adapter, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan, Cpu)`.
+    pub fn describe(&self) -> String {
+        describe(&self.info)
+    }
+}
+
+pub fn describe(info: &wgpu::AdapterInfo) -> String {
+    format!("{} ({:?}, {:?})", info.name, info.backend, info.device_type)
+}
+
+/// Preference among adapters: real GPUs first, software last; Vulkan/Metal/DX12 before GL.
+fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
+    let device = match info.device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    };
+    let backend = match info.backend {
+        wgpu::Backend::Gl | wgpu::Backend::BrowserWebGpu => 1,
+        _ => 0,
+    };
+    (device, backend)
+}
+
+/// Opens a device on the best adapter, or on the first whose name contains `filter`
+/// (case-insensitive; from `--adapter` or `GPURT_ADAPTER`). `WGPU_BACKEND` limits the
+/// backends searched, as in every wgpu program.
+pub fn open(filter: Option<&str>) -> Result<GpuContext> {
+    let filter = filter
+        .map(str::to_owned)
+        .or_else(|| std::env::var("GPURT_ADAPTER").ok())
+        .filter(|f| !f.is_empty());
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    // The instance already honours WGPU_BACKEND; list what it enabled.
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    // Compute shaders need storage buffers; GL adapters without them cannot run ours.
+    adapters.retain(|a| {
+        a.get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+    });
+    if let Some(f) = &filter {
+        let f = f.to_lowercase();
+        adapters.retain(|a| a.get_info().name.to_lowercase().contains(&f));
+    }
+    adapters.sort_by_key(|a| rank(&a.get_info()));
+    let Some(adapter) = adapters.into_iter().next() else {
+        return Err(Error::NoAdapter(match filter {
+            Some(f) => format!(" whose name contains '{f}'"),
+            None => String::new(),
+        }));
+    };
+    let info = adapter.get_info();
+    // Ask for everything the adapter offers: big scenes need its largest buffer limits.
+    let mut required_features = wgpu::Features::empty();
+    if adapter.features().contains(wgpu::Features::PIPELINE_CACHE) {
+        required_features |= wgpu::Features::PIPELINE_CACHE;
+    }
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("gpurt"),
+        required_features,
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;
+    Ok(GpuContext {
+        device,
+        queue,
+        adapter,
+        info,
+    })
+}

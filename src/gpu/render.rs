@@ -1,0 +1,324 @@
+//! Upload, tiled dispatch and readback.
+//!
+//! The image is traced one bounded tile per submission, so that no dispatch runs long
+//! enough to trip a driver watchdog on a real GPU, the progress bar can advance per tile,
+//! and Ctrl-C is noticed between tiles. Each tile's results are copied to a mappable
+//! buffer and read back before the next tile starts.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use wgpu::util::DeviceExt;
+
+use super::shaders;
+use crate::error::{Error, Result};
+use crate::film::Film;
+use crate::gpu_types::{GpuGlobals, GpuTile};
+use crate::pack::SceneBuffers;
+
+/// Workgroup size of `main.wgsl` (8 x 8).
+const WORKGROUP: u32 = 8;
+/// Bytes per traced pixel: `PixelOut` (rgb + ray count).
+const PIXEL_BYTES: u64 = 16;
+
+/// A compiled pipeline, reusable across renders on one device.
+pub struct GpuRenderer {
+    pipeline: wgpu::ComputePipeline,
+    /// Time spent creating the shader module and pipeline (shader compilation).
+    pub compile_time: Duration,
+}
+
+/// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
+/// `~/.cache/gpurt`. `GPURT_CACHE_DIR=` (empty) turns the cache off.
+fn cache_dir() -> Option<PathBuf> {
+    if let Ok(d) = std::env::var("GPURT_CACHE_DIR") {
+        return (!d.is_empty()).then(|| PathBuf::from(d));
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
+    Some(base.join("gpurt"))
+}
+
+/// Runs `f` inside validation and out-of-memory error scopes, turning any captured error
+/// into `Error::Gpu` (never a silent black image).
+fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let out = f();
+    let v = pollster::block_on(validation.pop());
+    let o = pollster::block_on(oom.pop());
+    match v.or(o) {
+        Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
+        None => Ok(out),
+    }
+}
+
+impl GpuRenderer {
+    /// Compiles the shader. `adapter_info` keys the on-disk pipeline cache, used when the
+    /// device has `PIPELINE_CACHE` (pass `None` to skip the cache).
+    pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
+        let start = Instant::now();
+        let cache_file = adapter_info
+            .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
+            .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
+        let cache_data = cache_file.as_ref().and_then(|f| std::fs::read(f).ok());
+        let pipeline_and_cache = scoped(device, "compiling the shader", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("gpurt"),
+                source: wgpu::ShaderSource::Wgsl(shaders::source().into()),
+            });
+            // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
+            // with the same cache key; `fallback` makes wgpu ignore data it rejects.
+            let cache = cache_file.as_ref().map(|_| unsafe {
+                device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                    label: Some("gpurt"),
+                    data: cache_data.as_deref(),
+                    fallback: true,
+                })
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("gpurt"),
+                layout: None,
+                module: &module,
+                entry_point: Some("main"),
+                compilation_options: Default::default(),
+                cache: cache.as_ref(),
+            });
+            (pipeline, cache)
+        })?;
+        let (pipeline, cache) = pipeline_and_cache;
+        if let (Some(file), Some(data)) = (&cache_file, cache.and_then(|c| c.get_data())) {
+            // Best effort: a cache that cannot be written only costs time next run.
+            let _ = std::fs::create_dir_all(file.parent().unwrap_or(file)).and_then(|_| {
+                crate::film::write_atomic(file, &data).map_err(std::io::Error::other)
+            });
+        }
+        Ok(GpuRenderer {
+            pipeline,
+            compile_time: start.elapsed(),
+        })
+    }
+
+    /// Renders the image described by `globals` on `device`. Returns the film and the
+    /// number of rays traced.
+    pub fn render(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+        progress: &dyn Fn(u64),
+        cancel: &AtomicBool,
+    ) -> Result<(Film, u64)> {
+        let (w, h) = (globals.width, globals.height);
+        let tile_side = tile_side(globals.spp);
+        let tile_bytes = u64::from(tile_side) * u64::from(tile_side) * PIXEL_BYTES;
+        check_sizes(device, scene, tile_bytes)?;
+
+        let storage = |label: &str, bytes: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let uniform = |label: &str, bytes: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        let (bind_group, tile_buf, output, readback) =
+            scoped(device, "uploading the scene", || {
+                let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
+                let tile_buf = uniform("tile", bytemuck::bytes_of(&GpuTile::default()));
+                let nodes = storage("nodes", non_empty(&scene.nodes));
+                let prims = storage("prims", non_empty(&scene.prims));
+                let normals = storage("tri_normals", non_empty(&scene.tri_normals));
+                let planes = storage("planes", non_empty(&scene.planes));
+                let materials = storage("materials", non_empty(&scene.materials));
+                let lights = storage("lights", non_empty(&scene.lights));
+                let output = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("output"),
+                    size: tile_bytes,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let readback = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("readback"),
+                    size: tile_bytes,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let buffers = [
+                    &globals_buf,
+                    &tile_buf,
+                    &nodes,
+                    &prims,
+                    &normals,
+                    &planes,
+                    &materials,
+                    &lights,
+                    &output,
+                ];
+                let entries: Vec<wgpu::BindGroupEntry> = buffers
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| wgpu::BindGroupEntry {
+                        binding: i as u32,
+                        resource: b.as_entire_binding(),
+                    })
+                    .collect();
+                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpurt"),
+                    layout: &self.pipeline.get_bind_group_layout(0),
+                    entries: &entries,
+                });
+                (bind_group, tile_buf, output, readback)
+            })?;
+
+        let mut film = Film::new(w, h);
+        let mut rays = 0u64;
+        for ty in (0..h).step_by(tile_side as usize) {
+            for tx in (0..w).step_by(tile_side as usize) {
+                if cancel.load(Ordering::Relaxed) {
+                    return Err(Error::Interrupted);
+                }
+                let tile = GpuTile {
+                    x: tx,
+                    y: ty,
+                    width: tile_side.min(w - tx),
+                    height: tile_side.min(h - ty),
+                };
+                let bytes = u64::from(tile.width) * u64::from(tile.height) * PIXEL_BYTES;
+                scoped(device, "tracing a tile", || {
+                    queue.write_buffer(&tile_buf, 0, bytemuck::bytes_of(&tile));
+                    let mut enc = device.create_command_encoder(&Default::default());
+                    {
+                        let mut pass = enc.begin_compute_pass(&Default::default());
+                        pass.set_pipeline(&self.pipeline);
+                        pass.set_bind_group(0, &bind_group, &[]);
+                        pass.dispatch_workgroups(
+                            tile.width.div_ceil(WORKGROUP),
+                            tile.height.div_ceil(WORKGROUP),
+                            1,
+                        );
+                    }
+                    enc.copy_buffer_to_buffer(&output, 0, &readback, 0, bytes);
+                    queue.submit([enc.finish()]);
+                })?;
+                rays += read_tile(device, &readback, bytes, &tile, &mut film)?;
+                progress(u64::from(tile.width) * u64::from(tile.height));
+            }
+        }
+        Ok((film, rays))
+    }
+}
+
+/// Maps the readback buffer, copies the tile into the film, returns its ray count.
+fn read_tile(
+    device: &wgpu::Device,
+    readback: &wgpu::Buffer,
+    bytes: u64,
+    tile: &GpuTile,
+    film: &mut Film,
+) -> Result<u64> {
+    let slice = readback.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    // A lost device or a hung submission surfaces here as a poll error.
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))?;
+    rx.recv()
+        .map_err(|_| Error::Gpu("readback was never completed".into()))?
+        .map_err(|e| Error::Gpu(format!("reading back a tile: {e}")))?;
+    let mut rays = 0u64;
+    {
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("reading back a tile: {e}")))?;
+        let px: &[[u32; 4]] = bytemuck::cast_slice(&view);
+        for (i, p) in px.iter().enumerate() {
+            let (x, y) = (
+                tile.x + i as u32 % tile.width,
+                tile.y + i as u32 / tile.width,
+            );
+            film.set(x, y, [p[0], p[1], p[2]].map(f32::from_bits));
+            rays += u64::from(p[3]);
+        }
+    }
+    readback.unmap();
+    Ok(rays)
+}
+
+/// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.
+fn tile_side(spp: u32) -> u32 {
+    match spp {
+        0..=4 => 256,
+        5..=16 => 128,
+        _ => 64,
+    }
+}
+
+/// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element
+/// (the shader never reads it, since the counts in `GpuGlobals` are zero).
+fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
+    const ZERO: [u8; 64] = [0; 64];
+    if v.is_empty() {
+        &ZERO[..size_of::<T>().max(4)]
+    } else {
+        bytemuck::cast_slice(v)
+    }
+}
+
+/// Refuses scenes that need a larger storage binding or buffer than the device allows.
+fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, tile_bytes: u64) -> Result<()> {
+    let limits = device.limits();
+    let max_binding = u64::from(limits.max_storage_buffer_binding_size);
+    let max_buffer = limits.max_buffer_size;
+    let arrays = [
+        ("BVH nodes", size_of_val(&scene.nodes[..])),
+        ("primitives", size_of_val(&scene.prims[..])),
+        ("triangle normals", size_of_val(&scene.tri_normals[..])),
+        ("planes", size_of_val(&scene.planes[..])),
+        ("materials", size_of_val(&scene.materials[..])),
+        ("lights", size_of_val(&scene.lights[..])),
+        ("output tile", tile_bytes as usize),
+    ];
+    for (what, bytes) in arrays {
+        let bytes = bytes as u64;
+        let limit = max_binding.min(max_buffer);
+        if bytes > limit {
+            return Err(Error::Gpu(format!(
+                "the scene's {what} need {bytes} bytes in one storage buffer, but this adapter's \
+                 max_storage_buffer_binding_size is {max_binding} (max_buffer_size {max_buffer}); \
+                 render it with --backend cpu"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Convenience for one render: compiles the pipeline (no disk cache) and renders.
+pub fn render_gpu(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> Result<(Film, u64)> {
+    let r = GpuRenderer::new(device, None)?;
+    r.render(
+        device,
+        queue,
+        scene,
+        globals,
+        &|_| {},
+        &AtomicBool::new(false),
+    )
+}
