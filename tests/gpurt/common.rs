@@ -1,0 +1,49 @@
+//! Helpers shared by the test modules.
+
+use std::path::PathBuf;
+
+/// Whether missing prerequisites (shared scenes, a GPU adapter) must fail tests rather
+/// than skip them.
+pub fn in_ci() -> bool {
+    std::env::var("CI").is_ok_and(|v| v == "true")
+}
+
+/// `../shared/scenes` next to the checkout. When it is missing, tests skip with a message,
+/// except under `CI=true`, where they fail.
+pub fn shared_scenes() -> Option<PathBuf> {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes");
+    if dir.is_dir() {
+        Some(dir)
+    } else if in_ci() {
+        panic!("{} is missing (required under CI=true)", dir.display());
+    } else {
+        eprintln!("skipping: {} is missing", dir.display());
+        None
+    }
+}
+
+/// The project's own `scenes/` directory.
+pub fn own_scenes() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
+}
+
+/// Files under `dir` (recursively) whose names end with one of `suffixes`, sorted.
+pub fn files_with(dir: &std::path::Path, suffixes: &[&str]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(&d) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if suffixes.iter().any(|s| p.to_string_lossy().ends_with(s)) {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}

@@ -1,0 +1,353 @@
+//! GPU against the CPU reference, pixel by pixel, on every shared scene up to its default
+//! size, every P3D file and every scene of our own; with samples per pixel, area lights,
+//! the thin lens and each AOV; plus the comparer's own self-test.
+//!
+//! Without an adapter these tests skip with a message, unless `GPURT_REQUIRE_GPU=1`, where
+//! they fail. Failures write the CPU image, the GPU image and a heat map to
+//! `target/gpu-vs-cpu/`.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::sync::atomic::AtomicBool;
+
+use gpurt::film::{self, Film, Thresholds};
+use gpurt::gpu::{GpuContext, GpuRenderer};
+use gpurt::gpu_types::*;
+use gpurt::pack::{self, RenderOptions};
+use gpurt::render::display_film;
+use gpurt::scene::{self, Scene};
+use image::RgbImage;
+
+use crate::common::{files_with, own_scenes, shared_scenes};
+
+/// Side of the comparison renders.
+const SIZE: u32 = 128;
+
+struct Gpu {
+    ctx: GpuContext,
+    renderer: GpuRenderer,
+}
+
+/// One device and compiled pipeline for the whole test binary.
+fn gpu() -> Option<&'static Gpu> {
+    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
+    let gpu = GPU.get_or_init(|| {
+        let required = std::env::var("GPURT_REQUIRE_GPU").is_ok_and(|v| v == "1");
+        match gpurt::gpu::open(None) {
+            Ok(ctx) => {
+                let renderer = GpuRenderer::new(&ctx.device, None).expect("shader compiles");
+                Some(Gpu { ctx, renderer })
+            }
+            Err(e) if required => panic!("GPURT_REQUIRE_GPU=1 but: {e}"),
+            Err(e) => {
+                eprintln!("skipping GPU tests: {e}");
+                None
+            }
+        }
+    });
+    if let Some(g) = gpu {
+        println!("GPU tests run on {}", g.ctx.describe());
+    }
+    gpu.as_ref()
+}
+
+fn render_both(g: &Gpu, scene: &Scene, opts: &RenderOptions) -> (Film, Film) {
+    let buffers = pack::pack(scene).expect("scene packs");
+    let globals = pack::globals(scene, &buffers, opts);
+    let never = AtomicBool::new(false);
+    let (cpu, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");
+    let (gpu, _) = g
+        .renderer
+        .render(
+            &g.ctx.device,
+            &g.ctx.queue,
+            &buffers,
+            &globals,
+            &|_| {},
+            &never,
+        )
+        .unwrap_or_else(|e| panic!("{}: GPU render failed: {e}", scene.name));
+    (cpu, gpu)
+}
+
+fn failure_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/gpu-vs-cpu")
+}
+
+/// Compares GPU and CPU images under `Thresholds::GPU_VS_CPU`; on failure writes the
+/// images and returns a message.
+fn compare(label: &str, cpu: &RgbImage, gpu: &RgbImage) -> Result<(), String> {
+    let stats = film::diff(cpu, gpu, Thresholds::GPU_VS_CPU.tolerance_255)
+        .map_err(|e| format!("{label}: {e}"))?;
+    Thresholds::GPU_VS_CPU.check(&stats).map_err(|why| {
+        let dir = failure_dir();
+        let _ = std::fs::create_dir_all(&dir);
+        let base = dir.join(label.replace(['/', ' '], "_"));
+        let _ = film::save_rgb8(cpu, &base.with_extension("cpu.png"));
+        let _ = film::save_rgb8(gpu, &base.with_extension("actual.png"));
+        if let Ok(heat) = film::heat_map(cpu, gpu) {
+            let _ = film::save_rgb8(&heat, &base.with_extension("difference.png"));
+        }
+        format!("{label}: {why} ({stats}); images in {}", dir.display())
+    })
+}
+
+fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Result<(), String> {
+    let (cpu, gpu) = render_both(g, scene, opts);
+    if cpu.pixels.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(format!("{label}: CPU image has non-finite values"));
+    }
+    compare(
+        label,
+        &display_film(&cpu, opts.aov).to_rgb8(),
+        &display_film(&gpu, opts.aov).to_rgb8(),
+    )
+}
+
+fn opts(scene: &Scene) -> RenderOptions {
+    RenderOptions {
+        width: SIZE,
+        height: SIZE,
+        ..RenderOptions::for_scene(scene)
+    }
+}
+
+/// Runs every case, then fails with all the mismatches at once.
+fn check_all(cases: impl IntoIterator<Item = Result<(), String>>) {
+    let failures: Vec<String> = cases.into_iter().filter_map(Result::err).collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Default size factor of each SPD generator (docs/nff.md).
+fn default_size(name: &str) -> Option<u32> {
+    Some(match name {
+        "balls" => 4,
+        "gears" => 4,
+        "mount" => 6,
+        "rings" => 7,
+        "teapot" => 6,
+        "tetra" => 6,
+        "tree" => 11,
+        _ => return None,
+    })
+}
+
+/// SPD scenes at sizes up to their generator's default, and every P3D file.
+fn shared_scene_files(root: &Path) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = files_with(&root.join("spd"), &[".nff", ".nff.gz"])
+        .into_iter()
+        .filter(|p| {
+            let name = p.file_name().unwrap().to_string_lossy();
+            let stem = name.split('.').next().unwrap_or("");
+            let (kind, size) = stem.rsplit_once('-').unwrap_or((stem, ""));
+            matches!((default_size(kind), size.parse::<u32>()), (Some(d), Ok(s)) if s <= d)
+        })
+        .collect();
+    files.extend(files_with(&root.join("p3d"), &[".nff"]));
+    files
+}
+
+#[test]
+fn shared_scenes_match_cpu() {
+    let (Some(g), Some(root)) = (gpu(), shared_scenes()) else {
+        return;
+    };
+    let files = shared_scene_files(&root);
+    assert!(
+        files.len() >= 25,
+        "expected the SPD and P3D scenes, found {files:?}"
+    );
+    check_all(files.iter().map(|f| {
+        let scene = scene::load(f).expect("shared scene loads");
+        check_scene(g, &f.display().to_string(), &scene, &opts(&scene))
+    }));
+}
+
+#[test]
+fn own_scenes_match_cpu() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let files = files_with(&own_scenes(), &[".nff"]);
+    assert!(!files.is_empty(), "scenes/ has no .nff files");
+    check_all(files.iter().map(|f| {
+        let scene = scene::load(f).expect("own scene loads");
+        check_scene(g, &f.display().to_string(), &scene, &opts(&scene))
+    }));
+}
+
+/// A small scene with every light kind, glass, a mirror, a cone and a box, written here so
+/// the test does not depend on files that may change.
+const FEATURES: &str = "
+b 0.2 0.3 0.4
+v
+from 0 -6 2.5
+at 0 0 0.6
+up 0 0 1
+angle 40
+hither 0.01
+resolution 128 128
+l 4 -4 6
+dl -1 1 -2 0.3 0.3 0.3
+al -1 -1 5  2 0 0  0 2 0  0.8 0.8 0.7  3 3
+f 0.8 0.8 0.8 0.8 0 1 0 1
+pl 0 0 0  1 0 0  0 1 0
+f 1 0.2 0.2 0.6 0.4 40 0 1
+s -1.2 0 0.8 0.8
+f 0.9 0.9 1 0.1 0.1 100 0.85 1.5
+s 0.6 -1 0.7 0.7
+f 0.2 0.8 0.3 0.7 0.2 20 0 1
+c 1.6 1 0 0.5  1.6 1 1.5 0.2
+f 0.9 0.7 0.2 0.8 0 1 0 1
+aabb -0.3 0.5 0.8 1.6 0 0.6
+";
+
+fn features_scene(extra_view: &str) -> Scene {
+    let text = FEATURES.replace(
+        "resolution 128 128",
+        &format!("resolution 128 128\n{extra_view}"),
+    );
+    gpurt::scene::nff::parse(text.as_bytes(), "features.nff", Path::new(".")).expect("parses")
+}
+
+#[test]
+fn samples_per_pixel_area_lights_and_thin_lens_match_cpu() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let plain = features_scene("");
+    let lens = features_scene("aperture 0.3\nfocal 6");
+    let mut cases = Vec::new();
+    for spp in [1, 4] {
+        let o = RenderOptions {
+            spp,
+            ..opts(&plain)
+        };
+        cases.push(check_scene(g, &format!("features-spp{spp}"), &plain, &o));
+        cases.push(check_scene(
+            g,
+            &format!("lens-spp{spp}"),
+            &lens,
+            &RenderOptions { spp, ..opts(&lens) },
+        ));
+    }
+    if let Some(root) = shared_scenes() {
+        for name in [
+            "spd/balls-2.nff",
+            "spd/gears-1.nff",
+            "spd/tree-6.nff",
+            "p3d/mount_high.nff",
+        ] {
+            let scene = scene::load(&root.join(name)).expect("loads");
+            let o = RenderOptions {
+                spp: 4,
+                ..opts(&scene)
+            };
+            cases.push(check_scene(g, &format!("{name}-spp4"), &scene, &o));
+        }
+    }
+    check_all(cases);
+}
+
+#[test]
+fn each_aov_matches_cpu() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let mut scenes = vec![("features".to_string(), features_scene(""))];
+    if let Some(root) = shared_scenes() {
+        for name in ["spd/teapot-2.nff", "spd/rings-3.nff", "spd/mount-5.nff"] {
+            scenes.push((name.into(), scene::load(&root.join(name)).expect("loads")));
+        }
+    }
+    let mut cases = Vec::new();
+    for (name, scene) in &scenes {
+        for (aov, label) in [
+            (AOV_NORMAL, "normal"),
+            (AOV_DEPTH, "depth"),
+            (AOV_COST, "cost"),
+        ] {
+            let o = RenderOptions { aov, ..opts(scene) };
+            cases.push(check_scene(g, &format!("{name}-{label}"), scene, &o));
+        }
+    }
+    check_all(cases);
+}
+
+/// The comparer must reject a wrong image: a GPU render with a block shifted sideways,
+/// and one with a colour bias, both fail; the unmodified render passes.
+#[test]
+fn comparer_rejects_perturbed_gpu_images() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let scene = features_scene("");
+    let (cpu, gpu) = render_both(g, &scene, &opts(&scene));
+    let (cpu, gpu) = (cpu.to_rgb8(), gpu.to_rgb8());
+    compare("self-test-unperturbed", &cpu, &gpu).expect("unperturbed GPU image passes");
+
+    let mut shifted = gpu.clone();
+    for y in 40..72 {
+        for x in 40..72 {
+            shifted.put_pixel(x, y, *gpu.get_pixel(x - 6, y));
+        }
+    }
+    assert!(
+        compare("self-test-shifted", &cpu, &shifted).is_err(),
+        "shifted block passed"
+    );
+
+    let mut biased = gpu.clone();
+    for p in biased.pixels_mut() {
+        p.0 = p.0.map(|c| c.saturating_add(2));
+    }
+    assert!(
+        compare("self-test-biased", &cpu, &biased).is_err(),
+        "colour bias passed"
+    );
+}
+
+/// A scene larger than a storage binding the device allows is refused with a message that
+/// names the limit, never rendered as a black image.
+#[test]
+fn oversized_scene_is_refused_with_the_limit_named() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let limits = wgpu::Limits {
+        max_storage_buffer_binding_size: 1024,
+        ..g.ctx.adapter.limits()
+    };
+    let (device, queue) =
+        pollster::block_on(g.ctx.adapter.request_device(&wgpu::DeviceDescriptor {
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .expect("device with small limits");
+    let scene = features_scene("");
+    let mut big = scene.clone();
+    // 64 spheres take 3 KiB of primitives, over the 1 KiB binding.
+    for i in 0..64 {
+        let mut s = big.spheres[0];
+        s.center.x += i as f32 * 0.01;
+        big.spheres.push(s);
+    }
+    let buffers = pack::pack(&big).expect("packs");
+    let globals = pack::globals(&big, &buffers, &opts(&big));
+    let renderer = GpuRenderer::new(&device, None).expect("compiles");
+    let err = renderer
+        .render(
+            &device,
+            &queue,
+            &buffers,
+            &globals,
+            &|_| {},
+            &AtomicBool::new(false),
+        )
+        .expect_err("oversized scene must be refused");
+    let msg = err.to_string();
+    assert!(
+        msg.contains("max_storage_buffer_binding_size") && msg.contains("1024"),
+        "{msg}"
+    );
+}

@@ -1,0 +1,161 @@
+//! Every struct shared with WGSL has the same size and field offsets in Rust and in the
+//! shader, as naga's layouter computes them for the joined source.
+
+use std::mem::{offset_of, size_of};
+
+use gpurt::gpu::shaders;
+use gpurt::gpu_types::*;
+
+/// (WGSL name, Rust size, [(field, Rust offset)]).
+type Layout = (&'static str, usize, Vec<(&'static str, usize)>);
+
+macro_rules! layout {
+    ($wgsl:literal, $ty:ty, [$($field:ident),* $(,)?]) => {
+        ($wgsl, size_of::<$ty>(), vec![$((stringify!($field), offset_of!($ty, $field))),*])
+    };
+}
+
+fn rust_layouts() -> Vec<Layout> {
+    vec![
+        layout!("Prim", GpuPrim, [p0, f0, p1, f1, p2, tag]),
+        layout!(
+            "TriNormals",
+            GpuTriNormals,
+            [n0, _pad0, n1, _pad1, n2, _pad2]
+        ),
+        layout!("Node", GpuNode, [min, offset, max, count_axis]),
+        layout!("Material", GpuMaterial, [color, kd, ks, shine, t, ior]),
+        layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, _pad]),
+        layout!(
+            "Globals",
+            GpuGlobals,
+            [
+                cam_pos,
+                hither,
+                cam_forward,
+                pixel_pitch,
+                cam_right,
+                aperture,
+                cam_up,
+                focal,
+                background,
+                epsilon,
+                ambient,
+                max_depth,
+                width,
+                height,
+                spp,
+                seed,
+                n_nodes,
+                n_planes,
+                n_lights,
+                aov,
+            ]
+        ),
+        layout!("Tile", GpuTile, [x, y, width, height]),
+    ]
+}
+
+#[test]
+fn shared_structs_match_wgsl_layout() {
+    let (module, _) = shaders::validate().expect("shader validates");
+    let mut layouter = naga::proc::Layouter::default();
+    layouter
+        .update(module.to_ctx())
+        .expect("naga computes the layout");
+    for (name, size, fields) in rust_layouts() {
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("struct {name} missing from the WGSL"));
+        let naga::TypeInner::Struct { members, span } = &ty.inner else {
+            panic!("{name} is not a struct in WGSL");
+        };
+        assert_eq!(*span as usize, size, "{name}: WGSL size vs Rust size");
+        assert_eq!(
+            layouter[handle].size as usize, size,
+            "{name}: naga layout size"
+        );
+        let wgsl: Vec<(String, usize)> = members
+            .iter()
+            .map(|m| (m.name.clone().unwrap_or_default(), m.offset as usize))
+            .collect();
+        let rust: Vec<(String, usize)> = fields.iter().map(|(f, o)| (f.to_string(), *o)).collect();
+        assert_eq!(wgsl, rust, "{name}: fields and offsets (WGSL vs Rust)");
+    }
+}
+
+/// The plane struct pads with three named u32 in WGSL and an array in Rust.
+#[test]
+fn plane_layout_matches() {
+    let (module, _) = shaders::validate().expect("shader validates");
+    let (_, ty) = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some("Plane"))
+        .expect("Plane in WGSL");
+    let naga::TypeInner::Struct { members, span } = &ty.inner else {
+        panic!("Plane is not a struct");
+    };
+    assert_eq!(*span as usize, size_of::<GpuPlane>());
+    let offsets: Vec<usize> = members.iter().map(|m| m.offset as usize).collect();
+    assert_eq!(
+        &offsets[..3],
+        &[
+            offset_of!(GpuPlane, normal),
+            offset_of!(GpuPlane, d),
+            offset_of!(GpuPlane, material)
+        ]
+    );
+}
+
+/// The value of a WGSL `const` whose initialiser is a literal.
+fn wgsl_const(module: &naga::Module, name: &str) -> naga::Literal {
+    let (_, c) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("const {name} missing from the WGSL"));
+    match module.global_expressions[c.init] {
+        naga::Expression::Literal(l) => l,
+        ref e => panic!("const {name} is not a literal: {e:?}"),
+    }
+}
+
+/// Constants the two sides must agree on.
+#[test]
+fn shared_constants_match() {
+    let (module, _) = shaders::validate().expect("shader validates");
+    let u32s = [
+        ("TRAVERSAL_STACK", TRAVERSAL_STACK as u32),
+        ("RAY_STACK", RAY_STACK as u32),
+        ("PRIM_SPHERE", PRIM_SPHERE),
+        ("PRIM_TRIANGLE", PRIM_TRIANGLE),
+        ("PRIM_CONE", PRIM_CONE),
+        ("PRIM_BOX", PRIM_BOX),
+        ("PRIM_KIND_SHIFT", PRIM_KIND_SHIFT),
+        ("PRIM_MATERIAL_MASK", PRIM_MATERIAL_MASK),
+        ("LIGHT_POINT", LIGHT_POINT),
+        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
+        ("LIGHT_AREA", LIGHT_AREA),
+        ("AOV_COLOR", AOV_COLOR),
+        ("AOV_NORMAL", AOV_NORMAL),
+        ("AOV_DEPTH", AOV_DEPTH),
+        ("AOV_COST", AOV_COST),
+        ("PLANE_FLAG", gpurt::cpu::types::PLANE_FLAG),
+        ("NO_PRIM", gpurt::cpu::types::NO_PRIM),
+    ];
+    for (name, value) in u32s {
+        assert_eq!(
+            wgsl_const(&module, name),
+            naga::Literal::U32(value),
+            "{name}"
+        );
+    }
+    assert_eq!(
+        wgsl_const(&module, "NO_HIT"),
+        naga::Literal::F32(gpurt::cpu::types::NO_HIT),
+        "NO_HIT"
+    );
+}

@@ -1,0 +1,5 @@
+//! gpurt's integration tests: one binary, one module per area.
+
+mod common;
+mod gpu;
+mod layout;
