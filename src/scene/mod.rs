@@ -338,16 +338,29 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// Reads a file whole, decompressing it when it starts with the gzip magic bytes.
 pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    if raw.starts_with(&[0x1f, 0x8b]) {
-        let mut out = Vec::with_capacity(raw.len().saturating_mul(4));
-        flate2::read::MultiGzDecoder::new(&raw[..])
-            .take(MAX_FILE_BYTES)
-            .read_to_end(&mut out)
-            .map_err(|e| Error::io(path, e))?;
-        Ok(out)
-    } else {
-        Ok(raw)
+    if !raw.starts_with(&[0x1f, 0x8b]) {
+        return Ok(raw);
     }
+    // The gzip trailer ends with the decompressed size mod 2^32 (ISIZE): exact for the usual
+    // one-member file, so the output is allocated once instead of doubling its way up (which
+    // would hold up to twice the scene's bytes at the peak). Deflate cannot expand more than
+    // about 1032:1, which bounds a lying trailer.
+    let isize = raw.len().checked_sub(4).map_or(0, |i| {
+        u32::from_le_bytes(raw[i..].try_into().unwrap()) as u64
+    });
+    let hint = isize.min(raw.len() as u64 * 1032).min(MAX_FILE_BYTES);
+    let mut out = Vec::with_capacity(hint as usize + 64);
+    flate2::read::MultiGzDecoder::new(&raw[..])
+        .take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut out)
+        .map_err(|e| Error::io(path, e))?;
+    if out.len() as u64 > MAX_FILE_BYTES {
+        return Err(Error::Scene {
+            file: path.display().to_string(),
+            msg: format!("decompresses to more than {} GiB", MAX_FILE_BYTES >> 30),
+        });
+    }
+    Ok(out)
 }
 
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an

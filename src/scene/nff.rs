@@ -51,7 +51,9 @@ struct Parser<'a> {
 
 impl Parser<'_> {
     fn run(&mut self) -> Result<()> {
+        let mut first = true;
         while let Some(tok) = self.lx.next_token() {
+            let is_first = std::mem::replace(&mut first, false);
             match tok.text {
                 b"v" => self.view(&tok)?,
                 b"b" => self.scene.background = self.lx.vec3("background colour")?,
@@ -96,10 +98,21 @@ impl Parser<'_> {
                 b"pl" => self.plane(&tok)?,
                 b"aabb" => self.aabb()?,
                 b"mesh" => self.mesh(&tok)?,
-                b"nff" if tok.line == 1 => {
+                b"nff" if is_first => {
                     return Err(self.lx.error_at(
                         &tok,
                         "this is a Sense8 NFF file (starts with 'nff'), not Haines' NFF",
+                    ));
+                }
+                _ if super::lex::parse_f32(tok.text).is_some() => {
+                    // Usually a light in the `l x y z intensity r g b` variant, or a count
+                    // that is smaller than the numbers that follow it.
+                    return Err(self.lx.error_at(
+                        &tok,
+                        format!(
+                            "expected an entity keyword, found the number {} (too many numbers for the entity before it?)",
+                            tok.show()
+                        ),
                     ));
                 }
                 _ => {
@@ -301,7 +314,12 @@ impl Parser<'_> {
 
     fn polygon(&mut self, tok: &Token, patch: bool) -> Result<()> {
         let kind = if patch { "patch" } else { "polygon" };
-        let (n, ntok) = self.lx.count(&format!("{kind} vertex count"))?;
+        let what = if patch {
+            "patch vertex count"
+        } else {
+            "polygon vertex count"
+        };
+        let (n, ntok) = self.lx.count(what)?;
         // Each vertex needs at least 3 (or 6) one-character numbers and separators: a count
         // the rest of the file cannot hold is a lie, reported before anything is allocated.
         let min_bytes = n as u64 * if patch { 12 } else { 6 };
@@ -317,11 +335,16 @@ impl Parser<'_> {
         self.verts.clear();
         self.normals.clear();
         for i in 0..n {
-            let what = format!("{kind} vertex {} of {n}", i + 1);
+            let mut what = VertexWhat {
+                kind,
+                index: i + 1,
+                count: n,
+                normal: false,
+            };
             self.verts.push(self.lx.vec3(&what)?);
             if patch {
-                self.normals
-                    .push(self.lx.vec3(&format!("normal of {what}"))?);
+                what.normal = true;
+                self.normals.push(self.lx.vec3(&what)?);
             }
         }
         let material = self.current_material();
@@ -364,9 +387,14 @@ impl Parser<'_> {
     fn aabb(&mut self) -> Result<()> {
         let mut lo = [0.0f32; 3];
         let mut hi = [0.0f32; 3];
-        for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-            let a = self.lx.number(&format!("box {name} min"))?;
-            let b = self.lx.number(&format!("box {name} max"))?;
+        const WHAT: [[&str; 2]; 3] = [
+            ["box x min", "box x max"],
+            ["box y min", "box y max"],
+            ["box z min", "box z max"],
+        ];
+        for (axis, [wmin, wmax]) in WHAT.iter().enumerate() {
+            let a = self.lx.number(wmin)?;
+            let b = self.lx.number(wmax)?;
             lo[axis] = a.min(b);
             hi[axis] = a.max(b);
         }
@@ -444,13 +472,6 @@ impl Parser<'_> {
             }
         }
         let path = self.base.join(rel);
-        let bytes = super::read_file(&path).map_err(|e| match e {
-            Error::Io { source, .. } => self.lx.error_at(
-                &ptok,
-                format!("cannot read mesh file '{}': {source}", path.display()),
-            ),
-            other => other,
-        })?;
         let kind = FileKind::of(&path);
         if kind == FileKind::Nff {
             return Err(self.lx.error_at(
@@ -458,6 +479,13 @@ impl Parser<'_> {
                 format!("mesh file '{rel}' must end in .stl or .obj (optionally .gz)"),
             ));
         }
+        let bytes = super::read_file(&path).map_err(|e| match e {
+            Error::Io { source, .. } => self.lx.error_at(
+                &ptok,
+                format!("cannot read mesh file '{}': {source}", path.display()),
+            ),
+            other => other,
+        })?;
         let mut tris = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
         if tris.is_empty() {
             self.warn(tok, &format!("mesh '{rel}' has no triangles"));
@@ -469,5 +497,23 @@ impl Parser<'_> {
         }
         self.scene.triangles.append(&mut tris);
         Ok(())
+    }
+}
+
+/// "polygon vertex 3 of 5" (or "normal of patch vertex ..."), formatted only for a message:
+/// building this string for every vertex read cost more than parsing the vertex.
+struct VertexWhat {
+    kind: &'static str,
+    index: u32,
+    count: u32,
+    normal: bool,
+}
+
+impl std::fmt::Display for VertexWhat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.normal {
+            f.write_str("normal of ")?;
+        }
+        write!(f, "{} vertex {} of {}", self.kind, self.index, self.count)
     }
 }
