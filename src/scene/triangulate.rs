@@ -6,17 +6,23 @@
 //! it, for any simple polygon. (A crate such as `earcut` drops collinear vertices and so
 //! changes the triangle count; this one keeps every vertex and the polygon's winding.)
 
-use glam::{Vec2, Vec3};
+use glam::{DVec2, Vec3};
 
 /// Triangulates a planar polygon into `out` as index triples that keep the polygon's
 /// winding. Returns false when the polygon is degenerate (no area, non-finite points).
+///
+/// The ring is a linked list walked by a cursor, and only vertices that are not strictly
+/// convex are tested against a candidate ear (no convex vertex can be the only one inside an
+/// ear of a simple polygon). So a convex polygon costs O(n), and the cost grows with the
+/// number of reflex vertices rather than with n squared: large hostile polygons stay cheap.
 pub fn triangulate(points: &[Vec3], out: &mut Vec<[u32; 3]>) -> bool {
     let n = points.len();
     if n < 3 {
         return false;
     }
     let normal = newell_normal(points);
-    if !(normal.length_squared() > 0.0) || !normal.is_finite() {
+    // (A non-finite point makes the normal non-finite too.)
+    if !normal.is_finite() || normal.length_squared() <= 0.0 {
         return false;
     }
     if n == 3 {
@@ -26,37 +32,74 @@ pub fn triangulate(points: &[Vec3], out: &mut Vec<[u32; 3]>) -> bool {
     let pts = project(points, normal);
     // Orientation of the projected polygon: a corner is convex when its turn has this sign.
     let sign = signed_area(&pts).signum();
-    if sign == 0.0 {
+    if sign == 0.0 || sign.is_nan() {
         return false;
     }
-    let mut ring: Vec<u32> = (0..n as u32).collect();
-    while ring.len() > 3 {
-        let m = ring.len();
-        let corner = |i: usize| {
-            let (a, b, c) = (ring[(i + m - 1) % m], ring[i], ring[(i + 1) % m]);
-            (
-                a,
-                b,
-                c,
-                sign * turn(pts[a as usize], pts[b as usize], pts[c as usize]),
-            )
+    let convexity =
+        |a: u32, b: u32, c: u32| sign * turn(pts[a as usize], pts[b as usize], pts[c as usize]);
+    let mut prev: Vec<u32> = (0..n).map(|i| ((i + n - 1) % n) as u32).collect();
+    let mut next: Vec<u32> = (0..n).map(|i| ((i + 1) % n) as u32).collect();
+    // Vertices that are not strictly convex: the only ones that can block an ear.
+    let mut reflex_flag: Vec<bool> = (0..n)
+        .map(|i| convexity(prev[i], i as u32, next[i]) <= 0.0)
+        .collect();
+    let mut reflex: Vec<u32> = (0..n as u32).filter(|&i| reflex_flag[i as usize]).collect();
+
+    let mut remaining = n;
+    let mut i = 0u32;
+    let mut misses = 0;
+    while remaining > 3 {
+        let (a, c) = (prev[i as usize], next[i as usize]);
+        let is_ear = convexity(a, i, c) > 0.0
+            && !reflex
+                .iter()
+                .any(|&p| reflex_flag[p as usize] && blocks_ear(&pts, p, a, i, c));
+        let clip = if is_ear {
+            i
+        } else if misses + 1 < remaining {
+            misses += 1;
+            i = c;
+            continue;
+        } else {
+            // A full turn without a clean ear: only a polygon with collinear runs or
+            // self-intersections gets here. Clip its most convex corner so the count stays
+            // n - 2 and the loop always ends.
+            let mut best = i;
+            let mut j = next[i as usize];
+            while j != i {
+                let (jp, jn) = (prev[j as usize], next[j as usize]);
+                let (bp, bn) = (prev[best as usize], next[best as usize]);
+                if convexity(jp, j, jn) > convexity(bp, best, bn) {
+                    best = j;
+                }
+                j = jn;
+            }
+            best
         };
-        let ear = (0..m).find(|&i| {
-            let (a, b, c, t) = corner(i);
-            t > 0.0 && !ring.iter().any(|&p| blocks_ear(&pts, p, a, b, c))
-        });
-        // Only a polygon with collinear runs or self-intersections has no clean ear: clip
-        // its most convex corner so the count stays n - 2 and the loop always ends.
-        let i = ear.unwrap_or_else(|| {
-            (0..m)
-                .max_by(|&x, &y| corner(x).3.total_cmp(&corner(y).3))
-                .expect("ring is not empty")
-        });
-        let (a, b, c, _) = corner(i);
-        out.push([a, b, c]);
-        ring.remove(i);
+        let (a, c) = (prev[clip as usize], next[clip as usize]);
+        out.push([a, clip, c]);
+        next[a as usize] = c;
+        prev[c as usize] = a;
+        remaining -= 1;
+        misses = 0;
+        // The clipped vertex is gone and its neighbours have new corners: refresh their
+        // flags (a reflex vertex usually becomes convex; degenerate input can do the reverse).
+        let mut dropped = reflex_flag[clip as usize];
+        reflex_flag[clip as usize] = false;
+        for v in [a, c] {
+            let is_reflex = convexity(prev[v as usize], v, next[v as usize]) <= 0.0;
+            if is_reflex && !reflex_flag[v as usize] {
+                reflex.push(v);
+            }
+            dropped |= reflex_flag[v as usize] && !is_reflex;
+            reflex_flag[v as usize] = is_reflex;
+        }
+        if dropped {
+            reflex.retain(|&p| reflex_flag[p as usize]);
+        }
+        i = c;
     }
-    out.push([ring[0], ring[1], ring[2]]);
+    out.push([prev[i as usize], i, next[i as usize]]);
     true
 }
 
@@ -74,8 +117,9 @@ fn newell_normal(points: &[Vec3]) -> Vec3 {
     n
 }
 
-/// Drops the normal's dominant axis, keeping the other two.
-fn project(points: &[Vec3], normal: Vec3) -> Vec<Vec2> {
+/// Drops the normal's dominant axis, keeping the other two, in f64 so that the orientation
+/// tests below are (nearly) exact for f32 input.
+fn project(points: &[Vec3], normal: Vec3) -> Vec<DVec2> {
     let a = normal.abs();
     let (u, v) = if a.x >= a.y && a.x >= a.z {
         (1, 2)
@@ -85,17 +129,17 @@ fn project(points: &[Vec3], normal: Vec3) -> Vec<Vec2> {
         (0, 1)
     };
     // Centre the points first so that far-from-origin polygons keep their precision.
-    let c = points.iter().copied().sum::<Vec3>() / points.len() as f32;
+    let c = points.iter().map(|p| p.as_dvec3()).sum::<glam::DVec3>() / points.len() as f64;
     points
         .iter()
         .map(|p| {
-            let d = *p - c;
-            Vec2::new(d[u], d[v])
+            let d = p.as_dvec3() - c;
+            DVec2::new(d[u], d[v])
         })
         .collect()
 }
 
-fn signed_area(p: &[Vec2]) -> f32 {
+fn signed_area(p: &[DVec2]) -> f64 {
     let mut s = 0.0;
     for i in 0..p.len() {
         s += p[i].perp_dot(p[(i + 1) % p.len()]);
@@ -104,13 +148,13 @@ fn signed_area(p: &[Vec2]) -> f32 {
 }
 
 /// Twice the signed area of triangle abc (positive when counter-clockwise).
-fn turn(a: Vec2, b: Vec2, c: Vec2) -> f32 {
+fn turn(a: DVec2, b: DVec2, c: DVec2) -> f64 {
     (b - a).perp_dot(c - a)
 }
 
 /// Whether vertex `p` lies inside or on the candidate ear abc (vertices at the same position
 /// as a corner do not count).
-fn blocks_ear(pts: &[Vec2], p: u32, a: u32, b: u32, c: u32) -> bool {
+fn blocks_ear(pts: &[DVec2], p: u32, a: u32, b: u32, c: u32) -> bool {
     if p == a || p == b || p == c {
         return false;
     }
