@@ -2,7 +2,9 @@
 //!
 //! Written here rather than with `stl_io` because errors must point at a line and column
 //! (ASCII) or a byte offset (binary), and because a binary file may begin with the word
-//! `solid`: the size must match `84 + 50 * count` for a file to be binary. Non-zero facet
+//! `solid`. A file is read as ASCII only when it starts with `solid`, its size does not match
+//! the binary `84 + 50 * count`, and it holds no control bytes (a binary file with a `solid`
+//! header and a wrong count is then still reported as a broken binary file). Non-zero facet
 //! normals are kept as the triangle's shading normal.
 
 use glam::Vec3;
@@ -12,11 +14,19 @@ use super::{MaterialId, Triangle};
 use crate::error::{Error, Result};
 
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
-    if binary_size_matches(bytes) || !starts_with_solid(bytes) {
+    if binary_size_matches(bytes) || !starts_with_solid(bytes) || !looks_like_text(bytes) {
         parse_binary(bytes, name)
     } else {
         parse_ascii(bytes, name)
     }
+}
+
+/// True when every byte could appear in an ASCII STL: no NUL or other control bytes except
+/// whitespace. Binary STLs almost always hold a zero byte (the count's high byte, or a
+/// coordinate's), so this separates them from text that merely has the wrong size.
+fn looks_like_text(b: &[u8]) -> bool {
+    b.iter()
+        .all(|&c| c >= 0x20 || matches!(c, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c))
 }
 
 fn binary_size_matches(b: &[u8]) -> bool {
@@ -53,13 +63,23 @@ fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
     }
     let count = u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64;
     let need = 84 + 50 * count;
-    if need != b.len() as u64 {
+    let len = b.len() as u64;
+    if len < need {
+        // Truncated (or a count that is too large): point at where the data stops.
+        let whole = (len - 84) / 50;
+        return Err(err(
+            b.len(),
+            format!(
+                "file ends inside triangle {} of {count}: the header's count needs {need} bytes, the file has {len}",
+                whole + 1
+            ),
+        ));
+    }
+    if len > need {
+        // A count that is too small: point at the count itself.
         return Err(err(
             80,
-            format!(
-                "header says {count} triangles ({need} bytes), found a file of {} bytes",
-                b.len()
-            ),
+            format!("header says {count} triangles ({need} bytes), but the file has {len} bytes"),
         ));
     }
     let f = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
@@ -86,19 +106,13 @@ fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
 fn parse_ascii(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
     let mut lx = Lexer::new(b, name);
     let mut tris = Vec::new();
-    let expect = |lx: &mut Lexer, word: &[u8]| -> Result<()> {
-        let t = lx.expect_token(&format!("'{}'", String::from_utf8_lossy(word)))?;
-        if t.text == word {
+    // Keywords are ASCII literals; quoting them is only done when there is an error.
+    let expect = |lx: &mut Lexer, word: &'static str| -> Result<()> {
+        let t = lx.expect_token(&format_args!("'{word}'"))?;
+        if t.text == word.as_bytes() {
             Ok(())
         } else {
-            Err(lx.error_at(
-                &t,
-                format!(
-                    "expected '{}', found {}",
-                    String::from_utf8_lossy(word),
-                    t.show()
-                ),
-            ))
+            Err(lx.error_at(&t, format!("expected '{word}', found {}", t.show())))
         }
     };
     let skip_rest_of_line = |lx: &mut Lexer, line: u32| {
@@ -119,17 +133,17 @@ fn parse_ascii(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
                     break;
                 }
                 b"facet" => {
-                    expect(&mut lx, b"normal")?;
+                    expect(&mut lx, "normal")?;
                     let n = lx.vec3("facet normal")?;
-                    expect(&mut lx, b"outer")?;
-                    expect(&mut lx, b"loop")?;
+                    expect(&mut lx, "outer")?;
+                    expect(&mut lx, "loop")?;
                     let mut v = [Vec3::ZERO; 3];
                     for p in &mut v {
-                        expect(&mut lx, b"vertex")?;
+                        expect(&mut lx, "vertex")?;
                         *p = lx.vec3("vertex coordinate")?;
                     }
-                    expect(&mut lx, b"endloop")?;
-                    expect(&mut lx, b"endfacet")?;
+                    expect(&mut lx, "endloop")?;
+                    expect(&mut lx, "endfacet")?;
                     tris.push(Triangle {
                         v,
                         n: facet_normal(n),
