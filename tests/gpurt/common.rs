@@ -1,6 +1,7 @@
 //! Helpers shared by the test modules.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Whether missing prerequisites (shared scenes, a GPU adapter) must fail tests rather
 /// than skip them.
@@ -46,4 +47,18 @@ pub fn files_with(dir: &std::path::Path, suffixes: &[&str]) -> Vec<PathBuf> {
     }
     out.sort();
     out
+}
+
+/// A new empty directory for one test's files, under cargo's per-target temporary
+/// directory (inside `target/`), unique per call so parallel tests never collide.
+pub fn temp_dir(tag: &str) -> PathBuf {
+    static N: AtomicU32 = AtomicU32::new(0);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "{tag}-{}-{}",
+        std::process::id(),
+        N.fetch_add(1, Ordering::Relaxed)
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("temporary directory can be created");
+    dir
 }

@@ -3,3 +3,4 @@
 mod common;
 mod gpu;
 mod layout;
+mod parse;
