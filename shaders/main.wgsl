@@ -48,7 +48,11 @@ fn aov(ray: Ray) -> vec3<f32> {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+) {
+    stack_base = local_index * TRAVERSAL_STACK;
     if (id.x >= tile.width || id.y >= tile.height) {
         return;
     }

@@ -109,6 +109,8 @@ const AOV_DEPTH: u32 = 2u;
 const AOV_COST: u32 = 3u;
 
 const TRAVERSAL_STACK: u32 = 64u;
+// Invocations per workgroup: @workgroup_size(8, 8, 1) in main.wgsl.
+const WORKGROUP_INVOCATIONS: u32 = 64u;
 const RAY_STACK: u32 = 16u;
 
 // "No hit": the largest f32 (WGSL has no infinity literal; the CPU uses the same value).

@@ -185,6 +185,60 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
     })
 }
 
+impl SceneBuffers {
+    /// Proves the invariants the GPU shader relies on, since it runs without runtime
+    /// bounds checks: every index in range, every inner node's children after it (so a
+    /// traversal visits each node at most once and ends), the tree shallow enough for the
+    /// fixed traversal stack, and the ray depth within the ray stack.
+    pub fn check(&self, globals: &GpuGlobals) -> Result<()> {
+        let fail = |msg: String| Err(Error::Gpu(format!("internal error: {msg}")));
+        let n = self.nodes.len();
+        for (i, node) in self.nodes.iter().enumerate() {
+            let (count, offset) = (node.count() as usize, node.offset as usize);
+            if count > 0 {
+                if offset + count > self.prims.len() {
+                    return fail(format!("leaf {i} refers past the primitives"));
+                }
+            } else if !(i + 1 < n && offset > i + 1 && offset < n) || node.axis() > 2 {
+                return fail(format!("inner node {i} has bad children or axis"));
+            }
+        }
+        if self.bvh_depth >= TRAVERSAL_STACK {
+            return fail(format!("BVH depth {} exceeds the stack", self.bvh_depth));
+        }
+        for (i, p) in self.prims.iter().enumerate() {
+            let slot_ok =
+                p.kind() != PRIM_TRIANGLE || p.f1 < 0.0 || (p.f1 as usize) < self.tri_normals.len();
+            if p.material() as usize >= self.materials.len() || p.kind() > PRIM_BOX || !slot_ok {
+                return fail(format!(
+                    "primitive {i} has a bad material, kind or normal slot"
+                ));
+            }
+        }
+        if self
+            .planes
+            .iter()
+            .any(|p| p.material as usize >= self.materials.len())
+        {
+            return fail("a plane has a bad material".into());
+        }
+        if self
+            .lights
+            .iter()
+            .any(|l| l.kind > LIGHT_AREA || (l.kind == LIGHT_AREA && (l.nu == 0 || l.nv == 0)))
+        {
+            return fail("a light has a bad kind or sample count".into());
+        }
+        let counts_ok = globals.n_nodes as usize == n
+            && globals.n_planes as usize == self.planes.len()
+            && globals.n_lights as usize == self.lights.len();
+        if !counts_ok || globals.max_depth > MAX_DEPTH || globals.spp == 0 {
+            return fail("render constants disagree with the scene buffers".into());
+        }
+        Ok(())
+    }
+}
+
 /// The secondary-ray offset: `EPSILON_REL` times the bounds diagonal (or the viewing
 /// distance for a scene of planes only).
 pub fn epsilon(scene: &Scene) -> f32 {
