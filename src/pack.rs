@@ -325,3 +325,65 @@ pub fn globals(scene: &Scene, buffers: &SceneBuffers, opts: &RenderOptions) -> G
         aov: opts.aov,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::nff;
+
+    fn balls() -> Scene {
+        let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 8 8
+            l 1 -2 3
+            l -1 -2 3 0.5 0.5 0.5
+            f 1 0 0 1 0 1 0 1
+            s 0 0 0 1  s 2 0 0 0.5  s -2 0 0 0.5  s 0 0 2 0.3  s 0 2 0 0.4  s 1 1 1 0.2
+            p 3 -3 -3 -1  3 -3 -1  0 3 -1";
+        nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap()
+    }
+
+    #[test]
+    fn packed_scene_passes_its_checks_and_corruption_is_caught() {
+        let scene = balls();
+        let b = pack(&scene).unwrap();
+        let g = globals(&scene, &b, &RenderOptions::for_scene(&scene));
+        b.check(&g).unwrap();
+        let inner = b.nodes.iter().position(|n| n.count() == 0).unwrap();
+
+        let mut bad = b.clone();
+        bad.nodes[inner].offset = inner as u32; // a cycle
+        assert!(bad.check(&g).is_err());
+        let mut bad = b.clone();
+        let leaf = bad.nodes.iter().position(|n| n.count() > 0).unwrap();
+        bad.nodes[leaf].offset = bad.prims.len() as u32;
+        assert!(bad.check(&g).is_err());
+        let mut bad = b.clone();
+        bad.prims[0].tag = PRIM_SPHERE << PRIM_KIND_SHIFT | 99;
+        assert!(bad.check(&g).is_err());
+        let deep = GpuGlobals {
+            max_depth: MAX_DEPTH + 1,
+            ..g
+        };
+        assert!(b.check(&deep).is_err());
+    }
+
+    #[test]
+    fn uncoloured_lights_share_spd_intensity_and_coloured_keep_theirs() {
+        let b = pack(&balls()).unwrap();
+        let grey = 1.0 / 2f32.sqrt();
+        assert_eq!(b.lights[0].color, Vec3::splat(grey));
+        assert_eq!(b.lights[1].color, Vec3::splat(0.5));
+    }
+
+    #[test]
+    fn camera_basis_and_pixel_pitch_follow_the_nff_angle() {
+        let scene = balls();
+        let b = pack(&scene).unwrap();
+        let g = globals(&scene, &b, &RenderOptions::for_scene(&scene));
+        // 40 degrees between the centres of the 8 rows: 7 pitches.
+        let want = 2.0 * 20f32.to_radians().tan() / 7.0;
+        assert!((g.pixel_pitch - want).abs() < 1e-7);
+        assert!(g.cam_forward.dot(g.cam_right).abs() < 1e-6);
+        assert!(g.cam_up.z > 0.9, "up stays up");
+        assert!((b.epsilon - EPSILON_REL * scene.bounds().extent().length()).abs() < 1e-9);
+    }
+}
