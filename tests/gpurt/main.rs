@@ -2,6 +2,7 @@
 
 mod bvh;
 mod common;
+mod cpu;
 mod gpu;
 mod layout;
 mod parse;
