@@ -22,6 +22,14 @@ const WORKGROUP: u32 = 8;
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 const PIXEL_BYTES: u64 = 16;
 
+/// What one render binds.
+struct Bound {
+    bind_group: wgpu::BindGroup,
+    tile_buf: wgpu::Buffer,
+    output: wgpu::Buffer,
+    readback: wgpu::Buffer,
+}
+
 /// A compiled pipeline, reusable across renders on one device.
 pub struct GpuRenderer {
     pipeline: wgpu::ComputePipeline,
@@ -58,7 +66,11 @@ fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result
 impl GpuRenderer {
     /// Compiles the shader. `adapter_info` keys the on-disk pipeline cache, used when the
     /// device has `PIPELINE_CACHE` (pass `None` to skip the cache).
-    pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        adapter_info: Option<&wgpu::AdapterInfo>,
+    ) -> Result<Self> {
         let start = Instant::now();
         let cache_file = adapter_info
             .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
@@ -104,10 +116,121 @@ impl GpuRenderer {
                 crate::film::write_atomic(file, &data).map_err(std::io::Error::other)
             });
         }
-        Ok(GpuRenderer {
+        let mut renderer = GpuRenderer {
             pipeline,
-            compile_time: start.elapsed(),
+            compile_time: Duration::ZERO,
+        };
+        renderer.warm_up(device, queue)?;
+        renderer.compile_time = start.elapsed();
+        Ok(renderer)
+    }
+
+    /// Uploads the scene and creates the bind group, the tile's output buffer and the
+    /// buffer it is read back through.
+    fn bind(
+        &self,
+        device: &wgpu::Device,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+        tile_bytes: u64,
+    ) -> Result<Bound> {
+        let storage = |label: &str, bytes: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::STORAGE,
+            })
+        };
+        let uniform = |label: &str, bytes: &[u8]| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        scoped(device, "uploading the scene", || {
+            let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
+            let tile_buf = uniform("tile", bytemuck::bytes_of(&GpuTile::default()));
+            let nodes = storage("nodes", non_empty(&scene.nodes));
+            let prims = storage("prims", non_empty(&scene.prims));
+            let normals = storage("tri_normals", non_empty(&scene.tri_normals));
+            let planes = storage("planes", non_empty(&scene.planes));
+            let materials = storage("materials", non_empty(&scene.materials));
+            let lights = storage("lights", non_empty(&scene.lights));
+            let output = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("output"),
+                size: tile_bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            let readback = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: tile_bytes,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let buffers = [
+                &globals_buf,
+                &tile_buf,
+                &nodes,
+                &prims,
+                &normals,
+                &planes,
+                &materials,
+                &lights,
+                &output,
+            ];
+            let entries: Vec<wgpu::BindGroupEntry> = buffers
+                .iter()
+                .enumerate()
+                .map(|(i, b)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: b.as_entire_binding(),
+                })
+                .collect();
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("gpurt"),
+                layout: &self.pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+            Bound {
+                bind_group,
+                tile_buf,
+                output,
+                readback,
+            }
         })
+    }
+
+    /// Traces an empty tile once: drivers that compile at the first dispatch (lavapipe
+    /// does) compile now, so `compile_time` is the whole cost of getting the shader ready.
+    fn warm_up(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<()> {
+        let empty = SceneBuffers {
+            nodes: Vec::new(),
+            prims: Vec::new(),
+            tri_normals: Vec::new(),
+            planes: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            bounds: crate::scene::Bounds::EMPTY,
+            epsilon: 0.0,
+            bvh_depth: 0,
+        };
+        let bound = self.bind(device, &empty, &GpuGlobals::default(), PIXEL_BYTES)?;
+        scoped(device, "compiling the shader", || {
+            let mut enc = device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &bound.bind_group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            queue.submit([enc.finish()]);
+        })?;
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))?;
+        Ok(())
     }
 
     /// Renders the image described by `globals` on `device`. Returns the film and the
@@ -127,68 +250,12 @@ impl GpuRenderer {
         check_sizes(device, scene, tile_bytes)?;
         scene.check(globals)?;
 
-        let storage = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let uniform = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            })
-        };
-        let (bind_group, tile_buf, output, readback) =
-            scoped(device, "uploading the scene", || {
-                let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
-                let tile_buf = uniform("tile", bytemuck::bytes_of(&GpuTile::default()));
-                let nodes = storage("nodes", non_empty(&scene.nodes));
-                let prims = storage("prims", non_empty(&scene.prims));
-                let normals = storage("tri_normals", non_empty(&scene.tri_normals));
-                let planes = storage("planes", non_empty(&scene.planes));
-                let materials = storage("materials", non_empty(&scene.materials));
-                let lights = storage("lights", non_empty(&scene.lights));
-                let output = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("output"),
-                    size: tile_bytes,
-                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                });
-                let readback = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("readback"),
-                    size: tile_bytes,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let buffers = [
-                    &globals_buf,
-                    &tile_buf,
-                    &nodes,
-                    &prims,
-                    &normals,
-                    &planes,
-                    &materials,
-                    &lights,
-                    &output,
-                ];
-                let entries: Vec<wgpu::BindGroupEntry> = buffers
-                    .iter()
-                    .enumerate()
-                    .map(|(i, b)| wgpu::BindGroupEntry {
-                        binding: i as u32,
-                        resource: b.as_entire_binding(),
-                    })
-                    .collect();
-                let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("gpurt"),
-                    layout: &self.pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                });
-                (bind_group, tile_buf, output, readback)
-            })?;
+        let Bound {
+            bind_group,
+            tile_buf,
+            output,
+            readback,
+        } = self.bind(device, scene, globals, tile_bytes)?;
 
         let mut film = Film::new(w, h);
         let mut rays = 0u64;
@@ -322,7 +389,7 @@ pub fn render_gpu(
     scene: &SceneBuffers,
     globals: &GpuGlobals,
 ) -> Result<(Film, u64)> {
-    let r = GpuRenderer::new(device, None)?;
+    let r = GpuRenderer::new(device, queue, None)?;
     r.render(
         device,
         queue,

@@ -1,0 +1,183 @@
+//! The `gpurt` command as a user runs it: exit codes, messages, files written or not.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn gpurt(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(args)
+        .current_dir(dir)
+        .env("GPURT_CACHE_DIR", "")
+        .output()
+        .expect("gpurt runs")
+}
+
+/// A fresh directory under target/ for one test.
+fn workdir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/cli-tests")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const SCENE: &str = "b 0.1 0.2 0.3
+v
+from 0 -4 1
+at 0 0 0
+up 0 0 1
+angle 40
+resolution 32 32
+l 2 -3 4
+f 1 0.5 0.2 0.8 0.2 20 0 1
+s 0 0 0 1
+";
+
+#[test]
+fn renders_to_the_default_name_and_to_each_format() {
+    let d = workdir("formats");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "--backend", "cpu"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(d.join("ball.png")).expect("ball.png written");
+    assert_eq!((img.width(), img.height()), (32, 32));
+    for ext in ["ppm", "bmp", "exr"] {
+        let out = format!("ball.{ext}");
+        let o = gpurt(
+            &["ball.nff", "--backend", "cpu", "-o", &out, "--width", "20"],
+            &d,
+        );
+        assert!(o.status.success(), "{ext}: {}", stderr(&o));
+        let img = image::open(d.join(&out)).unwrap_or_else(|e| panic!("{out}: {e}"));
+        assert_eq!(img.width(), 20);
+    }
+}
+
+#[test]
+fn bad_scene_reports_file_line_column_exits_2_and_writes_nothing() {
+    let d = workdir("bad-scene");
+    std::fs::write(
+        d.join("bad.nff"),
+        SCENE.replace("s 0 0 0 1", "s 0 0 zero 1"),
+    )
+    .unwrap();
+    let o = gpurt(&["bad.nff", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("bad.nff:10:7:"), "{err}");
+    assert!(!d.join("out.png").exists());
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "no stray files");
+}
+
+#[test]
+fn unknown_output_format_is_refused_before_rendering() {
+    let d = workdir("bad-format");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-o", "out.jpg"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("jpg"), "{}", stderr(&o));
+    assert!(!d.join("out.jpg").exists());
+}
+
+#[test]
+fn missing_scene_and_bad_arguments_fail_cleanly() {
+    let d = workdir("missing");
+    let o = gpurt(&["nope.nff"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("nope.nff"), "{}", stderr(&o));
+    let o = gpurt(&["x.nff", "--depth", "99"], &d);
+    assert!(!o.status.success());
+}
+
+#[test]
+fn info_json_has_the_documented_keys() {
+    let d = workdir("info");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["info", "ball.nff", "--json"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    for key in [
+        "spheres",
+        "triangles",
+        "planes",
+        "cones",
+        "boxes",
+        "lights",
+        "materials",
+    ] {
+        assert!(v[key].is_u64(), "{key} missing or not an integer in {v}");
+    }
+    assert_eq!(v["spheres"], 1);
+    assert!(v["warnings"].is_array());
+}
+
+#[test]
+fn diff_exit_codes_and_heat_map() {
+    let d = workdir("diff");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let a = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(a.status.success(), "{}", stderr(&a));
+    std::fs::copy(d.join("a.png"), d.join("same.png")).unwrap();
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "same.png",
+            "--max-flip",
+            "0.01",
+            "--max-bad",
+            "0.005",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("PSNR"));
+
+    let b = gpurt(
+        &[
+            "ball.nff",
+            "--backend",
+            "cpu",
+            "-o",
+            "b.png",
+            "--ambient",
+            "0.6",
+        ],
+        &d,
+    );
+    assert!(b.status.success(), "{}", stderr(&b));
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "b.png",
+            "-o",
+            "heat.png",
+            "--max-flip",
+            "0.01",
+            "--max-bad",
+            "0.005",
+        ],
+        &d,
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let heat = image::open(d.join("heat.png")).expect("heat map written");
+    assert_eq!(
+        (heat.width(), heat.height()),
+        (96, 32),
+        "A | B | difference"
+    );
+
+    let o = gpurt(&["diff", "a.png", "missing.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+}
