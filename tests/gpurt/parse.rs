@@ -1396,3 +1396,88 @@ fn random_mutations_never_panic_a_reader() {
         started.elapsed()
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// docs/scene-format.md: every example reads as documented
+// ---------------------------------------------------------------------------------------
+
+/// The fenced blocks of a Markdown text as (info string, body).
+fn fenced_blocks(md: &str) -> Vec<(String, String)> {
+    let mut blocks = Vec::new();
+    let mut open: Option<(String, String)> = None;
+    for line in md.lines() {
+        match (&mut open, line.strip_prefix("```")) {
+            (None, Some(info)) => open = Some((info.trim().to_string(), String::new())),
+            (Some(_), Some(_)) => blocks.push(open.take().unwrap()),
+            (Some((_, body)), None) => {
+                body.push_str(line);
+                body.push('\n');
+            }
+            (None, None) => {}
+        }
+    }
+    assert!(open.is_none(), "unclosed code block");
+    blocks
+}
+
+#[test]
+fn docs_examples_read_as_documented() {
+    let md =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene-format.md"))
+            .expect("docs/scene-format.md reads");
+    let dir = temp_dir("docs");
+    let blocks = fenced_blocks(&md);
+    let (mut parsed, mut errors) = (0, 0);
+    for (i, (info, body)) in blocks.iter().enumerate() {
+        match info.as_str() {
+            "nff" => {
+                // Mesh files the example names are made up: a tetrahedron in each format.
+                for line in body.lines() {
+                    let toks: Vec<&str> = line.split_whitespace().collect();
+                    if toks.first() == Some(&"mesh") {
+                        let path = dir.join(toks[1].trim_matches('"'));
+                        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+                        let name = path.to_string_lossy().into_owned();
+                        let bytes = if name.trim_end_matches(".gz").ends_with(".obj") {
+                            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+                                .to_vec()
+                        } else {
+                            stl::write_binary(&tetra(), &[0; 80])
+                        };
+                        let bytes = if name.ends_with(".gz") {
+                            gzip(&bytes)
+                        } else {
+                            bytes
+                        };
+                        write(&path, &bytes);
+                    }
+                }
+                let has_view = body
+                    .lines()
+                    .any(|l| l.split_whitespace().next() == Some("v"));
+                let src = if has_view {
+                    body.clone()
+                } else {
+                    format!("{VIEW}{body}")
+                };
+                let s = nff::parse(src.as_bytes(), "example.nff", &dir)
+                    .unwrap_or_else(|e| panic!("docs example {i} should parse: {e}\n{body}"));
+                assert!(s.warnings.is_empty(), "docs example {i}: {:?}", s.warnings);
+                parsed += 1;
+            }
+            "nff-error" => {
+                let (next_info, want) = blocks.get(i + 1).expect("a text block after nff-error");
+                assert_eq!(next_info, "text", "docs example {i}: message block follows");
+                let e = nff::parse(body.as_bytes(), "example.nff", &dir)
+                    .expect_err("docs error example must fail");
+                assert_eq!(e.to_string(), want.trim_end(), "docs example {i}");
+                errors += 1;
+            }
+            _ => {}
+        }
+    }
+    assert!(
+        parsed >= 15 && errors >= 5,
+        "{parsed} parsed, {errors} errors"
+    );
+}
