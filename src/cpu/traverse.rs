@@ -43,23 +43,19 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     let mut sp = 0usize;
     let mut node = 0u32;
     loop {
-        let n = &b.nodes[node as usize];
-        hit.cost += 1;
-        if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t) {
-            let count = n.count();
-            if count > 0 {
-                for i in n.offset..n.offset + count {
-                    let p = &b.prims[i as usize];
-                    let t = intersect::prim(p, ray, inv_dir);
-                    let first = first_in(t, tmin, hit.t);
-                    if first != NO_HIT {
-                        hit.t = first;
-                        hit.prim = i;
-                        hit.u = t.z;
-                        hit.v = t.w;
-                    }
+        // Descend until this ray reaches a leaf it overlaps (the shader's SIMD batches then
+        // test primitives together; see traverse.wgsl).
+        let mut first = 0u32;
+        let mut count = 0u32;
+        loop {
+            let n = &b.nodes[node as usize];
+            hit.cost += 1;
+            if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t) {
+                count = n.count();
+                if count > 0 {
+                    first = n.offset;
+                    break;
                 }
-            } else {
                 // Visit the child nearer along the split axis first.
                 if neg[n.axis() as usize] {
                     stack[sp] = node + 1;
@@ -70,6 +66,25 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
                 }
                 sp += 1;
                 continue;
+            }
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            node = stack[sp];
+        }
+        if count == 0 {
+            break;
+        }
+        for i in first..first + count {
+            let p = &b.prims[i as usize];
+            let t = intersect::prim(p, ray, inv_dir);
+            let t_first = first_in(t, tmin, hit.t);
+            if t_first != NO_HIT {
+                hit.t = t_first;
+                hit.prim = i;
+                hit.u = t.z;
+                hit.v = t.w;
             }
         }
         if sp == 0 {
@@ -104,26 +119,16 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
     let mut sp = 0usize;
     let mut node = 0u32;
     loop {
-        let n = &b.nodes[node as usize];
-        if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax) {
-            let count = n.count();
-            if count > 0 {
-                for i in n.offset..n.offset + count {
-                    let p = &b.prims[i as usize];
-                    let t = intersect::prim(p, ray, inv_dir);
-                    let crossings =
-                        (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
-                    if crossings > 0 {
-                        let m = &b.materials[p.material() as usize];
-                        if m.t <= 0.0 {
-                            return Vec3::ZERO;
-                        }
-                        for _ in 0..crossings {
-                            light *= m.t * m.color;
-                        }
-                    }
+        let mut first = 0u32;
+        let mut count = 0u32;
+        loop {
+            let n = &b.nodes[node as usize];
+            if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax) {
+                count = n.count();
+                if count > 0 {
+                    first = n.offset;
+                    break;
                 }
-            } else {
                 if neg[n.axis() as usize] {
                     stack[sp] = node + 1;
                     node = n.offset;
@@ -133,6 +138,28 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
                 }
                 sp += 1;
                 continue;
+            }
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            node = stack[sp];
+        }
+        if count == 0 {
+            break;
+        }
+        for i in first..first + count {
+            let p = &b.prims[i as usize];
+            let t = intersect::prim(p, ray, inv_dir);
+            let crossings = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
+            if crossings > 0 {
+                let m = &b.materials[p.material() as usize];
+                if m.t <= 0.0 {
+                    return Vec3::ZERO;
+                }
+                for _ in 0..crossings {
+                    light *= m.t * m.color;
+                }
             }
         }
         if sp == 0 {
