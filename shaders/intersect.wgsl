@@ -47,12 +47,15 @@ fn cone_valid(t: f32, cv: f32, dv: f32, height: f32, r0: f32, k: f32) -> bool {
     return t != NO_HIT && s >= 0.0 && s <= height && r0 + k * s >= 0.0;
 }
 
+// Solved from the ray's closest approach to the cone's middle, as the sphere is: far from
+// a thin cone the quadratic's terms would otherwise cancel away the hit's precision.
 fn intersect_cone(p: Prim, ray: Ray) -> vec2<f32> {
     let axis = p.p1 - p.p0;
     let height = length(axis);
     let a = axis / height;
     let k = (p.f1 - p.f0) / height;
-    let co = ray.origin - p.p0;
+    let tc = dot(0.5 * (p.p0 + p.p1) - ray.origin, ray.dir);
+    let co = ray.origin + tc * ray.dir - p.p0;
     let dv = dot(ray.dir, a);
     let cv = dot(co, a);
     let dp = ray.dir - dv * a;
@@ -79,11 +82,11 @@ fn intersect_cone(p: Prim, ray: Ray) -> vec2<f32> {
     let ok0 = cone_valid(t.x, cv, dv, height, p.f0, k);
     let ok1 = cone_valid(t.y, cv, dv, height, p.f0, k);
     if (ok0 && ok1) {
-        return t;
+        return t + vec2<f32>(tc);
     } else if (ok0) {
-        return vec2<f32>(t.x, NO_HIT);
+        return vec2<f32>(t.x + tc, NO_HIT);
     } else if (ok1) {
-        return vec2<f32>(t.y, NO_HIT);
+        return vec2<f32>(t.y + tc, NO_HIT);
     }
     return vec2<f32>(NO_HIT);
 }

@@ -51,12 +51,15 @@ pub fn triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
 }
 
 /// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
+/// Solved from the ray's closest approach to the cone's middle, as `sphere` is: far from a
+/// thin cone the quadratic's terms would otherwise cancel away the hit's precision.
 pub fn cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
     let axis = p.p1 - p.p0;
     let height = axis.length();
     let a = axis / height;
     let k = (p.f1 - p.f0) / height;
-    let co = ray.origin - p.p0;
+    let tc = (0.5 * (p.p0 + p.p1) - ray.origin).dot(ray.dir);
+    let co = ray.origin + tc * ray.dir - p.p0;
     let dv = ray.dir.dot(a);
     let cv = co.dot(a);
     let dp = ray.dir - dv * a;
@@ -88,11 +91,11 @@ pub fn cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
     };
     let (ok0, ok1) = (valid(t.x), valid(t.y));
     if ok0 && ok1 {
-        t
+        t + Vec2::splat(tc)
     } else if ok0 {
-        Vec2::new(t.x, NO_HIT)
+        Vec2::new(t.x + tc, NO_HIT)
     } else if ok1 {
-        Vec2::new(t.y, NO_HIT)
+        Vec2::new(t.y + tc, NO_HIT)
     } else {
         Vec2::splat(NO_HIT)
     }

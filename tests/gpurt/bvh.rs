@@ -617,7 +617,6 @@ fn sphere_hits_stay_on_the_surface_far_from_the_sphere() {
 /// from the ray's closest approach to the cone's middle (`tc = dot(mid - o, d)`, roots +
 /// tc), as `intersect::sphere` does, measured 1.3e-5 r at 100 r and 1.1e-4 r at 1000 r.
 #[test]
-#[ignore = "intersect::cone loses precision far from thin cones (reported; fix in cone + WGSL)"]
 fn cone_hits_stay_on_the_surface_far_from_the_cone() {
     let r = 0.1;
     let cylinder = GpuPrim {
