@@ -20,16 +20,14 @@ fn intersect_sphere(center: vec3<f32>, radius: f32, ray: Ray) -> vec2<f32> {
 }
 
 // Two-sided Möller-Trumbore: (t, u, v), t = NO_HIT on a miss.
-fn intersect_triangle(p: Prim, ray: Ray) -> vec3<f32> {
-    let e1 = p.p1;
-    let e2 = p.p2;
+fn intersect_triangle(v0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, ray: Ray) -> vec3<f32> {
     let pvec = cross(ray.dir, e2);
     let det = dot(e1, pvec);
     if (det == 0.0) {
         return vec3<f32>(NO_HIT);
     }
     let inv = 1.0 / det;
-    let tvec = ray.origin - p.p0;
+    let tvec = ray.origin - v0;
     let u = dot(tvec, pvec) * inv;
     if (!(u >= 0.0 && u <= 1.0)) {
         return vec3<f32>(NO_HIT);
@@ -49,18 +47,18 @@ fn cone_valid(t: f32, cv: f32, dv: f32, height: f32, r0: f32, k: f32) -> bool {
 
 // Solved from the ray's closest approach to the cone's middle, as the sphere is: far from
 // a thin cone the quadratic's terms would otherwise cancel away the hit's precision.
-fn intersect_cone(p: Prim, ray: Ray) -> vec2<f32> {
-    let axis = p.p1 - p.p0;
+fn intersect_cone(base: vec3<f32>, r0: f32, apex: vec3<f32>, r1: f32, ray: Ray) -> vec2<f32> {
+    let axis = apex - base;
     let height = length(axis);
     let a = axis / height;
-    let k = (p.f1 - p.f0) / height;
-    let tc = dot(0.5 * (p.p0 + p.p1) - ray.origin, ray.dir);
-    let co = ray.origin + tc * ray.dir - p.p0;
+    let k = (r1 - r0) / height;
+    let tc = dot(0.5 * (base + apex) - ray.origin, ray.dir);
+    let co = ray.origin + tc * ray.dir - base;
     let dv = dot(ray.dir, a);
     let cv = dot(co, a);
     let dp = ray.dir - dv * a;
     let cp = co - cv * a;
-    let rr = p.f0 + k * cv;
+    let rr = r0 + k * cv;
     let qa = dot(dp, dp) - k * k * dv * dv;
     let qb = dot(cp, dp) - k * rr * dv;
     let qc = dot(cp, cp) - rr * rr;
@@ -79,8 +77,8 @@ fn intersect_cone(p: Prim, ray: Ray) -> vec2<f32> {
         let r1 = (-qb + sq) / qa;
         t = vec2<f32>(min(r0, r1), max(r0, r1));
     }
-    let ok0 = cone_valid(t.x, cv, dv, height, p.f0, k);
-    let ok1 = cone_valid(t.y, cv, dv, height, p.f0, k);
+    let ok0 = cone_valid(t.x, cv, dv, height, r0, k);
+    let ok1 = cone_valid(t.y, cv, dv, height, r0, k);
     if (ok0 && ok1) {
         return t + vec2<f32>(tc);
     } else if (ok0) {
@@ -118,22 +116,25 @@ fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>,
     return near <= far;
 }
 
-fn intersect_prim(p: Prim, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {
-    switch prim_kind(p) {
-        case PRIM_SPHERE: {
-            return vec4<f32>(intersect_sphere(p.p0, p.f0, ray), 0.0, 0.0);
-        }
-        case PRIM_TRIANGLE: {
-            let h = intersect_triangle(p, ray);
-            return vec4<f32>(h.x, NO_HIT, h.y, h.z);
-        }
-        case PRIM_CONE: {
-            return vec4<f32>(intersect_cone(p, ray), 0.0, 0.0);
-        }
-        default: {
-            return vec4<f32>(slabs(p.p0, p.p1, ray.origin, inv_dir), 0.0, 0.0);
-        }
+// Takes the primitive's index rather than the primitive, so that only the fields its
+// kind uses are loaded; kinds the scene lacks are compiled out (see the overrides).
+fn intersect_prim(i: u32, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {
+    let kind = prims[i].tag >> PRIM_KIND_SHIFT;
+    var t = vec4<f32>(NO_HIT, NO_HIT, 0.0, 0.0);
+    if (SPHERES && kind == PRIM_SPHERE) {
+        t = vec4<f32>(intersect_sphere(prims[i].p0, prims[i].f0, ray), 0.0, 0.0);
     }
+    if (TRIANGLES && kind == PRIM_TRIANGLE) {
+        let h = intersect_triangle(prims[i].p0, prims[i].p1, prims[i].p2, ray);
+        t = vec4<f32>(h.x, NO_HIT, h.y, h.z);
+    }
+    if (CONES && kind == PRIM_CONE) {
+        t = vec4<f32>(intersect_cone(prims[i].p0, prims[i].f0, prims[i].p1, prims[i].f1, ray), 0.0, 0.0);
+    }
+    if (BOXES && kind == PRIM_BOX) {
+        t = vec4<f32>(slabs(prims[i].p0, prims[i].p1, ray.origin, inv_dir), 0.0, 0.0);
+    }
+    return t;
 }
 
 fn intersect_plane(pl: Plane, ray: Ray) -> f32 {
@@ -149,32 +150,34 @@ fn sign_of(c: f32) -> f32 {
 }
 
 fn prim_normal(p: Prim, x: vec3<f32>) -> vec3<f32> {
-    switch prim_kind(p) {
-        case PRIM_SPHERE: {
-            return normalize(x - p.p0);
-        }
-        case PRIM_TRIANGLE: {
-            return normalize(cross(p.p1, p.p2));
-        }
-        case PRIM_CONE: {
-            let axis = p.p1 - p.p0;
-            let height = length(axis);
-            let a = axis / height;
-            let k = (p.f1 - p.f0) / height;
-            let q = x - p.p0;
-            let radial = q - dot(q, a) * a;
-            return normalize(normalize(radial) - k * a);
-        }
-        default: {
-            let c = 0.5 * (p.p0 + p.p1);
-            let local = (x - c) / max(0.5 * (p.p1 - p.p0), vec3<f32>(1e-30));
-            let m = abs(local);
-            if (m.x >= m.y && m.x >= m.z) {
-                return vec3<f32>(sign_of(local.x), 0.0, 0.0);
-            } else if (m.y >= m.z) {
-                return vec3<f32>(0.0, sign_of(local.y), 0.0);
-            }
-            return vec3<f32>(0.0, 0.0, sign_of(local.z));
+    let kind = prim_kind(p);
+    var n = vec3<f32>(0.0, 0.0, 1.0);
+    if (SPHERES && kind == PRIM_SPHERE) {
+        n = normalize(x - p.p0);
+    }
+    if (TRIANGLES && kind == PRIM_TRIANGLE) {
+        n = normalize(cross(p.p1, p.p2));
+    }
+    if (CONES && kind == PRIM_CONE) {
+        let axis = p.p1 - p.p0;
+        let height = length(axis);
+        let a = axis / height;
+        let k = (p.f1 - p.f0) / height;
+        let q = x - p.p0;
+        let radial = q - dot(q, a) * a;
+        n = normalize(normalize(radial) - k * a);
+    }
+    if (BOXES && kind == PRIM_BOX) {
+        let c = 0.5 * (p.p0 + p.p1);
+        let local = (x - c) / max(0.5 * (p.p1 - p.p0), vec3<f32>(1e-30));
+        let m = abs(local);
+        if (m.x >= m.y && m.x >= m.z) {
+            n = vec3<f32>(sign_of(local.x), 0.0, 0.0);
+        } else if (m.y >= m.z) {
+            n = vec3<f32>(0.0, sign_of(local.y), 0.0);
+        } else {
+            n = vec3<f32>(0.0, 0.0, sign_of(local.z));
         }
     }
+    return n;
 }

@@ -8,7 +8,7 @@ fn camera_ray(x: f32, y: f32, rng: ptr<function, u32>) -> Ray {
     let sx = (x - 0.5 * f32(g.width)) * g.pixel_pitch;
     let sy = (0.5 * f32(g.height) - y) * g.pixel_pitch;
     let dir = normalize(g.cam_forward + sx * g.cam_right + sy * g.cam_up);
-    if (g.aperture <= 0.0) {
+    if (!LENS || g.aperture <= 0.0) {
         return Ray(g.cam_pos, dir);
     }
     // Thin lens: aim at the point on the focal plane, from a point on the lens disc.
@@ -20,7 +20,7 @@ fn camera_ray(x: f32, y: f32, rng: ptr<function, u32>) -> Ray {
 }
 
 fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
-    if (n <= 1u) {
+    if (!MULTISAMPLE || n <= 1u) {
         return vec2<f32>(0.5);
     }
     var k = 1u;
@@ -35,13 +35,13 @@ fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
 
 fn aov(ray: Ray) -> vec3<f32> {
     let hit = closest_hit(ray, globals.hither, NO_HIT);
-    if (globals.aov == AOV_COST) {
+    if (AOV == AOV_COST) {
         return vec3<f32>(f32(hit.cost));
     }
     if (hit.prim == NO_PRIM) {
         return vec3<f32>(0.0);
     }
-    if (globals.aov == AOV_DEPTH) {
+    if (AOV == AOV_DEPTH) {
         return vec3<f32>(hit.t);
     }
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
@@ -66,7 +66,7 @@ fn main(
         let off = sample_offset(s, g.spp, &rng);
         let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
         rays += 1u;
-        if (g.aov == AOV_COLOR) {
+        if (AOV == AOV_COLOR) {
             sum += trace(ray, &rng, &rays);
         } else {
             sum += aov(ray);

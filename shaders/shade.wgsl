@@ -22,7 +22,7 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
     var outward: vec3<f32>;
     var ns: vec3<f32>;
     var material: u32;
-    if ((hit.prim & PLANE_FLAG) != 0u) {
+    if (PLANES && (hit.prim & PLANE_FLAG) != 0u) {
         let pl = planes[hit.prim & ~PLANE_FLAG];
         outward = pl.normal;
         ns = pl.normal;
@@ -31,7 +31,7 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
         let p = prims[hit.prim];
         outward = prim_normal(p, point);
         ns = outward;
-        if (prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {
+        if (NORMALS && prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {
             let n = tri_normals[u32(p.f1)];
             ns = normalize((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2);
         }
@@ -63,19 +63,19 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
     for (var li = 0u; li < globals.n_lights; li++) {
         let light = lights[li];
         var samples = 1u;
-        if (light.kind == LIGHT_AREA) {
+        if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
             samples = light.nu * light.nv;
         }
         let intensity = light.color / f32(samples);
         for (var k = 0u; k < samples; k++) {
             var l: vec3<f32>;
             var dist: f32;
-            if (light.kind == LIGHT_DIRECTIONAL) {
+            if (DIRECTIONAL_LIGHTS && light.kind == LIGHT_DIRECTIONAL) {
                 l = light.pos;
                 dist = NO_HIT;
             } else {
                 var lp = light.pos;
-                if (light.kind == LIGHT_AREA) {
+                if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
                     let su = (f32(k % light.nu) + rand(rng)) / f32(light.nu);
                     let sv = (f32(k / light.nu) + rand(rng)) / f32(light.nv);
                     lp += su * light.u + sv * light.v;
@@ -122,13 +122,13 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
             continue;
         }
         let m = materials[s.material];
-        if (m.ks > 0.0) {
+        if (REFLECTION && m.ks > 0.0) {
             let dir = reflect_dir(ray.dir, s.ns);
             *rays += 1u;
             stack[sp] = Pending(offset_origin(s, dir, globals.epsilon), dir, ray_in.weight * m.ks, ray_in.depth + 1u, 0.0);
             sp += 1u;
         }
-        if (m.t > 0.0) {
+        if (REFRACTION && m.t > 0.0) {
             let eta = select(m.ior, 1.0 / m.ior, s.entering);
             let cos_i = -dot(s.ns, ray.dir);
             let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);

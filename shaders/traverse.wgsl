@@ -22,11 +22,13 @@ fn first_in(t: vec4<f32>, tmin: f32, tmax: f32) -> f32 {
 
 fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
     var hit = Hit(tmax, NO_PRIM, 0.0, 0.0, 0u);
-    for (var i = 0u; i < globals.n_planes; i++) {
-        let t = intersect_plane(planes[i], ray);
-        if (t > tmin && t < hit.t) {
-            hit.t = t;
-            hit.prim = PLANE_FLAG | i;
+    if (PLANES) {
+        for (var i = 0u; i < globals.n_planes; i++) {
+            let t = intersect_plane(planes[i], ray);
+            if (t > tmin && t < hit.t) {
+                hit.t = t;
+                hit.prim = PLANE_FLAG | i;
+            }
         }
     }
     if (globals.n_nodes == 0u) {
@@ -50,14 +52,11 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
                     first = n.offset;
                     break;
                 }
-                // Visit the child nearer along the split axis first.
-                if (neg[node_axis(n)]) {
-                    traversal_stack[stack_base + sp] = node + 1u;
-                    node = n.offset;
-                } else {
-                    traversal_stack[stack_base + sp] = n.offset;
-                    node += 1u;
-                }
+                // Visit the child nearer along the split axis first. Branch-free: lavapipe
+                // would run both arms of an `if`.
+                let second_first = neg[node_axis(n)];
+                traversal_stack[stack_base + sp] = select(n.offset, node + 1u, second_first);
+                node = select(node + 1u, n.offset, second_first);
                 sp += 1u;
                 continue;
             }
@@ -71,8 +70,7 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
             break;
         }
         for (var i = first; i < first + count; i++) {
-            let p = prims[i];
-            let t = intersect_prim(p, ray, inv_dir);
+            let t = intersect_prim(i, ray, inv_dir);
             let t_first = first_in(t, tmin, hit.t);
             if (t_first != NO_HIT) {
                 hit.t = t_first;
@@ -94,15 +92,17 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
 // blocks it, each crossing of a transmitting surface multiplies it by T * C.
 fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
     var light = vec3<f32>(1.0);
-    for (var i = 0u; i < globals.n_planes; i++) {
-        let pl = planes[i];
-        let t = intersect_plane(pl, ray);
-        if (t > 0.0 && t < tmax) {
-            let m = materials[pl.material];
-            if (m.t <= 0.0) {
-                return vec3<f32>(0.0);
+    if (PLANES) {
+        for (var i = 0u; i < globals.n_planes; i++) {
+            let pl = planes[i];
+            let t = intersect_plane(pl, ray);
+            if (t > 0.0 && t < tmax) {
+                let m = materials[pl.material];
+                if (m.t <= 0.0) {
+                    return vec3<f32>(0.0);
+                }
+                light *= m.t * m.color;
             }
-            light *= m.t * m.color;
         }
     }
     if (globals.n_nodes == 0u) {
@@ -123,13 +123,9 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
                     first = n.offset;
                     break;
                 }
-                if (neg[node_axis(n)]) {
-                    traversal_stack[stack_base + sp] = node + 1u;
-                    node = n.offset;
-                } else {
-                    traversal_stack[stack_base + sp] = n.offset;
-                    node += 1u;
-                }
+                let second_first = neg[node_axis(n)];
+                traversal_stack[stack_base + sp] = select(n.offset, node + 1u, second_first);
+                node = select(node + 1u, n.offset, second_first);
                 sp += 1u;
                 continue;
             }
@@ -143,11 +139,10 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
             break;
         }
         for (var i = first; i < first + count; i++) {
-            let p = prims[i];
-            let t = intersect_prim(p, ray, inv_dir);
+            let t = intersect_prim(i, ray, inv_dir);
             let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
             if (crossings > 0u) {
-                let m = materials[prim_material(p)];
+                let m = materials[prims[i].tag & PRIM_MATERIAL_MASK];
                 if (m.t <= 0.0) {
                     return vec3<f32>(0.0);
                 }

@@ -118,6 +118,30 @@ const NO_HIT: f32 = 3.40282347e+38;
 const PLANE_FLAG: u32 = 0x80000000u;
 const NO_PRIM: u32 = 0xffffffffu;
 
+// Specialisation: the host compiles one pipeline per combination the scene needs
+// (src/gpu/render.rs, `Specialization`). Each flag only removes code the scene cannot
+// reach, and the CPU twin keeps every branch. It matters on lavapipe, which executes both
+// sides of every `if` under a lane mask: a sphere test used to pay for the triangle, cone
+// and box tests beside it.
+override SPHERES: bool = true;
+override TRIANGLES: bool = true;
+override CONES: bool = true;
+override BOXES: bool = true;
+override PLANES: bool = true;
+// Some triangle carries shading normals.
+override NORMALS: bool = true;
+override DIRECTIONAL_LIGHTS: bool = true;
+override AREA_LIGHTS: bool = true;
+// Some material has Ks > 0 / T > 0.
+override REFLECTION: bool = true;
+override REFRACTION: bool = true;
+// Aperture > 0.
+override LENS: bool = true;
+// More than one sample per pixel.
+override MULTISAMPLE: bool = true;
+// globals.aov, as a constant.
+override AOV: u32 = 0u;
+
 @group(0) @binding(0) var<uniform> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
 @group(0) @binding(2) var<storage, read> nodes: array<Node>;

@@ -334,10 +334,11 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     }
     let mut gpu_film = None;
     if let Some(ctx) = &gpu {
-        let renderer = gpurt::gpu::GpuRenderer::new(&ctx.device, &ctx.queue, Some(&ctx.info))?;
+        let renderer = gpurt::gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
+        renderer.prepare(&ctx.device, &ctx.queue, &buffers, &globals)?;
         report.push(format!(
             "shader      {:.3} s (module, pipeline and first-dispatch compilation)",
-            renderer.compile_time.as_secs_f64()
+            renderer.compile_time().as_secs_f64()
         ));
         let progress = Progress::new(pixels);
         let t = Instant::now();

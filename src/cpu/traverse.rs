@@ -57,13 +57,9 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
                     break;
                 }
                 // Visit the child nearer along the split axis first.
-                if neg[n.axis() as usize] {
-                    stack[sp] = node + 1;
-                    node = n.offset;
-                } else {
-                    stack[sp] = n.offset;
-                    node += 1;
-                }
+                let second_first = neg[n.axis() as usize];
+                stack[sp] = if second_first { node + 1 } else { n.offset };
+                node = if second_first { n.offset } else { node + 1 };
                 sp += 1;
                 continue;
             }
@@ -129,13 +125,9 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
                     first = n.offset;
                     break;
                 }
-                if neg[n.axis() as usize] {
-                    stack[sp] = node + 1;
-                    node = n.offset;
-                } else {
-                    stack[sp] = n.offset;
-                    node += 1;
-                }
+                let second_first = neg[n.axis() as usize];
+                stack[sp] = if second_first { node + 1 } else { n.offset };
+                node = if second_first { n.offset } else { node + 1 };
                 sp += 1;
                 continue;
             }

@@ -5,6 +5,7 @@
 pub mod context;
 pub mod render;
 pub mod shaders;
+pub mod specialization;
 
 pub use context::{GpuContext, open};
 pub use render::{GpuRenderer, render_gpu};

@@ -5,13 +5,16 @@
 //! and Ctrl-C is noticed between tiles. Each tile's results are copied to a mappable
 //! buffer and read back before the next tile starts.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
 use super::shaders;
+use super::specialization::Specialization;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{GpuGlobals, GpuTile};
@@ -30,11 +33,15 @@ struct Bound {
     readback: wgpu::Buffer,
 }
 
-/// A compiled pipeline, reusable across renders on one device.
+/// The shader with its bind group layout, and the pipelines compiled from it so far, one
+/// per `Specialization`. Reusable across renders (and threads) on one device.
 pub struct GpuRenderer {
-    pipeline: wgpu::ComputePipeline,
-    /// Time spent creating the shader module and pipeline (shader compilation).
-    pub compile_time: Duration,
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    cache: Option<(wgpu::PipelineCache, PathBuf)>,
+    pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
+    compile_time: Mutex<Duration>,
 }
 
 /// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
@@ -58,25 +65,38 @@ fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result
     let v = pollster::block_on(validation.pop());
     let o = pollster::block_on(oom.pop());
     match v.or(o) {
-        Some(e) => Err(Error::Gpu(format!("{what}: {e}"))),
+        Some(e) => Err(Error::Gpu(format!("{what}: {}", error_chain(&e)))),
         None => Ok(out),
     }
 }
 
+/// An error with its causes: wgpu's `Display` alone says only "Validation Error".
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut source = e.source();
+    while let Some(cause) = source {
+        s.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    s
+}
+
 impl GpuRenderer {
-    /// Compiles the shader. `adapter_info` keys the on-disk pipeline cache, used when the
-    /// device has `PIPELINE_CACHE` (pass `None` to skip the cache).
-    pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        adapter_info: Option<&wgpu::AdapterInfo>,
-    ) -> Result<Self> {
+    /// Creates the shader module. Pipelines are compiled on first use by `render` (or
+    /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
+    /// `PIPELINE_CACHE` (pass `None` to skip the cache).
+    pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
         let start = Instant::now();
         let cache_file = adapter_info
             .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
-        let cache_data = cache_file.as_ref().and_then(|f| std::fs::read(f).ok());
-        let pipeline_and_cache = scoped(device, "compiling the shader", || {
+        let layout = bind_group_layout(device);
+        let (pipeline_layout, module, cache) = scoped(device, "compiling the shader", || {
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("gpurt"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
             let desc = wgpu::ShaderModuleDescriptor {
                 label: Some("gpurt"),
                 source: wgpu::ShaderSource::Wgsl(shaders::source().into()),
@@ -90,39 +110,79 @@ impl GpuRenderer {
             let module = unsafe {
                 device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
             };
-            // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
-            // with the same cache key; `fallback` makes wgpu ignore data it rejects.
-            let cache = cache_file.as_ref().map(|_| unsafe {
-                device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
-                    label: Some("gpurt"),
-                    data: cache_data.as_deref(),
-                    fallback: true,
-                })
+            let cache = cache_file.map(|file| {
+                let data = std::fs::read(&file).ok();
+                // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
+                // with the same cache key; `fallback` makes wgpu ignore data it rejects.
+                let cache = unsafe {
+                    device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                        label: Some("gpurt"),
+                        data: data.as_deref(),
+                        fallback: true,
+                    })
+                };
+                (cache, file)
             });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("gpurt"),
-                layout: None,
-                module: &module,
-                entry_point: Some("main"),
-                compilation_options: Default::default(),
-                cache: cache.as_ref(),
-            });
-            (pipeline, cache)
+            (pipeline_layout, module, cache)
         })?;
-        let (pipeline, cache) = pipeline_and_cache;
-        if let (Some(file), Some(data)) = (&cache_file, cache.and_then(|c| c.get_data())) {
-            // Best effort: a cache that cannot be written only costs time next run.
-            let _ = std::fs::create_dir_all(file.parent().unwrap_or(file)).and_then(|_| {
-                crate::film::write_atomic(file, &data).map_err(std::io::Error::other)
-            });
+        Ok(GpuRenderer {
+            layout,
+            pipeline_layout,
+            module,
+            cache,
+            pipelines: Mutex::new(HashMap::new()),
+            compile_time: Mutex::new(start.elapsed()),
+        })
+    }
+
+    /// Total time spent creating the module and compiling pipelines, first dispatches
+    /// included (lavapipe compiles there).
+    pub fn compile_time(&self) -> Duration {
+        *self.compile_time.lock().expect("not poisoned")
+    }
+
+    /// Compiles (once) the pipeline for a scene and render settings.
+    pub fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<wgpu::ComputePipeline> {
+        let spec = Specialization::of(scene, globals);
+        let mut pipelines = self.pipelines.lock().expect("not poisoned");
+        if let Some(p) = pipelines.get(&spec) {
+            return Ok(p.clone());
         }
-        let mut renderer = GpuRenderer {
-            pipeline,
-            compile_time: Duration::ZERO,
-        };
-        renderer.warm_up(device, queue)?;
-        renderer.compile_time = start.elapsed();
-        Ok(renderer)
+        let start = Instant::now();
+        let constants = spec.constants();
+        let pipeline = scoped(device, "compiling the shader", || {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("gpurt"),
+                layout: Some(&self.pipeline_layout),
+                module: &self.module,
+                entry_point: Some("main"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    // Every traversal-stack entry is written before it is read, so the
+                    // workgroup memory needs no zeroing (wgpu would otherwise add stores
+                    // and a barrier to the start of every workgroup).
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: self.cache.as_ref().map(|(c, _)| c),
+            })
+        })?;
+        self.warm_up(device, queue, &pipeline)?;
+        if let Some((cache, file)) = &self.cache
+            && let Some(data) = cache.get_data()
+        {
+            // Best effort: a cache that cannot be written only costs time next run.
+            let _ = std::fs::create_dir_all(file.parent().unwrap_or(file));
+            let _ = crate::film::write_atomic(file, &data);
+        }
+        *self.compile_time.lock().expect("not poisoned") += start.elapsed();
+        pipelines.insert(spec, pipeline.clone());
+        Ok(pipeline)
     }
 
     /// Uploads the scene and creates the bind group, the tile's output buffer and the
@@ -190,7 +250,7 @@ impl GpuRenderer {
                 .collect();
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("gpurt"),
-                layout: &self.pipeline.get_bind_group_layout(0),
+                layout: &self.layout,
                 entries: &entries,
             });
             Bound {
@@ -203,8 +263,13 @@ impl GpuRenderer {
     }
 
     /// Traces an empty tile once: drivers that compile at the first dispatch (lavapipe
-    /// does) compile now, so `compile_time` is the whole cost of getting the shader ready.
-    fn warm_up(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<()> {
+    /// does) compile now, so the compile time is the whole cost of getting a pipeline ready.
+    fn warm_up(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        pipeline: &wgpu::ComputePipeline,
+    ) -> Result<()> {
         let empty = SceneBuffers {
             nodes: Vec::new(),
             prims: Vec::new(),
@@ -221,7 +286,7 @@ impl GpuRenderer {
             let mut enc = device.create_command_encoder(&Default::default());
             {
                 let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&self.pipeline);
+                pass.set_pipeline(pipeline);
                 pass.set_bind_group(0, &bound.bind_group, &[]);
                 pass.dispatch_workgroups(1, 1, 1);
             }
@@ -249,6 +314,7 @@ impl GpuRenderer {
         let tile_bytes = u64::from(tile_side) * u64::from(tile_side) * PIXEL_BYTES;
         check_sizes(device, scene, tile_bytes)?;
         scene.check(globals)?;
+        let pipeline = self.prepare(device, queue, scene, globals)?;
 
         let Bound {
             bind_group,
@@ -276,7 +342,7 @@ impl GpuRenderer {
                     let mut enc = device.create_command_encoder(&Default::default());
                     {
                         let mut pass = enc.begin_compute_pass(&Default::default());
-                        pass.set_pipeline(&self.pipeline);
+                        pass.set_pipeline(&pipeline);
                         pass.set_bind_group(0, &bind_group, &[]);
                         pass.dispatch_workgroups(
                             tile.width.div_ceil(WORKGROUP),
@@ -293,6 +359,35 @@ impl GpuRenderer {
         }
         Ok((film, rays))
     }
+}
+
+/// The bindings of `types.wgsl`: globals and tile (uniform), the scene arrays (read-only
+/// storage), the tile's output (read-write storage). Explicit, so that a binding the
+/// shader happens not to use is still accepted.
+fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![
+        entry(0, wgpu::BufferBindingType::Uniform),
+        entry(1, wgpu::BufferBindingType::Uniform),
+    ];
+    entries.extend((2..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
+    entries.push(entry(
+        8,
+        wgpu::BufferBindingType::Storage { read_only: false },
+    ));
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("gpurt"),
+        entries: &entries,
+    })
 }
 
 /// Maps the readback buffer, copies the tile into the film, returns its ray count.
@@ -389,7 +484,7 @@ pub fn render_gpu(
     scene: &SceneBuffers,
     globals: &GpuGlobals,
 ) -> Result<(Film, u64)> {
-    let r = GpuRenderer::new(device, queue, None)?;
+    let r = GpuRenderer::new(device, None)?;
     r.render(
         device,
         queue,

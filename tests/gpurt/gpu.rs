@@ -35,7 +35,7 @@ fn gpu() -> Option<&'static Gpu> {
         let required = std::env::var("GPURT_REQUIRE_GPU").is_ok_and(|v| v == "1");
         match gpurt::gpu::open(None) {
             Ok(ctx) => {
-                let renderer = GpuRenderer::new(&ctx.device, &ctx.queue, None).expect("shader compiles");
+                let renderer = GpuRenderer::new(&ctx.device, None).expect("shader compiles");
                 Some(Gpu { ctx, renderer })
             }
             Err(e) if required => panic!("GPURT_REQUIRE_GPU=1 but: {e}"),
@@ -334,7 +334,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
     }
     let buffers = pack::pack(&big).expect("packs");
     let globals = pack::globals(&big, &buffers, &opts(&big));
-    let renderer = GpuRenderer::new(&device, &queue, None).expect("compiles");
+    let renderer = GpuRenderer::new(&device, None).expect("compiles");
     let err = renderer
         .render(
             &device,

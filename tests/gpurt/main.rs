@@ -1,6 +1,7 @@
 //! gpurt's integration tests: one binary, one module per area.
 
 mod bvh;
+mod cli;
 mod common;
 mod cpu;
 mod gpu;

@@ -1,0 +1,110 @@
+//! Which parts of the shader a render can reach, as the values of the `override` constants
+//! in `types.wgsl`. One pipeline is compiled per combination: code for primitive kinds,
+//! lights and features the scene lacks is then compiled out.
+//!
+//! This matters most on lavapipe, which runs both sides of every `if` under a lane mask:
+//! without it a sphere test also paid for the triangle, cone and box tests beside it.
+//! The flags only remove unreachable code, so the image does not change; the CPU twin
+//! keeps every branch.
+
+use crate::gpu_types::*;
+use crate::pack::SceneBuffers;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Specialization {
+    pub spheres: bool,
+    pub triangles: bool,
+    pub cones: bool,
+    pub boxes: bool,
+    pub planes: bool,
+    pub normals: bool,
+    pub directional_lights: bool,
+    pub area_lights: bool,
+    pub reflection: bool,
+    pub refraction: bool,
+    pub lens: bool,
+    pub multisample: bool,
+    pub aov: u32,
+}
+
+impl Specialization {
+    pub fn of(scene: &SceneBuffers, g: &GpuGlobals) -> Self {
+        let kind = |k: u32| scene.prims.iter().any(|p| p.kind() == k);
+        let light = |k: u32| scene.lights.iter().any(|l| l.kind == k);
+        Specialization {
+            spheres: kind(PRIM_SPHERE),
+            triangles: kind(PRIM_TRIANGLE),
+            cones: kind(PRIM_CONE),
+            boxes: kind(PRIM_BOX),
+            planes: !scene.planes.is_empty(),
+            normals: !scene.tri_normals.is_empty(),
+            directional_lights: light(LIGHT_DIRECTIONAL),
+            area_lights: light(LIGHT_AREA),
+            reflection: scene.materials.iter().any(|m| m.ks > 0.0),
+            refraction: scene.materials.iter().any(|m| m.t > 0.0),
+            lens: g.aperture > 0.0,
+            multisample: g.spp > 1,
+            aov: g.aov,
+        }
+    }
+
+    /// The pipeline-overridable constants, by their WGSL names.
+    pub fn constants(&self) -> Vec<(&'static str, f64)> {
+        let b = |v: bool| if v { 1.0 } else { 0.0 };
+        vec![
+            ("SPHERES", b(self.spheres)),
+            ("TRIANGLES", b(self.triangles)),
+            ("CONES", b(self.cones)),
+            ("BOXES", b(self.boxes)),
+            ("PLANES", b(self.planes)),
+            ("NORMALS", b(self.normals)),
+            ("DIRECTIONAL_LIGHTS", b(self.directional_lights)),
+            ("AREA_LIGHTS", b(self.area_lights)),
+            ("REFLECTION", b(self.reflection)),
+            ("REFRACTION", b(self.refraction)),
+            ("LENS", b(self.lens)),
+            ("MULTISAMPLE", b(self.multisample)),
+            ("AOV", f64::from(self.aov)),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every constant the host sets is an `override` in the shader, and every override
+    /// is set (a missing one would silently keep its default).
+    #[test]
+    fn constants_name_exactly_the_shader_overrides() {
+        let (module, _) = crate::gpu::shaders::validate().expect("shader validates");
+        let mut wgsl: Vec<String> = module
+            .overrides
+            .iter()
+            .filter_map(|(_, o)| o.name.clone())
+            .collect();
+        let spec = Specialization {
+            spheres: true,
+            triangles: true,
+            cones: true,
+            boxes: true,
+            planes: true,
+            normals: true,
+            directional_lights: true,
+            area_lights: true,
+            reflection: true,
+            refraction: true,
+            lens: true,
+            multisample: true,
+            aov: 0,
+        };
+        let mut host: Vec<String> = spec
+            .constants()
+            .iter()
+            .map(|(n, _)| n.to_string())
+            .collect();
+        wgsl.sort();
+        host.sort();
+        assert_eq!(wgsl, host);
+    }
+}
