@@ -116,23 +116,29 @@ fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>,
     return near <= far;
 }
 
-// Takes the primitive's index rather than the primitive, so that only the fields its
-// kind uses are loaded; kinds the scene lacks are compiled out (see the overrides).
+// Takes the primitive's index rather than the primitive, so that only the texels its
+// kind uses are fetched; kinds the scene lacks are compiled out (see the overrides).
 fn intersect_prim(i: u32, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {
-    let kind = prims[i].tag >> PRIM_KIND_SHIFT;
+    let kind = load_prim_tag(i) >> PRIM_KIND_SHIFT;
+    let a = texel(prim_texels, 3u * i);
+    let p0 = bitcast<vec3<f32>>(a.xyz);
     var t = vec4<f32>(NO_HIT, NO_HIT, 0.0, 0.0);
     if (SPHERES && kind == PRIM_SPHERE) {
-        t = vec4<f32>(intersect_sphere(prims[i].p0, prims[i].f0, ray), 0.0, 0.0);
+        t = vec4<f32>(intersect_sphere(p0, bitcast<f32>(a.w), ray), 0.0, 0.0);
     }
     if (TRIANGLES && kind == PRIM_TRIANGLE) {
-        let h = intersect_triangle(prims[i].p0, prims[i].p1, prims[i].p2, ray);
+        let e1 = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 1u).xyz);
+        let e2 = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 2u).xyz);
+        let h = intersect_triangle(p0, e1, e2, ray);
         t = vec4<f32>(h.x, NO_HIT, h.y, h.z);
     }
     if (CONES && kind == PRIM_CONE) {
-        t = vec4<f32>(intersect_cone(prims[i].p0, prims[i].f0, prims[i].p1, prims[i].f1, ray), 0.0, 0.0);
+        let b = texel(prim_texels, 3u * i + 1u);
+        t = vec4<f32>(intersect_cone(p0, bitcast<f32>(a.w), bitcast<vec3<f32>>(b.xyz), bitcast<f32>(b.w), ray), 0.0, 0.0);
     }
     if (BOXES && kind == PRIM_BOX) {
-        t = vec4<f32>(slabs(prims[i].p0, prims[i].p1, ray.origin, inv_dir), 0.0, 0.0);
+        let hi = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 1u).xyz);
+        t = vec4<f32>(slabs(p0, hi, ray.origin, inv_dir), 0.0, 0.0);
     }
     return t;
 }

@@ -28,7 +28,7 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
         ns = pl.normal;
         material = pl.material;
     } else {
-        let p = prims[hit.prim];
+        let p = load_prim(hit.prim);
         outward = prim_normal(p, point);
         ns = outward;
         if (NORMALS && prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {

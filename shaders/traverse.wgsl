@@ -44,7 +44,7 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
         var first = 0u;
         var count = 0u;
         loop {
-            let n = nodes[node];
+            let n = load_node(node);
             hit.cost += 1u;
             if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t)) {
                 count = node_count(n);
@@ -116,7 +116,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
         var first = 0u;
         var count = 0u;
         loop {
-            let n = nodes[node];
+            let n = load_node(node);
             if (overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax)) {
                 count = node_count(n);
                 if (count > 0u) {
@@ -142,7 +142,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
             let t = intersect_prim(i, ray, inv_dir);
             let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
             if (crossings > 0u) {
-                let m = materials[prims[i].tag & PRIM_MATERIAL_MASK];
+                let m = materials[load_prim_tag(i) & PRIM_MATERIAL_MASK];
                 if (m.t <= 0.0) {
                     return vec3<f32>(0.0);
                 }

@@ -109,6 +109,8 @@ const AOV_DEPTH: u32 = 2u;
 const AOV_COST: u32 = 3u;
 
 const TRAVERSAL_STACK: u32 = 64u;
+// Texels a row of node_texels and prim_texels (src/gpu_types.rs: TEXTURE_WIDTH).
+const TEXTURE_WIDTH: u32 = 4096u;
 // Invocations per workgroup: @workgroup_size(8, 8, 1) in main.wgsl.
 const WORKGROUP_INVOCATIONS: u32 = 64u;
 const RAY_STACK: u32 = 16u;
@@ -144,8 +146,13 @@ override AOV: u32 = 0u;
 
 @group(0) @binding(0) var<uniform> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
-@group(0) @binding(2) var<storage, read> nodes: array<Node>;
-@group(0) @binding(3) var<storage, read> prims: array<Prim>;
+// BVH nodes and primitives, the data every traversal step reads, come through rgba32uint
+// textures holding the very bytes of `array<Node>` and `array<Prim>` (2 and 3 texels
+// each, TEXTURE_WIDTH texels a row). lavapipe loads a storage buffer one component and
+// one invocation at a time (a 32-byte node took 64 scalar loads), but fetches texels with
+// vector gathers; real GPUs read both through their caches.
+@group(0) @binding(2) var node_texels: texture_2d<u32>;
+@group(0) @binding(3) var prim_texels: texture_2d<u32>;
 @group(0) @binding(4) var<storage, read> tri_normals: array<TriNormals>;
 @group(0) @binding(5) var<storage, read> planes: array<Plane>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
@@ -171,6 +178,35 @@ fn prim_kind(p: Prim) -> u32 {
 
 fn prim_material(p: Prim) -> u32 {
     return p.tag & PRIM_MATERIAL_MASK;
+}
+
+fn texel(texels: texture_2d<u32>, i: u32) -> vec4<u32> {
+    return textureLoad(texels, vec2<u32>(i % TEXTURE_WIDTH, i / TEXTURE_WIDTH), 0);
+}
+
+fn load_node(i: u32) -> Node {
+    let a = texel(node_texels, 2u * i);
+    let b = texel(node_texels, 2u * i + 1u);
+    return Node(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
+
+fn load_prim(i: u32) -> Prim {
+    let a = texel(prim_texels, 3u * i);
+    let b = texel(prim_texels, 3u * i + 1u);
+    let c = texel(prim_texels, 3u * i + 2u);
+    return Prim(
+        bitcast<vec3<f32>>(a.xyz),
+        bitcast<f32>(a.w),
+        bitcast<vec3<f32>>(b.xyz),
+        bitcast<f32>(b.w),
+        bitcast<vec3<f32>>(c.xyz),
+        c.w,
+    );
+}
+
+// The tag (kind and material) of primitive i: the last word of its third texel.
+fn load_prim_tag(i: u32) -> u32 {
+    return texel(prim_texels, 3u * i + 2u).w;
 }
 
 fn node_count(n: Node) -> u32 {

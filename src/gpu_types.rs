@@ -182,6 +182,10 @@ pub struct GpuTile {
 /// path with depth limit D never holds more than D pending rays (each pop pushes at most
 /// two rays one level deeper), so `RAY_STACK = MAX_DEPTH` cannot overflow.
 pub const TRAVERSAL_STACK: usize = 64;
+/// Texels (16 bytes) a row of the textures that carry `GpuNode`s and `GpuPrim`s to the
+/// shader; below WebGPU's guaranteed 8192, and 64 KiB a row, a multiple of the 256-byte
+/// row alignment of texture uploads.
+pub const TEXTURE_WIDTH: u32 = 4096;
 pub const MAX_DEPTH: u32 = 16;
 pub const RAY_STACK: usize = MAX_DEPTH as usize;
 

@@ -17,7 +17,7 @@ use super::shaders;
 use super::specialization::Specialization;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::gpu_types::{GpuGlobals, GpuTile};
+use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
 use crate::pack::SceneBuffers;
 
 /// Workgroup size of `main.wgsl` (8 x 8).
@@ -190,6 +190,7 @@ impl GpuRenderer {
     fn bind(
         &self,
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         scene: &SceneBuffers,
         globals: &GpuGlobals,
         tile_bytes: u64,
@@ -211,8 +212,10 @@ impl GpuRenderer {
         scoped(device, "uploading the scene", || {
             let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
             let tile_buf = uniform("tile", bytemuck::bytes_of(&GpuTile::default()));
-            let nodes = storage("nodes", non_empty(&scene.nodes));
-            let prims = storage("prims", non_empty(&scene.prims));
+            let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
+            let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
+            let nodes = nodes.create_view(&Default::default());
+            let prims = prims.create_view(&Default::default());
             let normals = storage("tri_normals", non_empty(&scene.tri_normals));
             let planes = storage("planes", non_empty(&scene.planes));
             let materials = storage("materials", non_empty(&scene.materials));
@@ -229,23 +232,23 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let buffers = [
-                &globals_buf,
-                &tile_buf,
-                &nodes,
-                &prims,
-                &normals,
-                &planes,
-                &materials,
-                &lights,
-                &output,
+            let resources = [
+                globals_buf.as_entire_binding(),
+                tile_buf.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&nodes),
+                wgpu::BindingResource::TextureView(&prims),
+                normals.as_entire_binding(),
+                planes.as_entire_binding(),
+                materials.as_entire_binding(),
+                lights.as_entire_binding(),
+                output.as_entire_binding(),
             ];
-            let entries: Vec<wgpu::BindGroupEntry> = buffers
-                .iter()
+            let entries: Vec<wgpu::BindGroupEntry> = resources
+                .into_iter()
                 .enumerate()
-                .map(|(i, b)| wgpu::BindGroupEntry {
+                .map(|(i, resource)| wgpu::BindGroupEntry {
                     binding: i as u32,
-                    resource: b.as_entire_binding(),
+                    resource,
                 })
                 .collect();
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -281,7 +284,7 @@ impl GpuRenderer {
             epsilon: 0.0,
             bvh_depth: 0,
         };
-        let bound = self.bind(device, &empty, &GpuGlobals::default(), PIXEL_BYTES)?;
+        let bound = self.bind(device, queue, &empty, &GpuGlobals::default(), PIXEL_BYTES)?;
         scoped(device, "compiling the shader", || {
             let mut enc = device.create_command_encoder(&Default::default());
             {
@@ -321,7 +324,7 @@ impl GpuRenderer {
             tile_buf,
             output,
             readback,
-        } = self.bind(device, scene, globals, tile_bytes)?;
+        } = self.bind(device, queue, scene, globals, tile_bytes)?;
 
         let mut film = Film::new(w, h);
         let mut rays = 0u64;
@@ -361,8 +364,9 @@ impl GpuRenderer {
     }
 }
 
-/// The bindings of `types.wgsl`: globals and tile (uniform), the scene arrays (read-only
-/// storage), the tile's output (read-write storage). Explicit, so that a binding the
+/// The bindings of `types.wgsl`: globals and tile (uniform), nodes and primitives
+/// (rgba32uint textures), the other scene arrays (read-only storage), the tile's output
+/// (read-write storage). Explicit, so that a binding the
 /// shader happens not to use is still accepted.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
@@ -375,11 +379,23 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         count: None,
     };
+    let texels = |binding: u32| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    };
     let mut entries = vec![
         entry(0, wgpu::BufferBindingType::Uniform),
         entry(1, wgpu::BufferBindingType::Uniform),
+        texels(2),
+        texels(3),
     ];
-    entries.extend((2..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
+    entries.extend((4..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
     entries.push(entry(
         8,
         wgpu::BufferBindingType::Storage { read_only: false },
@@ -438,6 +454,37 @@ fn tile_side(spp: u32) -> u32 {
     }
 }
 
+/// Rows of `TEXTURE_WIDTH` texels that hold `bytes` (at least one).
+fn texel_rows(bytes: usize) -> u32 {
+    (bytes.div_ceil(16) as u32).div_ceil(TEXTURE_WIDTH).max(1)
+}
+
+/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows.
+fn texels(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, bytes: &[u8]) -> wgpu::Texture {
+    let rows = texel_rows(bytes.len());
+    let mut data = bytes.to_vec();
+    data.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
+    device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: TEXTURE_WIDTH,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &data,
+    )
+}
+
 /// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element
 /// (the shader never reads it, since the counts in `GpuGlobals` are zero).
 fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
@@ -449,22 +496,36 @@ fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
     }
 }
 
-/// Refuses scenes that need a larger storage binding or buffer than the device allows.
+/// Refuses scenes that need a larger texture, storage binding or buffer than the device
+/// allows, naming the limit and the size needed.
 fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, tile_bytes: u64) -> Result<()> {
     let limits = device.limits();
+    let max_rows = limits.max_texture_dimension_2d;
+    for (what, bytes) in [
+        ("BVH nodes", size_of_val(&scene.nodes[..])),
+        ("primitives", size_of_val(&scene.prims[..])),
+    ] {
+        let rows = texel_rows(bytes);
+        if rows > max_rows {
+            return Err(Error::Gpu(format!(
+                "the scene's {what} need a texture {rows} rows high, but this adapter's \
+                 max_texture_dimension_2d is {max_rows}; render it with --backend cpu"
+            )));
+        }
+    }
     let max_binding = u64::from(limits.max_storage_buffer_binding_size);
     let max_buffer = limits.max_buffer_size;
     let arrays = [
-        ("BVH nodes", size_of_val(&scene.nodes[..])),
-        ("primitives", size_of_val(&scene.prims[..])),
-        ("triangle normals", size_of_val(&scene.tri_normals[..])),
-        ("planes", size_of_val(&scene.planes[..])),
-        ("materials", size_of_val(&scene.materials[..])),
-        ("lights", size_of_val(&scene.lights[..])),
-        ("output tile", tile_bytes as usize),
+        (
+            "triangle normals",
+            size_of_val(&scene.tri_normals[..]) as u64,
+        ),
+        ("planes", size_of_val(&scene.planes[..]) as u64),
+        ("materials", size_of_val(&scene.materials[..]) as u64),
+        ("lights", size_of_val(&scene.lights[..]) as u64),
+        ("output tile", tile_bytes),
     ];
     for (what, bytes) in arrays {
-        let bytes = bytes as u64;
         let limit = max_binding.min(max_buffer);
         if bytes > limit {
             return Err(Error::Gpu(format!(

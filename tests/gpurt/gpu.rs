@@ -307,47 +307,83 @@ fn comparer_rejects_perturbed_gpu_images() {
     );
 }
 
-/// A scene larger than a storage binding the device allows is refused with a message that
-/// names the limit, never rendered as a black image.
-#[test]
-fn oversized_scene_is_refused_with_the_limit_named() {
-    let Some(g) = gpu() else {
-        return;
-    };
-    let limits = wgpu::Limits {
-        max_storage_buffer_binding_size: 1024,
-        ..g.ctx.adapter.limits()
-    };
-    let (device, queue) =
-        pollster::block_on(g.ctx.adapter.request_device(&wgpu::DeviceDescriptor {
-            required_limits: limits,
-            ..Default::default()
-        }))
-        .expect("device with small limits");
-    let scene = features_scene("");
-    let mut big = scene.clone();
-    // 64 spheres take 3 KiB of primitives, over the 1 KiB binding.
-    for i in 0..64 {
-        let mut s = big.spheres[0];
-        s.center.x += i as f32 * 0.01;
-        big.spheres.push(s);
+/// Opens a second device on the test adapter with some limits lowered.
+fn device_with(g: &Gpu, limits: wgpu::Limits) -> (wgpu::Device, wgpu::Queue) {
+    pollster::block_on(g.ctx.adapter.request_device(&wgpu::DeviceDescriptor {
+        required_limits: limits,
+        ..Default::default()
+    }))
+    .expect("device with lowered limits")
+}
+
+/// The features scene plus `n` tiny triangles with shading normals.
+fn with_triangles(n: usize) -> Scene {
+    let mut scene = features_scene("");
+    let material = scene.spheres[0].material;
+    for i in 0..n {
+        let x = i as f32 * 1e-4;
+        scene.triangles.push(gpurt::scene::Triangle {
+            v: [
+                glam::Vec3::new(x, 3.0, 0.0),
+                glam::Vec3::new(x + 1e-4, 3.0, 0.0),
+                glam::Vec3::new(x, 3.0, 1e-4),
+            ],
+            n: Some([glam::Vec3::Y; 3]),
+            material,
+        });
     }
-    let buffers = pack::pack(&big).expect("packs");
-    let globals = pack::globals(&big, &buffers, &opts(&big));
-    let renderer = GpuRenderer::new(&device, None).expect("compiles");
-    let err = renderer
+    scene
+}
+
+fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
+    let buffers = pack::pack(scene).expect("packs");
+    let globals = pack::globals(scene, &buffers, &opts(scene));
+    let renderer = GpuRenderer::new(device, None).expect("shader module");
+    renderer
         .render(
-            &device,
-            &queue,
+            device,
+            queue,
             &buffers,
             &globals,
             &|_| {},
             &AtomicBool::new(false),
         )
-        .expect_err("oversized scene must be refused");
-    let msg = err.to_string();
+        .expect_err("oversized scene must be refused")
+        .to_string()
+}
+
+/// A scene larger than a storage binding or a texture the device allows is refused with a
+/// message that names the limit and what needed more, never rendered as a black image.
+#[test]
+fn oversized_scene_is_refused_with_the_limit_named() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    // 1 MiB holds the 256x256 output tile; 30000 triangles' normals need 1.4 MiB.
+    let mib = 1 << 20;
+    let (device, queue) = device_with(
+        g,
+        wgpu::Limits {
+            max_storage_buffer_binding_size: mib,
+            ..g.ctx.adapter.limits()
+        },
+    );
+    let msg = refusal(&device, &queue, &with_triangles(30_000));
     assert!(
-        msg.contains("max_storage_buffer_binding_size") && msg.contains("1024"),
+        msg.contains("triangle normals")
+            && msg.contains("max_storage_buffer_binding_size")
+            && msg.contains(&mib.to_string()),
         "{msg}"
     );
+    // Nodes and primitives travel as textures 4096 texels wide: 30000 primitives of three
+    // texels need 22 rows.
+    let (device, queue) = device_with(
+        g,
+        wgpu::Limits {
+            max_texture_dimension_2d: 16,
+            ..g.ctx.adapter.limits()
+        },
+    );
+    let msg = refusal(&device, &queue, &with_triangles(30_000));
+    assert!(msg.contains("max_texture_dimension_2d is 16"), "{msg}");
 }

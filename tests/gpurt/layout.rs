@@ -129,6 +129,7 @@ fn shared_constants_match() {
     let (module, _) = shaders::validate().expect("shader validates");
     let u32s = [
         ("TRAVERSAL_STACK", TRAVERSAL_STACK as u32),
+        ("TEXTURE_WIDTH", TEXTURE_WIDTH),
         ("RAY_STACK", RAY_STACK as u32),
         ("PRIM_SPHERE", PRIM_SPHERE),
         ("PRIM_TRIANGLE", PRIM_TRIANGLE),
