@@ -1,5 +1,5 @@
 // main.wgsl: the compute entry point. One invocation per pixel of the current tile
-// (8x8 workgroups; the host dispatches one bounded tile at a time): camera rays
+// (workgroups of 8x8 pixels; the host dispatches one bounded tile at a time): camera rays
 // (stratified, jittered samples and the thin lens, from the shared hash), traced and
 // averaged, or an AOV (CPU twin: src/cpu/main.rs).
 
@@ -47,12 +47,20 @@ fn aov(ray: Ray) -> vec3<f32> {
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
 }
 
-@compute @workgroup_size(8, 8, 1)
+@compute @workgroup_size(64, 1, 1)
 fn main(
-    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
 ) {
     stack_base = local_index * TRAVERSAL_STACK;
+    // Consecutive invocations cover 4x2 pixel blocks rather than rows of 8: the lanes
+    // a SIMD unit runs together then trace neighbouring, more coherent rays.
+    let block = local_index / 8u;
+    let lane = local_index % 8u;
+    let id = vec2<u32>(
+        group.x * 8u + (block % 2u) * 4u + lane % 4u,
+        group.y * 8u + (block / 2u) * 2u + lane / 4u,
+    );
     if (id.x >= tile.width || id.y >= tile.height) {
         return;
     }

@@ -20,7 +20,7 @@ use crate::film::Film;
 use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
 use crate::pack::SceneBuffers;
 
-/// Workgroup size of `main.wgsl` (8 x 8).
+/// Pixels a workgroup of `main.wgsl` covers along each axis (8 x 8, in 4 x 2 blocks).
 const WORKGROUP: u32 = 8;
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 const PIXEL_BYTES: u64 = 16;
