@@ -48,10 +48,24 @@ pub fn build(bounds: &[Bounds]) -> FlatBvh {
     }
 }
 
+/// Scenes up to this many primitives get obvhs' most thorough build: at about 2 us a
+/// primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
+/// (0.80 s against 0.92 s). Larger scenes get the medium build, about 4 times faster to
+/// build (mount-9: 0.29 s against 1.46 s) for a few percent slower tracing.
+pub const THOROUGH_BUILD_MAX_PRIMS: usize = 20_000;
+
 fn build_obvhs(aabbs: &[Aabb]) -> Bvh2 {
+    let quality = if aabbs.len() <= THOROUGH_BUILD_MAX_PRIMS {
+        BvhBuildParams::very_slow_build()
+    } else {
+        BvhBuildParams::medium_build()
+    };
     let params = BvhBuildParams {
         max_prims_per_leaf: MAX_LEAF_PRIMS,
-        ..BvhBuildParams::medium_build()
+        // Spatial splits reference a primitive from several leaves, which would count a
+        // shadow ray's crossings more than once.
+        pre_split: false,
+        ..quality
     };
     let mut bvh = PlocBuilder::with_capacity(aabbs.len()).build(
         params.ploc_search_distance,
