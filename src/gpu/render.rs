@@ -513,7 +513,7 @@ fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, tile_bytes: u64) -> 
             )));
         }
     }
-    let max_binding = u64::from(limits.max_storage_buffer_binding_size);
+    let max_binding = limits.max_storage_buffer_binding_size;
     let max_buffer = limits.max_buffer_size;
     let arrays = [
         (
