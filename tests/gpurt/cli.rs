@@ -181,3 +181,41 @@ fn diff_exit_codes_and_heat_map() {
     let o = gpurt(&["diff", "a.png", "missing.png"], &d);
     assert_eq!(o.status.code(), Some(2));
 }
+
+/// Ctrl-C (SIGINT) stops a render cleanly: exit code 130, a message, and no output file.
+#[test]
+fn interrupt_stops_without_writing_a_partial_file() {
+    let d = workdir("interrupt");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    // Some seconds of work on two cores; interrupted long before it ends.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args([
+            "ball.nff",
+            "--backend",
+            "cpu",
+            "--width",
+            "2048",
+            "--height",
+            "2048",
+        ])
+        .args(["--spp", "64", "-o", "out.png"])
+        .current_dir(&d)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("gpurt starts");
+    std::thread::sleep(std::time::Duration::from_millis(700));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(killed.success());
+    let out = child.wait_with_output().expect("gpurt ends");
+    assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
+    assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
+    assert!(!d.join("out.png").exists());
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(leftovers.len(), 1, "only the scene remains: {leftovers:?}");
+}
