@@ -188,7 +188,7 @@ fn interrupt_stops_without_writing_a_partial_file() {
     let d = workdir("interrupt");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     // Some seconds of work on two cores; interrupted long before it ends.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
         .args([
             "ball.nff",
             "--backend",
