@@ -20,6 +20,58 @@ fn first_in(t: vec4<f32>, tmin: f32, tmax: f32) -> f32 {
     return NO_HIT;
 }
 
+// Where a traversal stands: the node to visit next and how many nodes wait on its stack
+// (this invocation's slice of traversal_stack).
+struct Walk {
+    node: u32,
+    sp: u32,
+}
+
+// Takes the next waiting node; false when the traversal is done.
+fn pop(walk: ptr<function, Walk>) -> bool {
+    if ((*walk).sp == 0u) {
+        return false;
+    }
+    (*walk).sp -= 1u;
+    (*walk).node = traversal_stack[stack_base + (*walk).sp];
+    return true;
+}
+
+// Walks on until the ray reaches a leaf whose box overlaps [tmin, tmax], entering the
+// child nearer along the split axis first and pushing the other. Returns the leaf's
+// (first primitive, count), count 0 when the tree is done; adds the nodes visited to
+// `cost`. Every ray of a SIMD batch reaches a leaf before any tests primitives, so they
+// test them together instead of taking turns (Aila & Laine's while-while traversal).
+fn next_leaf(
+    walk: ptr<function, Walk>,
+    ray: Ray,
+    inv_dir: vec3<f32>,
+    tmin: f32,
+    tmax: f32,
+    cost: ptr<function, u32>,
+) -> vec2<u32> {
+    let neg = ray.dir < vec3<f32>(0.0);
+    loop {
+        let node = (*walk).node;
+        let n = load_node(node);
+        *cost += 1u;
+        if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax)) {
+            let count = node_count(n);
+            if (count > 0u) {
+                return vec2<u32>(n.offset, count);
+            }
+            // Branch-free: lavapipe would run both arms of an `if`.
+            let second_first = neg[node_axis(n)];
+            traversal_stack[stack_base + (*walk).sp] = select(n.offset, node + 1u, second_first);
+            (*walk).node = select(node + 1u, n.offset, second_first);
+            (*walk).sp += 1u;
+        } else if (!pop(walk)) {
+            return vec2<u32>(0u);
+        }
+    }
+    return vec2<u32>(0u);
+}
+
 fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
     var hit = Hit(tmax, NO_PRIM, 0.0, 0.0, 0u);
     if (PLANES) {
@@ -35,41 +87,15 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
-    let neg = ray.dir < vec3<f32>(0.0);
-    var sp = 0u;
-    var node = 0u;
+    var walk = Walk(0u, 0u);
+    // A pointer to hit.cost itself trips naga's SPIR-V writer (an uncached access).
+    var cost = 0u;
     loop {
-        // Descend until this ray reaches a leaf it overlaps: the rays of a SIMD batch then
-        // test primitives together instead of taking turns (Aila & Laine's while-while).
-        var first = 0u;
-        var count = 0u;
-        loop {
-            let n = load_node(node);
-            hit.cost += 1u;
-            if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t)) {
-                count = node_count(n);
-                if (count > 0u) {
-                    first = n.offset;
-                    break;
-                }
-                // Visit the child nearer along the split axis first. Branch-free: lavapipe
-                // would run both arms of an `if`.
-                let second_first = neg[node_axis(n)];
-                traversal_stack[stack_base + sp] = select(n.offset, node + 1u, second_first);
-                node = select(node + 1u, n.offset, second_first);
-                sp += 1u;
-                continue;
-            }
-            if (sp == 0u) {
-                break;
-            }
-            sp -= 1u;
-            node = traversal_stack[stack_base + sp];
-        }
-        if (count == 0u) {
+        let leaf = next_leaf(&walk, ray, inv_dir, tmin, hit.t, &cost);
+        if (leaf.y == 0u) {
             break;
         }
-        for (var i = first; i < first + count; i++) {
+        for (var i = leaf.x; i < leaf.x + leaf.y; i++) {
             let t = intersect_prim(i, ray, inv_dir);
             let t_first = first_in(t, tmin, hit.t);
             if (t_first != NO_HIT) {
@@ -79,12 +105,11 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
                 hit.v = t.w;
             }
         }
-        if (sp == 0u) {
+        if (!pop(&walk)) {
             break;
         }
-        sp -= 1u;
-        node = traversal_stack[stack_base + sp];
     }
+    hit.cost = cost;
     return hit;
 }
 
@@ -109,36 +134,14 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
         return light;
     }
     let inv_dir = safe_inverse(ray.dir);
-    let neg = ray.dir < vec3<f32>(0.0);
-    var sp = 0u;
-    var node = 0u;
+    var walk = Walk(0u, 0u);
+    var visited = 0u;
     loop {
-        var first = 0u;
-        var count = 0u;
-        loop {
-            let n = load_node(node);
-            if (overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax)) {
-                count = node_count(n);
-                if (count > 0u) {
-                    first = n.offset;
-                    break;
-                }
-                let second_first = neg[node_axis(n)];
-                traversal_stack[stack_base + sp] = select(n.offset, node + 1u, second_first);
-                node = select(node + 1u, n.offset, second_first);
-                sp += 1u;
-                continue;
-            }
-            if (sp == 0u) {
-                break;
-            }
-            sp -= 1u;
-            node = traversal_stack[stack_base + sp];
-        }
-        if (count == 0u) {
+        let leaf = next_leaf(&walk, ray, inv_dir, 0.0, tmax, &visited);
+        if (leaf.y == 0u) {
             break;
         }
-        for (var i = first; i < first + count; i++) {
+        for (var i = leaf.x; i < leaf.x + leaf.y; i++) {
             let t = intersect_prim(i, ray, inv_dir);
             let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
             if (crossings > 0u) {
@@ -151,11 +154,9 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
                 }
             }
         }
-        if (sp == 0u) {
+        if (!pop(&walk)) {
             break;
         }
-        sp -= 1u;
-        node = traversal_stack[stack_base + sp];
     }
     return light;
 }

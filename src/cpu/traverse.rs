@@ -18,6 +18,67 @@ fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
     }
 }
 
+/// Where a traversal stands: the node to visit next and the nodes waiting on its stack.
+struct Walk {
+    node: u32,
+    sp: usize,
+    stack: [u32; TRAVERSAL_STACK],
+}
+
+impl Walk {
+    fn new() -> Self {
+        Walk {
+            node: 0,
+            sp: 0,
+            stack: [0; TRAVERSAL_STACK],
+        }
+    }
+
+    /// Takes the next waiting node; false when the traversal is done.
+    fn pop(&mut self) -> bool {
+        if self.sp == 0 {
+            return false;
+        }
+        self.sp -= 1;
+        self.node = self.stack[self.sp];
+        true
+    }
+
+    /// Walks on until the ray reaches a leaf whose box overlaps `[tmin, tmax]`, entering
+    /// the child nearer along the split axis first and pushing the other. Returns the
+    /// leaf's (first primitive, count), count 0 when the tree is done; adds the nodes
+    /// visited to `cost`. (The shader's SIMD batches then test primitives together; see
+    /// traverse.wgsl.)
+    fn next_leaf(
+        &mut self,
+        b: &Bindings,
+        ray: &Ray,
+        inv_dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        cost: &mut u32,
+    ) -> (u32, u32) {
+        let neg = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
+        loop {
+            let node = self.node;
+            let n = &b.nodes[node as usize];
+            *cost += 1;
+            if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax) {
+                let count = n.count();
+                if count > 0 {
+                    return (n.offset, count);
+                }
+                let second_first = neg[n.axis() as usize];
+                self.stack[self.sp] = if second_first { node + 1 } else { n.offset };
+                self.node = if second_first { n.offset } else { node + 1 };
+                self.sp += 1;
+            } else if !self.pop() {
+                return (0, 0);
+            }
+        }
+    }
+}
+
 /// Nearest surface along the ray within `(tmin, tmax)`.
 pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     let mut hit = Hit {
@@ -38,37 +99,9 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
-    let neg = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
-    let mut stack = [0u32; TRAVERSAL_STACK];
-    let mut sp = 0usize;
-    let mut node = 0u32;
+    let mut walk = Walk::new();
     loop {
-        // Descend until this ray reaches a leaf it overlaps (the shader's SIMD batches then
-        // test primitives together; see traverse.wgsl).
-        let mut first = 0u32;
-        let mut count = 0u32;
-        loop {
-            let n = &b.nodes[node as usize];
-            hit.cost += 1;
-            if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, tmin, hit.t) {
-                count = n.count();
-                if count > 0 {
-                    first = n.offset;
-                    break;
-                }
-                // Visit the child nearer along the split axis first.
-                let second_first = neg[n.axis() as usize];
-                stack[sp] = if second_first { node + 1 } else { n.offset };
-                node = if second_first { n.offset } else { node + 1 };
-                sp += 1;
-                continue;
-            }
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            node = stack[sp];
-        }
+        let (first, count) = walk.next_leaf(b, ray, inv_dir, tmin, hit.t, &mut hit.cost);
         if count == 0 {
             break;
         }
@@ -83,11 +116,9 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
                 hit.v = t.w;
             }
         }
-        if sp == 0 {
+        if !walk.pop() {
             break;
         }
-        sp -= 1;
-        node = stack[sp];
     }
     hit
 }
@@ -110,33 +141,10 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
         return light;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
-    let neg = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
-    let mut stack = [0u32; TRAVERSAL_STACK];
-    let mut sp = 0usize;
-    let mut node = 0u32;
+    let mut walk = Walk::new();
+    let mut visited = 0;
     loop {
-        let mut first = 0u32;
-        let mut count = 0u32;
-        loop {
-            let n = &b.nodes[node as usize];
-            if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, 0.0, tmax) {
-                count = n.count();
-                if count > 0 {
-                    first = n.offset;
-                    break;
-                }
-                let second_first = neg[n.axis() as usize];
-                stack[sp] = if second_first { node + 1 } else { n.offset };
-                node = if second_first { n.offset } else { node + 1 };
-                sp += 1;
-                continue;
-            }
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            node = stack[sp];
-        }
+        let (first, count) = walk.next_leaf(b, ray, inv_dir, 0.0, tmax, &mut visited);
         if count == 0 {
             break;
         }
@@ -154,11 +162,9 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
                 }
             }
         }
-        if sp == 0 {
+        if !walk.pop() {
             break;
         }
-        sp -= 1;
-        node = stack[sp];
     }
     light
 }
