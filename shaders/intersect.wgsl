@@ -108,12 +108,16 @@ fn slabs(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>) ->
     return vec2<f32>(near, far);
 }
 
+// Relative widening of the far end, 2^-16 (see SLAB_WIDEN in the CPU twin): rays grazing a
+// box face, and boxes whose near face lies exactly at a hit, overlap on both renderers.
+const SLAB_WIDEN: f32 = 1.0000152587890625;
+
 fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
     let near = max(max_element(min(t0, t1)), tmin);
     let far = min(min_element(max(t0, t1)), tmax);
-    return near <= far;
+    return near <= far * SLAB_WIDEN;
 }
 
 // Takes the primitive's index rather than the primitive, so that only the texels its

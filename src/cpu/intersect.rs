@@ -114,13 +114,20 @@ pub fn slabs(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3) -> Vec2 {
     }
 }
 
+/// Relative widening of the far end in `overlaps`: 2^-16, far more than the rounding of
+/// the slab distances on either renderer (Vulkan lets a GPU divide 2.5 ulp off; depths
+/// agree to about 1e-6). Rays grazing a box face, and boxes whose near face lies exactly at
+/// a hit, are common with flat axis-aligned faces (the gears); they now count as
+/// overlapping on both renderers instead of depending on the last bits of arithmetic.
+pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
+
 /// Whether the ray's interval `[tmin, tmax]` overlaps the box (BVH node test).
 pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> bool {
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
     let near = t0.min(t1).max_element().max(tmin);
     let far = t0.max(t1).min_element().min(tmax);
-    near <= far
+    near <= far * SLAB_WIDEN
 }
 
 /// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.

@@ -154,9 +154,15 @@ fn shared_constants_match() {
             "{name}"
         );
     }
-    assert_eq!(
-        wgsl_const(&module, "NO_HIT"),
-        naga::Literal::F32(gpurt::cpu::types::NO_HIT),
-        "NO_HIT"
-    );
+    let f32s = [
+        ("NO_HIT", gpurt::cpu::types::NO_HIT),
+        ("SLAB_WIDEN", gpurt::cpu::intersect::SLAB_WIDEN),
+    ];
+    for (name, value) in f32s {
+        assert_eq!(
+            wgsl_const(&module, name),
+            naga::Literal::F32(value),
+            "{name}"
+        );
+    }
 }
