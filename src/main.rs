@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
-use gpurt::film::{self, Film, Thresholds};
+use gpurt::film::{self, Thresholds};
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::pack::{self, RenderOptions};
 use gpurt::render::{self, Prepared};
@@ -374,7 +374,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     } else {
         render::display_film(&film, opts.aov)
     };
-    save(&out_film, &output)?;
+    out_film.save(&output)?;
     if args.stats {
         eprintln!(
             "image       {}x{}, {} spp, depth {}",
@@ -407,10 +407,6 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
 fn is_float_format(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-}
-
-fn save(film: &Film, path: &Path) -> gpurt::Result<()> {
-    film.save(path)
 }
 
 /// Checked before rendering, so a long render never ends in "unknown format".
