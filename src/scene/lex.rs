@@ -261,7 +261,14 @@ fn fast_f32(t: &[u8]) -> Option<f32> {
     let mut digits = 0usize; // significant digits accumulated (leading zeros excluded)
     let mut any_digit = false;
     let mut exp: i64 = 0;
+    // Digits with at most one '.' among them; each digit after it lowers the exponent.
+    let mut after_dot = false;
     while let Some(&b) = t.get(i) {
+        if b == b'.' && !after_dot {
+            after_dot = true;
+            i += 1;
+            continue;
+        }
         let d = b.wrapping_sub(b'0');
         if d > 9 {
             break;
@@ -271,23 +278,8 @@ fn fast_f32(t: &[u8]) -> Option<f32> {
             digits += 1;
         }
         mant = mant.wrapping_mul(10).wrapping_add(d as u64);
+        exp -= after_dot as i64;
         i += 1;
-    }
-    if t.get(i) == Some(&b'.') {
-        i += 1;
-        while let Some(&b) = t.get(i) {
-            let d = b.wrapping_sub(b'0');
-            if d > 9 {
-                break;
-            }
-            any_digit = true;
-            if mant != 0 || d != 0 {
-                digits += 1;
-            }
-            mant = mant.wrapping_mul(10).wrapping_add(d as u64);
-            exp -= 1;
-            i += 1;
-        }
     }
     // 15 significant digits stay below 2^53 and cannot have wrapped.
     if !any_digit || digits > 15 {
