@@ -52,6 +52,12 @@ fn offset_origin(s: Surface, dir: vec3<f32>, eps: f32) -> vec3<f32> {
     return s.point - eps * s.ng;
 }
 
+// A ray leaving surface `s` along `dir`, one level deeper than `parent`, its weight scaled
+// by `factor` (Ks or T).
+fn secondary(s: Surface, dir: vec3<f32>, parent: Pending, factor: f32) -> Pending {
+    return Pending(offset_origin(s, dir, globals.epsilon), dir, parent.weight * factor, parent.depth + 1u, 0.0);
+}
+
 fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return d - 2.0 * dot(n, d) * n;
 }
@@ -125,7 +131,7 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
         if (REFLECTION && m.ks > 0.0) {
             let dir = reflect_dir(ray.dir, s.ns);
             *rays += 1u;
-            stack[sp] = Pending(offset_origin(s, dir, globals.epsilon), dir, ray_in.weight * m.ks, ray_in.depth + 1u, 0.0);
+            stack[sp] = secondary(s, dir, ray_in, m.ks);
             sp += 1u;
         }
         if (REFRACTION && m.t > 0.0) {
@@ -140,7 +146,7 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
                 dir = normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns);
             }
             *rays += 1u;
-            stack[sp] = Pending(offset_origin(s, dir, globals.epsilon), dir, ray_in.weight * m.t, ray_in.depth + 1u, 0.0);
+            stack[sp] = secondary(s, dir, ray_in, m.t);
             sp += 1u;
         }
     }

@@ -70,6 +70,18 @@ pub fn offset_origin(s: &Surface, dir: Vec3, eps: f32) -> Vec3 {
     }
 }
 
+/// A ray leaving surface `s` along `dir`, one level deeper than `parent`, its weight
+/// scaled by `factor` (Ks or T).
+fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) -> Pending {
+    Pending {
+        origin: offset_origin(s, dir, eps),
+        dir,
+        weight: parent.weight * factor,
+        depth: parent.depth + 1,
+        tmin: 0.0,
+    }
+}
+
 fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
@@ -157,13 +169,7 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
         if m.ks > 0.0 {
             let dir = reflect(ray.dir, s.ns);
             counts.reflected += 1;
-            stack[sp] = Pending {
-                origin: offset_origin(&s, dir, g.epsilon),
-                dir,
-                weight: ray_in.weight * m.ks,
-                depth: ray_in.depth + 1,
-                tmin: 0.0,
-            };
+            stack[sp] = secondary(&s, dir, &ray_in, m.ks, g.epsilon);
             sp += 1;
         }
         if m.t > 0.0 {
@@ -177,13 +183,7 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
                 (eta * ray.dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
             };
             counts.refracted += 1;
-            stack[sp] = Pending {
-                origin: offset_origin(&s, dir, g.epsilon),
-                dir,
-                weight: ray_in.weight * m.t,
-                depth: ray_in.depth + 1,
-                tmin: 0.0,
-            };
+            stack[sp] = secondary(&s, dir, &ray_in, m.t, g.epsilon);
             sp += 1;
         }
     }
