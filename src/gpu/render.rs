@@ -286,18 +286,10 @@ impl GpuRenderer {
         };
         let bound = self.bind(device, queue, &empty, &GpuGlobals::default(), PIXEL_BYTES)?;
         scoped(device, "compiling the shader", || {
-            let mut enc = device.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(pipeline);
-                pass.set_bind_group(0, &bound.bind_group, &[]);
-                pass.dispatch_workgroups(1, 1, 1);
-            }
+            let enc = encode_pass(device, pipeline, &bound.bind_group, [1, 1]);
             queue.submit([enc.finish()]);
         })?;
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))?;
+        wait(device)?;
         Ok(())
     }
 
@@ -342,17 +334,8 @@ impl GpuRenderer {
                 let bytes = u64::from(tile.width) * u64::from(tile.height) * PIXEL_BYTES;
                 scoped(device, "tracing a tile", || {
                     queue.write_buffer(&tile_buf, 0, bytemuck::bytes_of(&tile));
-                    let mut enc = device.create_command_encoder(&Default::default());
-                    {
-                        let mut pass = enc.begin_compute_pass(&Default::default());
-                        pass.set_pipeline(&pipeline);
-                        pass.set_bind_group(0, &bind_group, &[]);
-                        pass.dispatch_workgroups(
-                            tile.width.div_ceil(WORKGROUP),
-                            tile.height.div_ceil(WORKGROUP),
-                            1,
-                        );
-                    }
+                    let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP));
+                    let mut enc = encode_pass(device, &pipeline, &bind_group, groups);
                     enc.copy_buffer_to_buffer(&output, 0, &readback, 0, bytes);
                     queue.submit([enc.finish()]);
                 })?;
@@ -406,6 +389,31 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// A command encoder holding one compute pass of `groups` workgroups.
+fn encode_pass(
+    device: &wgpu::Device,
+    pipeline: &wgpu::ComputePipeline,
+    bind_group: &wgpu::BindGroup,
+    groups: [u32; 2],
+) -> wgpu::CommandEncoder {
+    let mut enc = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], 1);
+    }
+    enc
+}
+
+/// Blocks until the GPU has finished everything submitted.
+fn wait(device: &wgpu::Device) -> Result<()> {
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map(|_| ())
+        .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
+}
+
 /// Maps the readback buffer, copies the tile into the film, returns its ray count.
 fn read_tile(
     device: &wgpu::Device,
@@ -420,9 +428,7 @@ fn read_tile(
         let _ = tx.send(r);
     });
     // A lost device or a hung submission surfaces here as a poll error.
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))?;
+    wait(device)?;
     rx.recv()
         .map_err(|_| Error::Gpu("readback was never completed".into()))?
         .map_err(|e| Error::Gpu(format!("reading back a tile: {e}")))?;
