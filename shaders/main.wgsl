@@ -1,5 +1,6 @@
 // main.wgsl: the compute entry point. One invocation per pixel of the current tile
-// (workgroups of 8x8 pixels; the host dispatches one bounded tile at a time): camera rays
+// (workgroups of 8x8 pixels; the host dispatches one bounded tile at a time, a band of
+// tiles per submission): camera rays
 // (stratified, jittered samples and the thin lens, from the shared hash), traced and
 // averaged, or an AOV (CPU twin: src/cpu/main.rs).
 
@@ -52,7 +53,7 @@ fn main(
     @builtin(workgroup_id) group: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
 ) {
-    stack_base = local_index * TRAVERSAL_STACK;
+    stack_base = local_index;
     // Consecutive invocations cover 4x2 pixel blocks rather than rows of 8: the lanes
     // a SIMD unit runs together then trace neighbouring, more coherent rays.
     let block = local_index / 8u;
@@ -80,5 +81,5 @@ fn main(
             sum += aov(ray);
         }
     }
-    output[id.y * tile.width + id.x] = PixelOut(sum / f32(g.spp), rays);
+    output[tile.out_base + id.y * tile.out_stride + id.x] = PixelOut(sum / f32(g.spp), rays);
 }

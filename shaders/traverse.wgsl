@@ -33,7 +33,7 @@ fn pop(walk: ptr<function, Walk>) -> bool {
         return false;
     }
     (*walk).sp -= 1u;
-    (*walk).node = traversal_stack[stack_base + (*walk).sp];
+    (*walk).node = traversal_stack[(*walk).sp * WORKGROUP_INVOCATIONS + stack_base];
     return true;
 }
 
@@ -62,7 +62,7 @@ fn next_leaf(
             }
             // Branch-free: lavapipe would run both arms of an `if`.
             let second_first = neg[node_axis(n)];
-            traversal_stack[stack_base + (*walk).sp] = select(n.offset, node + 1u, second_first);
+            traversal_stack[(*walk).sp * WORKGROUP_INVOCATIONS + stack_base] = select(n.offset, node + 1u, second_first);
             (*walk).node = select(node + 1u, n.offset, second_first);
             (*walk).sp += 1u;
         } else if (!pop(walk)) {

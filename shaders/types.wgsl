@@ -84,6 +84,10 @@ struct Tile {
     y: u32,
     width: u32,
     height: u32,
+    out_base: u32,
+    out_stride: u32,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // One traced pixel: its value and the number of rays traced for it.

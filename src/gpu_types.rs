@@ -166,7 +166,9 @@ pub struct GpuGlobals {
     pub aov: u32,
 }
 
-/// The image region one dispatch traces (a uniform buffer, rewritten per tile).
+/// The image region one dispatch traces, and where its pixels go in the output buffer:
+/// pixel (x + i, y + j) of the image is `output[out_base + j * out_stride + i]`. One per
+/// dispatch, at a dynamic offset into a uniform buffer.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTile {
@@ -174,6 +176,10 @@ pub struct GpuTile {
     pub y: u32,
     pub width: u32,
     pub height: u32,
+    pub out_base: u32,
+    pub out_stride: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
 }
 
 /// Fixed sizes of the per-pixel stacks in both renderers.
@@ -197,6 +203,6 @@ const _: () = {
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 128);
-    assert!(size_of::<GpuTile>() == 16);
+    assert!(size_of::<GpuTile>() == 32);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

@@ -24,13 +24,81 @@ use crate::pack::SceneBuffers;
 const WORKGROUP: u32 = 8;
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 const PIXEL_BYTES: u64 = 16;
+/// Largest output buffer a band of rows writes: far below the 128 MiB storage binding of
+/// lavapipe, large enough that a 4K frame at one sample takes two submissions.
+const BAND_BYTES: u64 = 64 << 20;
 
 /// What one render binds.
 struct Bound {
     bind_group: wgpu::BindGroup,
+    /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
     tile_buf: wgpu::Buffer,
+    tile_stride: u32,
     output: wgpu::Buffer,
     readback: wgpu::Buffer,
+}
+
+/// How a frame is cut into work. Each tile is one dispatch whose work is bounded by its
+/// size and the samples per pixel (so that no dispatch runs long enough to trip a driver
+/// watchdog); each band of full-width rows is one submission with one readback, whose
+/// output fits `BAND_BYTES` and whose work fits `band_samples`.
+#[derive(Clone, Copy, Debug)]
+struct Cut {
+    width: u32,
+    height: u32,
+    tile_side: u32,
+    band_rows: u32,
+}
+
+impl Cut {
+    fn new(width: u32, height: u32, spp: u32, band_samples: u64, max_bytes: u64) -> Cut {
+        let tile_side = tile_side(spp);
+        let row_bytes = u64::from(width) * PIXEL_BYTES;
+        let row_samples = u64::from(width) * u64::from(spp);
+        let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
+        // At least one row of tiles; whole rows of tiles, so only the last band is short.
+        let band_rows = (rows as u32 / tile_side).max(1) * tile_side;
+        Cut {
+            width,
+            height,
+            tile_side,
+            band_rows: band_rows.min(height.next_multiple_of(tile_side)),
+        }
+    }
+
+    fn tiles_per_band(&self) -> u32 {
+        self.width.div_ceil(self.tile_side) * self.band_rows.div_ceil(self.tile_side)
+    }
+
+    fn band_bytes(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.band_rows) * PIXEL_BYTES
+    }
+
+    /// The first row of each band and its number of rows.
+    fn bands(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
+        let (h, n) = (self.height, self.band_rows);
+        (0..h).step_by(n as usize).map(move |y| (y, n.min(h - y)))
+    }
+
+    /// The tiles of the band starting at row `y0`, with their places in its output.
+    fn tiles(&self, y0: u32, rows: u32) -> Vec<GpuTile> {
+        let (w, side) = (self.width, self.tile_side);
+        let mut tiles = Vec::new();
+        for y in (y0..y0 + rows).step_by(side as usize) {
+            for x in (0..w).step_by(side as usize) {
+                tiles.push(GpuTile {
+                    x,
+                    y,
+                    width: side.min(w - x),
+                    height: side.min(y0 + rows - y),
+                    out_base: (y - y0) * w + x,
+                    out_stride: w,
+                    ..Default::default()
+                });
+            }
+        }
+        tiles
+    }
 }
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
@@ -42,6 +110,8 @@ pub struct GpuRenderer {
     cache: Option<(wgpu::PipelineCache, PathBuf)>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
     compile_time: Mutex<Duration>,
+    /// The device is a CPU (lavapipe): bands are kept small.
+    software: bool,
 }
 
 /// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
@@ -132,6 +202,7 @@ impl GpuRenderer {
             cache,
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
+            software: device.adapter_info().device_type == wgpu::DeviceType::Cpu,
         })
     }
 
@@ -193,7 +264,8 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         scene: &SceneBuffers,
         globals: &GpuGlobals,
-        tile_bytes: u64,
+        out_bytes: u64,
+        tile_slots: u32,
     ) -> Result<Bound> {
         let storage = |label: &str, bytes: &[u8]| {
             device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -211,7 +283,14 @@ impl GpuRenderer {
         };
         scoped(device, "uploading the scene", || {
             let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
-            let tile_buf = uniform("tile", bytemuck::bytes_of(&GpuTile::default()));
+            let tile_stride = (size_of::<GpuTile>() as u32)
+                .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
+            let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("tiles"),
+                size: u64::from(tile_stride) * u64::from(tile_slots.max(1)),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
             let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
             let nodes = nodes.create_view(&Default::default());
@@ -222,19 +301,23 @@ impl GpuRenderer {
             let lights = storage("lights", non_empty(&scene.lights));
             let output = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("output"),
-                size: tile_bytes,
+                size: out_bytes,
                 usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
                 mapped_at_creation: false,
             });
             let readback = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("readback"),
-                size: tile_bytes,
+                size: out_bytes,
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
             let resources = [
                 globals_buf.as_entire_binding(),
-                tile_buf.as_entire_binding(),
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &tile_buf,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
+                }),
                 wgpu::BindingResource::TextureView(&nodes),
                 wgpu::BindingResource::TextureView(&prims),
                 normals.as_entire_binding(),
@@ -259,6 +342,7 @@ impl GpuRenderer {
             Bound {
                 bind_group,
                 tile_buf,
+                tile_stride,
                 output,
                 readback,
             }
@@ -284,13 +368,67 @@ impl GpuRenderer {
             epsilon: 0.0,
             bvh_depth: 0,
         };
-        let bound = self.bind(device, queue, &empty, &GpuGlobals::default(), PIXEL_BYTES)?;
+        // A tile of no pixels: every invocation returns at once.
+        let bound = self.bind(
+            device,
+            queue,
+            &empty,
+            &GpuGlobals::default(),
+            PIXEL_BYTES,
+            1,
+        )?;
         scoped(device, "compiling the shader", || {
-            let enc = encode_pass(device, pipeline, &bound.bind_group, [1, 1]);
+            let enc = encode_band(device, pipeline, &bound, &[GpuTile::default()]);
             queue.submit([enc.finish()]);
         })?;
         wait(device)?;
         Ok(())
+    }
+
+    /// Uploads a scene for the image described by `globals` and gets its pipeline ready.
+    /// The result can be traced any number of times (`trace`), each time giving the same
+    /// image.
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<GpuScene> {
+        let limits = device.limits();
+        // Software adapters get small bands so that Ctrl-C and the progress bar respond
+        // within a second; on a GPU a band is the most one submission should hold.
+        let band_samples = if self.software { 1 << 18 } else { 1 << 26 };
+        let cut = Cut::new(
+            globals.width,
+            globals.height,
+            globals.spp,
+            band_samples,
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
+        );
+        check_sizes(device, scene, cut.band_bytes())?;
+        scene.check(globals)?;
+        let pipeline = self.prepare(device, queue, scene, globals)?;
+        let bound = self.bind(
+            device,
+            queue,
+            scene,
+            globals,
+            cut.band_bytes(),
+            cut.tiles_per_band(),
+        )?;
+        // The texture uploads are queued: finish them, so a failure surfaces here.
+        queue.submit([]);
+        wait(device)?;
+        let device_bytes = device_bytes(scene, &cut);
+        Ok(GpuScene {
+            bound,
+            pipeline,
+            cut,
+            device_bytes,
+        })
     }
 
     /// Renders the image described by `globals` on `device`. Returns the film and the
@@ -304,47 +442,94 @@ impl GpuRenderer {
         progress: &dyn Fn(u64),
         cancel: &AtomicBool,
     ) -> Result<(Film, u64)> {
-        let (w, h) = (globals.width, globals.height);
-        let tile_side = tile_side(globals.spp);
-        let tile_bytes = u64::from(tile_side) * u64::from(tile_side) * PIXEL_BYTES;
-        check_sizes(device, scene, tile_bytes)?;
-        scene.check(globals)?;
-        let pipeline = self.prepare(device, queue, scene, globals)?;
-
-        let Bound {
-            bind_group,
-            tile_buf,
-            output,
-            readback,
-        } = self.bind(device, queue, scene, globals, tile_bytes)?;
-
-        let mut film = Film::new(w, h);
-        let mut rays = 0u64;
-        for ty in (0..h).step_by(tile_side as usize) {
-            for tx in (0..w).step_by(tile_side as usize) {
-                if cancel.load(Ordering::Relaxed) {
-                    return Err(Error::Interrupted);
-                }
-                let tile = GpuTile {
-                    x: tx,
-                    y: ty,
-                    width: tile_side.min(w - tx),
-                    height: tile_side.min(h - ty),
-                };
-                let bytes = u64::from(tile.width) * u64::from(tile.height) * PIXEL_BYTES;
-                scoped(device, "tracing a tile", || {
-                    queue.write_buffer(&tile_buf, 0, bytemuck::bytes_of(&tile));
-                    let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP));
-                    let mut enc = encode_pass(device, &pipeline, &bind_group, groups);
-                    enc.copy_buffer_to_buffer(&output, 0, &readback, 0, bytes);
-                    queue.submit([enc.finish()]);
-                })?;
-                rays += read_tile(device, &readback, bytes, &tile, &mut film)?;
-                progress(u64::from(tile.width) * u64::from(tile.height));
-            }
-        }
-        Ok((film, rays))
+        let uploaded = self.upload(device, queue, scene, globals)?;
+        trace(device, queue, &uploaded, progress, cancel)
     }
+}
+
+/// A scene on the device with the bindings and pipeline for one image's settings.
+pub struct GpuScene {
+    bound: Bound,
+    pipeline: wgpu::ComputePipeline,
+    cut: Cut,
+    /// Device memory held by the scene's buffers and textures and a band's output and
+    /// readback buffers, in bytes.
+    pub device_bytes: u64,
+}
+
+/// Traces an uploaded scene's image. Returns the film and the number of rays traced.
+pub fn trace(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<(Film, u64)> {
+    let cut = scene.cut;
+    let mut film = Film::new(cut.width, cut.height);
+    let mut rays = 0u64;
+    for (y0, rows) in cut.bands() {
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Error::Interrupted);
+        }
+        let bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
+        scoped(device, "tracing a band", || {
+            let mut enc = submit_band(device, queue, scene, y0, rows);
+            enc.copy_buffer_to_buffer(&scene.bound.output, 0, &scene.bound.readback, 0, bytes);
+            queue.submit([enc.finish()]);
+        })?;
+        rays += read_band(device, &scene.bound.readback, bytes, y0, &mut film)?;
+        progress(u64::from(cut.width) * u64::from(rows));
+    }
+    Ok((film, rays))
+}
+
+/// Traces an uploaded scene's image and waits for the GPU, reading nothing back: the
+/// GPU's own time for a frame, as a viewer that displays on the device would see it.
+pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
+    for (y0, rows) in scene.cut.bands() {
+        scoped(device, "tracing a band", || {
+            let enc = submit_band(device, queue, scene, y0, rows);
+            queue.submit([enc.finish()]);
+        })?;
+    }
+    wait(device)
+}
+
+/// Writes the tiles of the band at row `y0` and encodes their dispatches.
+fn submit_band(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    y0: u32,
+    rows: u32,
+) -> wgpu::CommandEncoder {
+    let tiles = scene.cut.tiles(y0, rows);
+    let stride = scene.bound.tile_stride as usize;
+    let mut bytes = vec![0u8; tiles.len() * stride];
+    for (chunk, tile) in bytes.chunks_mut(stride).zip(&tiles) {
+        chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
+    }
+    queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
+    encode_band(device, &scene.pipeline, &scene.bound, &tiles)
+}
+
+/// Device memory a scene's upload takes: the node and primitive textures (padded to
+/// whole rows), the other arrays, a band's output and readback buffers and the tiles.
+fn device_bytes(scene: &SceneBuffers, cut: &Cut) -> u64 {
+    let texture = |bytes: usize| u64::from(texel_rows(bytes)) * u64::from(TEXTURE_WIDTH) * 16;
+    texture(size_of_val(&scene.nodes[..]))
+        + texture(size_of_val(&scene.prims[..]))
+        + [
+            non_empty(&scene.tri_normals).len(),
+            non_empty(&scene.planes).len(),
+            non_empty(&scene.materials).len(),
+            non_empty(&scene.lights).len(),
+        ]
+        .iter()
+        .map(|&b| b as u64)
+        .sum::<u64>()
+        + 2 * cut.band_bytes()
 }
 
 /// The bindings of `types.wgsl`: globals and tile (uniform), nodes and primitives
@@ -374,7 +559,14 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     };
     let mut entries = vec![
         entry(0, wgpu::BufferBindingType::Uniform),
-        entry(1, wgpu::BufferBindingType::Uniform),
+        wgpu::BindGroupLayoutEntry {
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
+            },
+            ..entry(1, wgpu::BufferBindingType::Uniform)
+        },
         texels(2),
         texels(3),
     ];
@@ -389,19 +581,23 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
-/// A command encoder holding one compute pass of `groups` workgroups.
-fn encode_pass(
+/// A command encoder holding one compute pass with a dispatch per tile, each tile read
+/// from its slot of the tile buffer (written beforehand, in the same order).
+fn encode_band(
     device: &wgpu::Device,
     pipeline: &wgpu::ComputePipeline,
-    bind_group: &wgpu::BindGroup,
-    groups: [u32; 2],
+    bound: &Bound,
+    tiles: &[GpuTile],
 ) -> wgpu::CommandEncoder {
     let mut enc = device.create_command_encoder(&Default::default());
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.dispatch_workgroups(groups[0], groups[1], 1);
+        for (i, tile) in tiles.iter().enumerate() {
+            pass.set_bind_group(0, &bound.bind_group, &[i as u32 * bound.tile_stride]);
+            let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP).max(1));
+            pass.dispatch_workgroups(groups[0], groups[1], 1);
+        }
     }
     enc
 }
@@ -414,12 +610,13 @@ fn wait(device: &wgpu::Device) -> Result<()> {
         .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
 }
 
-/// Maps the readback buffer, copies the tile into the film, returns its ray count.
-fn read_tile(
+/// Maps the readback buffer, copies the band (full rows from `y0`) into the film,
+/// returns its ray count.
+fn read_band(
     device: &wgpu::Device,
     readback: &wgpu::Buffer,
     bytes: u64,
-    tile: &GpuTile,
+    y0: u32,
     film: &mut Film,
 ) -> Result<u64> {
     let slice = readback.slice(..bytes);
@@ -431,19 +628,16 @@ fn read_tile(
     wait(device)?;
     rx.recv()
         .map_err(|_| Error::Gpu("readback was never completed".into()))?
-        .map_err(|e| Error::Gpu(format!("reading back a tile: {e}")))?;
+        .map_err(|e| Error::Gpu(format!("reading back a band: {e}")))?;
     let mut rays = 0u64;
     {
         let view = slice
             .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("reading back a tile: {e}")))?;
+            .map_err(|e| Error::Gpu(format!("reading back a band: {e}")))?;
         let px: &[[u32; 4]] = bytemuck::cast_slice(&view);
-        for (i, p) in px.iter().enumerate() {
-            let (x, y) = (
-                tile.x + i as u32 % tile.width,
-                tile.y + i as u32 / tile.width,
-            );
-            film.set(x, y, [p[0], p[1], p[2]].map(f32::from_bits));
+        let start = y0 as usize * film.width as usize;
+        for (out, p) in film.pixels[start..start + px.len()].iter_mut().zip(px) {
+            *out = [p[0], p[1], p[2]].map(f32::from_bits);
             rays += u64::from(p[3]);
         }
     }
@@ -504,7 +698,7 @@ fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
 
 /// Refuses scenes that need a larger texture, storage binding or buffer than the device
 /// allows, naming the limit and the size needed.
-fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, tile_bytes: u64) -> Result<()> {
+fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, out_bytes: u64) -> Result<()> {
     let limits = device.limits();
     let max_rows = limits.max_texture_dimension_2d;
     for (what, bytes) in [
@@ -529,7 +723,7 @@ fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, tile_bytes: u64) -> 
         ("planes", size_of_val(&scene.planes[..]) as u64),
         ("materials", size_of_val(&scene.materials[..]) as u64),
         ("lights", size_of_val(&scene.lights[..]) as u64),
-        ("output tile", tile_bytes),
+        ("output band", out_bytes),
     ];
     for (what, bytes) in arrays {
         let limit = max_binding.min(max_buffer);

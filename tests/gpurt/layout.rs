@@ -52,7 +52,11 @@ fn rust_layouts() -> Vec<Layout> {
                 aov,
             ]
         ),
-        layout!("Tile", GpuTile, [x, y, width, height]),
+        layout!(
+            "Tile",
+            GpuTile,
+            [x, y, width, height, out_base, out_stride, _pad0, _pad1]
+        ),
     ]
 }
 
