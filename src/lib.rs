@@ -3,6 +3,7 @@
 //! Data flows one way: `scene` (readers, plain data) -> `bvh` -> `pack` (flat `#[repr(C)]`
 //! buffers) -> `gpu` (WGSL compute) or `cpu` (the reference) -> `film` (images, diffs).
 
+pub mod bench;
 pub mod bvh;
 pub mod cpu;
 pub mod error;

@@ -55,6 +55,31 @@ enum Command {
         #[arg(long)]
         max_bad: Option<f64>,
     },
+    /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
+    /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
+    Bench {
+        /// Scenes to render.
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+        /// Image sizes, WxH, comma-separated.
+        #[arg(long, default_value = "1920x1080", value_delimiter = ',', value_parser = parse_size)]
+        sizes: Vec<(u32, u32)>,
+        /// Samples per pixel, comma-separated.
+        #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=4096))]
+        spp: Vec<u32>,
+        /// Maximum ray depth.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+        depth: u32,
+        /// Timed GPU frames per pass; the median is reported.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+        frames: u32,
+        /// Which backends to time.
+        #[arg(long, value_enum, default_value_t = Backend::Both)]
+        backend: Backend,
+        /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+        #[arg(long)]
+        adapter: Option<String>,
+    },
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -141,6 +166,17 @@ fn parse_colour(s: &str) -> Result<Vec3, String> {
     }
 }
 
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT"))?;
+    let dim = |d: &str| match d.trim().parse::<u32>() {
+        Ok(v) if (1..=16384).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': each side must be 1 to 16384")),
+    };
+    Ok((dim(w)?, dim(h)?))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -152,6 +188,25 @@ fn main() -> ExitCode {
             max_flip,
             max_bad,
         }) => diff(&a, &b, output.as_deref(), max_flip, max_bad),
+        Some(Command::Bench {
+            scenes,
+            sizes,
+            spp,
+            depth,
+            frames,
+            backend,
+            adapter,
+        }) => gpurt::bench::run(&gpurt::bench::BenchConfig {
+            scenes,
+            sizes,
+            spps: spp,
+            depth,
+            frames,
+            cpu: backend != Backend::Gpu,
+            gpu: backend != Backend::Cpu,
+            adapter,
+        })
+        .map(|()| ExitCode::SUCCESS),
         None => render_command(cli.render),
     };
     match result {

@@ -1,0 +1,309 @@
+//! `gpurt bench`: frame times and ray rates of both backends over scenes, image sizes and
+//! sample counts, printed as a markdown table.
+//!
+//! Per scene and setting, on the GPU: the pipeline compile and the upload are timed apart
+//! from the frames, then each of three passes is traced `frames` times after a quarter of
+//! a second of warm-up frames and its median time kept, once reading the image back into a film and once on the
+//! device alone (the time the rates are computed from):
+//! - `eye`: the depth AOV, which traces the eye rays and nothing else;
+//! - `direct`: colour with depth 1, eye rays plus their shadow rays;
+//! - `full`: colour with the requested depth, adding reflected and refracted rays and
+//!   their shadow rays.
+//!
+//! The differences between passes give each kind's rate: shadow rays take
+//! `direct - eye`, secondary rays (with their own shadow rays) `full - direct`. The CPU
+//! renders the `full` pass once per setting, with its own count of rays by kind, which
+//! should equal the GPU's total: a mismatch is reported as a warning.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use crate::error::Result;
+use crate::gpu::{self, GpuContext, GpuRenderer};
+use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals};
+use crate::pack::{self, RenderOptions};
+use crate::render;
+
+/// What to measure.
+pub struct BenchConfig {
+    pub scenes: Vec<PathBuf>,
+    pub sizes: Vec<(u32, u32)>,
+    pub spps: Vec<u32>,
+    pub depth: u32,
+    /// Timed GPU frames per pass (after one warm-up frame).
+    pub frames: u32,
+    /// Render on the CPU too.
+    pub cpu: bool,
+    /// Render on the GPU (needs an adapter).
+    pub gpu: bool,
+    pub adapter: Option<String>,
+}
+
+/// One row of the table: one scene at one size and sample count.
+struct Row {
+    scene: String,
+    prims: usize,
+    width: u32,
+    height: u32,
+    spp: u32,
+    gpu: Option<GpuRow>,
+    cpu: Option<CpuRow>,
+}
+
+struct GpuRow {
+    compile: Duration,
+    upload: Duration,
+    device_bytes: u64,
+    eye: Pass,
+    direct: Pass,
+    full: Pass,
+}
+
+/// One timed pass: median frame time on the device, median time with the image read
+/// back into a film, and rays traced per frame.
+#[derive(Clone, Copy)]
+struct Pass {
+    time: Duration,
+    with_readback: Duration,
+    rays: u64,
+}
+
+struct CpuRow {
+    time: Duration,
+    rays: u64,
+    eye: u64,
+    shadow: u64,
+    secondary: u64,
+}
+
+fn mrays(rays: u64, t: Duration) -> f64 {
+    rays as f64 / t.as_secs_f64().max(1e-12) / 1e6
+}
+
+/// Rays per second of the rays one pass adds over another, in millions; `-` when the
+/// difference is within timing noise.
+fn rate_between(more: Pass, less: Pass) -> String {
+    let rays = more.rays.saturating_sub(less.rays);
+    let t = more.time.saturating_sub(less.time);
+    if rays == 0 || t < Duration::from_micros(20) {
+        "-".into()
+    } else {
+        format!("{:.0}", mrays(rays, t))
+    }
+}
+
+fn ms(t: Duration) -> String {
+    format!("{:.2}", t.as_secs_f64() * 1e3)
+}
+
+fn median(mut times: Vec<Duration>) -> Duration {
+    times.sort();
+    times[times.len() / 2]
+}
+
+/// Runs the benchmark, printing each row as it is measured (header first) to stdout.
+pub fn run(config: &BenchConfig) -> Result<()> {
+    let ctx = if config.gpu {
+        let ctx = gpu::open(config.adapter.as_deref())?;
+        eprintln!("adapter     {}", ctx.describe());
+        Some(ctx)
+    } else {
+        None
+    };
+    let renderer = match &ctx {
+        Some(c) => Some(GpuRenderer::new(&c.device, None)?),
+        None => None,
+    };
+    if config.cpu {
+        eprintln!("cpu         {} threads", rayon::current_num_threads());
+    }
+    println!(
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
+    );
+    println!(
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
+    for path in &config.scenes {
+        let prepared = render::prepare(path)?;
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let name = name.split('.').next().unwrap_or_default().to_string();
+        for &(width, height) in &config.sizes {
+            for &spp in &config.spps {
+                let opts = RenderOptions {
+                    width,
+                    height,
+                    spp,
+                    max_depth: config.depth,
+                    ..RenderOptions::for_scene(&prepared.scene)
+                };
+                let globals = pack::globals(&prepared.scene, &prepared.buffers, &opts);
+                let gpu = match (&ctx, &renderer) {
+                    (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
+                    _ => None,
+                };
+                let cpu = config
+                    .cpu
+                    .then(|| cpu_row(&prepared.buffers, &globals))
+                    .transpose()?;
+                if let (Some(g), Some(c)) = (&gpu, &cpu)
+                    && g.full.rays != c.rays
+                {
+                    eprintln!(
+                        "gpurt: warning: {name} {width}x{height} {spp} spp: the GPU traced {} rays, the CPU {}",
+                        g.full.rays, c.rays
+                    );
+                }
+                print_row(&Row {
+                    scene: name.clone(),
+                    prims: prepared.buffers.prims.len() + prepared.buffers.planes.len(),
+                    width,
+                    height,
+                    spp,
+                    gpu,
+                    cpu,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+fn gpu_row(
+    ctx: &GpuContext,
+    renderer: &GpuRenderer,
+    buffers: &pack::SceneBuffers,
+    globals: &GpuGlobals,
+    config: &BenchConfig,
+) -> Result<GpuRow> {
+    let (device, queue) = (&ctx.device, &ctx.queue);
+    let pass = |globals: &GpuGlobals| -> Result<(Pass, Duration, Duration, u64)> {
+        let before = renderer.compile_time();
+        renderer.prepare(device, queue, buffers, globals)?;
+        let compile = renderer.compile_time() - before;
+        let t = Instant::now();
+        let scene = renderer.upload(device, queue, buffers, globals)?;
+        let upload = t.elapsed();
+        let never = AtomicBool::new(false);
+        let (_, rays) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
+        // A GPU idle for a while (the CPU rows run in between) clocks down: keep it busy
+        // for a quarter of a second before timing.
+        let warm = Instant::now();
+        while warm.elapsed() < Duration::from_millis(250) {
+            gpu::trace_on_device(device, queue, &scene)?;
+        }
+        let frames = 0..config.frames.max(1);
+        let with_readback = frames
+            .clone()
+            .map(|_| {
+                let t = Instant::now();
+                gpu::trace(device, queue, &scene, &|_| {}, &never).map(|_| t.elapsed())
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let on_device = frames
+            .map(|_| {
+                let t = Instant::now();
+                gpu::trace_on_device(device, queue, &scene).map(|()| t.elapsed())
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let pass = Pass {
+            time: median(on_device),
+            with_readback: median(with_readback),
+            rays,
+        };
+        Ok((pass, compile, upload, scene.device_bytes))
+    };
+    // The full pass first, so that its compile time is its own.
+    let (full, compile, upload, device_bytes) = pass(globals)?;
+    let (eye, ..) = pass(&GpuGlobals {
+        aov: AOV_DEPTH,
+        ..*globals
+    })?;
+    let (direct, ..) = pass(&GpuGlobals {
+        aov: AOV_COLOR,
+        max_depth: 1,
+        ..*globals
+    })?;
+    Ok(GpuRow {
+        compile,
+        upload,
+        device_bytes,
+        eye,
+        direct,
+        full,
+    })
+}
+
+fn cpu_row(buffers: &pack::SceneBuffers, globals: &GpuGlobals) -> Result<CpuRow> {
+    let never = AtomicBool::new(false);
+    let t = Instant::now();
+    let (_, counts) = crate::cpu::render(buffers, globals, &|_| {}, &never)?;
+    Ok(CpuRow {
+        time: t.elapsed(),
+        rays: counts.total(),
+        eye: counts.eye,
+        shadow: counts.shadow,
+        secondary: counts.reflected + counts.refracted,
+    })
+}
+
+fn print_row(r: &Row) {
+    let pixels = u64::from(r.width) * u64::from(r.height);
+    let rays = r
+        .gpu
+        .as_ref()
+        .map(|g| g.full.rays)
+        .or(r.cpu.as_ref().map(|c| c.rays))
+        .unwrap_or(0);
+    let dash = || "-".to_string();
+    let (frame, readback, rate, eye, shadow, secondary, upload, compile, mib) = match &r.gpu {
+        Some(g) => (
+            ms(g.full.time),
+            ms(g.full.with_readback),
+            format!("{:.0}", mrays(g.full.rays, g.full.time)),
+            format!("{:.0}", mrays(g.eye.rays, g.eye.time)),
+            rate_between(g.direct, g.eye),
+            rate_between(g.full, g.direct),
+            ms(g.upload),
+            ms(g.compile),
+            format!("{:.1}", g.device_bytes as f64 / (1 << 20) as f64),
+        ),
+        None => (
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+            dash(),
+        ),
+    };
+    let (cpu_frame, cpu_rate) = match &r.cpu {
+        Some(c) => (ms(c.time), format!("{:.1}", mrays(c.rays, c.time))),
+        None => (dash(), dash()),
+    };
+    let speedup = match (&r.gpu, &r.cpu) {
+        (Some(g), Some(c)) => format!("{:.1}x", c.time.as_secs_f64() / g.full.time.as_secs_f64()),
+        _ => dash(),
+    };
+    println!(
+        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} |",
+        r.scene,
+        r.prims,
+        r.width,
+        r.height,
+        r.spp,
+        rays as f64 / pixels as f64,
+    );
+    if let Some(c) = &r.cpu {
+        eprintln!(
+            "  {}: rays by kind (CPU count): {} eye, {} shadow, {} secondary",
+            r.scene, c.eye, c.shadow, c.secondary
+        );
+    }
+}
