@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Builds what benches/gpu-device.sh runs and puts it, stripped, in .device/ (ignored by
+# git): the release gpurt, the integration-test binary, the debug gpurt the CLI tests
+# call, and a copy of ../shared/scenes. Also fetches the Vulkan loader packages into .gl/
+# when missing (a machine without a Rust toolchain may lack them too).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+cargo build --release --quiet
+cargo build --quiet
+tests=$(cargo test --no-run --message-format=json 2>/dev/null |
+    python3 -c 'import json,sys
+for l in sys.stdin:
+    m = json.loads(l)
+    if m.get("reason") == "compiler-artifact" and m["target"]["kind"] == ["test"] and m["target"]["name"] == "gpurt":
+        print(m["executable"])')
+rm -rf .device
+mkdir -p .device
+strip -o .device/gpurt target/release/gpurt
+strip -o .device/gpurt-debug target/debug/gpurt
+strip -o .device/gpurt-tests "$tests"
+# Compressed: what travels to the device is limited in size.
+tar -C .. -cJf .device/shared.tar.xz shared/scenes
+pwd >.device/manifest-dir
+
+if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
+    mkdir -p .gl /tmp/amd64/partial
+    o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+    # shellcheck disable=SC2086
+    apt-get $o update -qq
+    # shellcheck disable=SC2086
+    (cd .gl && apt-get $o download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
+fi
+du -sh .device .gl

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Checks and times gpurt on a machine with a real GPU but no Rust toolchain, in one
+# command, from the repository root. What it needs is built elsewhere and carried in
+# `.device/` (see `benches/gpu-device-pack.sh`): stripped binaries `gpurt` and
+# `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
+# `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
+#
+# Usage: benches/gpu-device.sh [tests] [bench] [quick]    (default: tests bench)
+# Output goes to $OUT (or ./device-out): tests.log, bench.md, bench.log.
+set -uo pipefail
+
+OUT=${OUT:-$PWD/device-out}
+mkdir -p "$OUT"
+what=${*:-tests bench}
+
+for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
+chmod +x .device/gpurt* 2>/dev/null
+if ! ldconfig -p | grep -q libvulkan.so.1; then
+    for f in .gl/*.deb; do dpkg -x "$f" /; done
+    ldconfig
+fi
+if [[ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]]; then
+    export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+fi
+nvidia-smi --query-gpu=name,driver_version,memory.used,memory.total,clocks.sm,clocks.max.sm --format=csv || true
+
+# The test binary looks for its checkout (CARGO_MANIFEST_DIR) where it was built.
+manifest=$(cat .device/manifest-dir)
+if [[ $manifest != "$PWD" ]]; then
+    mkdir -p "$(dirname "$manifest")"
+    ln -sfn "$PWD" "$manifest"
+fi
+rm -rf "$manifest/../shared"
+tar -C "$manifest/.." -xJf .device/shared.tar.xz
+mkdir -p target/debug target/tmp
+cp .device/gpurt-debug target/debug/gpurt
+
+export GPURT_REQUIRE_GPU=1 CI=true GPURT_ADAPTER=${GPURT_ADAPTER:-nvidia}
+./.device/gpurt "$manifest/scenes/spheres.nff" -o "$OUT/spheres.png" -v --stats 2>&1
+
+if [[ $what == *tests* ]]; then
+    echo "== tests"
+    ./.device/gpurt-tests --test-threads "$(nproc)" 2>&1 | tee "$OUT/tests.log" | grep -v '^test .* ok$' | tail -60
+    [[ -d target/gpu-vs-cpu ]] && tar -C target -czf "$OUT/gpu-vs-cpu.tar.gz" gpu-vs-cpu
+fi
+
+if [[ $what == *bench* ]]; then
+    echo "== bench"
+    spd="$manifest/../shared/scenes/spd"
+    scenes=()
+    for s in balls-4 gears-4 mount-7 teapot-6 tree-11 balls-6 mount-9; do
+        scenes+=("$(ls "$spd/$s".nff* | head -1)")
+    done
+    if [[ $what == *quick* ]]; then
+        args=(--sizes 1920x1080,3840x2160 --spp 1 --backend gpu)
+    else
+        args=(--sizes 1920x1080,3840x2160 --spp 1,16 --frames 3)
+    fi
+    # BINS names other builds in .device/ (or .device/NAME.xz) to time first, GPU only.
+    for b in ${BINS:-}; do
+        echo "== bench $b"
+        ./.device/"$b" bench "${scenes[@]}" --sizes 1920x1080,3840x2160 --spp 1,16 --backend gpu \
+            >"$OUT/bench-$b.md" 2>"$OUT/bench-$b.log"
+        echo "exit $?"
+        cat "$OUT/bench-$b.md"
+    done
+    ./.device/gpurt bench "${scenes[@]}" "${args[@]}" >"$OUT/bench.md" 2>"$OUT/bench.log"
+    echo "exit $?"
+    tail -5 "$OUT/bench.log"
+    cat "$OUT/bench.md"
+fi
