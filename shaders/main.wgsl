@@ -28,6 +28,7 @@ fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
     while (k * k < n) {
         k += 1u;
     }
+    cut_short = cut_short || k * k < n;
     let rows = (n + k - 1u) / k;
     let jx = rand(rng);
     let jy = rand(rng);
@@ -68,9 +69,20 @@ fn main(
     let px = tile.x + id.x;
     let py = tile.y + id.y;
     let g = globals;
+    let slot = tile.out_base + id.y * tile.out_stride + id.x;
     var rays = 0u;
     var sum = vec3<f32>(0.0);
-    for (var s = 0u; s < g.spp; s++) {
+    // Later passes continue the sum where the earlier ones left it, in sample order, so
+    // the result does not depend on how the samples were split.
+    if (tile.sample_start > 0u) {
+        let before = output[slot];
+        sum = before.color;
+        rays = before.rays & ~PIXEL_CUT_SHORT;
+        cut_short = (before.rays & PIXEL_CUT_SHORT) != 0u;
+    }
+    let end = tile.sample_start + tile.sample_count;
+    var s = tile.sample_start;
+    for (; s < end; s++) {
         var rng = rng_seed(py * g.width + px, s, g.seed);
         let off = sample_offset(s, g.spp, &rng);
         let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
@@ -81,5 +93,9 @@ fn main(
             sum += aov(ray);
         }
     }
-    output[tile.out_base + id.y * tile.out_stride + id.x] = PixelOut(sum / f32(g.spp), rays);
+    cut_short = cut_short || s < end;
+    if (end == g.spp) {
+        sum /= f32(g.spp);
+    }
+    output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
 }

@@ -66,14 +66,16 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
     let m = materials[s.material];
     var colour = globals.ambient * m.kd * m.color;
     let r = reflect_dir(dir, s.ns);
-    for (var li = 0u; li < globals.n_lights; li++) {
+    var li = 0u;
+    for (; li < globals.n_lights; li++) {
         let light = lights[li];
         var samples = 1u;
         if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
             samples = light.nu * light.nv;
         }
         let intensity = light.color / f32(samples);
-        for (var k = 0u; k < samples; k++) {
+        var k = 0u;
+        for (; k < samples; k++) {
             var l: vec3<f32>;
             var dist: f32;
             if (DIRECTIONAL_LIGHTS && light.kind == LIGHT_DIRECTIONAL) {
@@ -104,7 +106,9 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
             }
             colour += shadow * intensity * (m.kd * m.color * ndotl + vec3<f32>(highlight));
         }
+        cut_short = cut_short || k < samples;
     }
+    cut_short = cut_short || li < globals.n_lights;
     return colour;
 }
 
@@ -150,5 +154,6 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
             sp += 1u;
         }
     }
+    cut_short = cut_short || sp > 0u;
     return colour;
 }

@@ -69,19 +69,23 @@ fn next_leaf(
             return vec2<u32>(0u);
         }
     }
+    // Reached only when the driver ends the loop.
+    cut_short = true;
     return vec2<u32>(0u);
 }
 
 fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
     var hit = Hit(tmax, NO_PRIM, 0.0, 0.0, 0u);
     if (PLANES) {
-        for (var i = 0u; i < globals.n_planes; i++) {
+        var i = 0u;
+        for (; i < globals.n_planes; i++) {
             let t = intersect_plane(planes[i], ray);
             if (t > tmin && t < hit.t) {
                 hit.t = t;
                 hit.prim = PLANE_FLAG | i;
             }
         }
+        cut_short = cut_short || i < globals.n_planes;
     }
     if (globals.n_nodes == 0u) {
         return hit;
@@ -90,12 +94,15 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
     var walk = Walk(0u, 0u);
     // A pointer to hit.cost itself trips naga's SPIR-V writer (an uncached access).
     var cost = 0u;
+    var done = false;
     loop {
         let leaf = next_leaf(&walk, ray, inv_dir, tmin, hit.t, &cost);
         if (leaf.y == 0u) {
+            done = true;
             break;
         }
-        for (var i = leaf.x; i < leaf.x + leaf.y; i++) {
+        var i = leaf.x;
+        for (; i < leaf.x + leaf.y; i++) {
             let t = intersect_prim(i, ray, inv_dir);
             let t_first = first_in(t, tmin, hit.t);
             if (t_first != NO_HIT) {
@@ -105,10 +112,13 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
                 hit.v = t.w;
             }
         }
+        cut_short = cut_short || i < leaf.x + leaf.y;
         if (!pop(&walk)) {
+            done = true;
             break;
         }
     }
+    cut_short = cut_short || !done;
     hit.cost = cost;
     return hit;
 }
@@ -118,7 +128,8 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
 fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
     var light = vec3<f32>(1.0);
     if (PLANES) {
-        for (var i = 0u; i < globals.n_planes; i++) {
+        var i = 0u;
+        for (; i < globals.n_planes; i++) {
             let pl = planes[i];
             let t = intersect_plane(pl, ray);
             if (t > 0.0 && t < tmax) {
@@ -129,6 +140,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
                 light *= m.t * m.color;
             }
         }
+        cut_short = cut_short || i < globals.n_planes;
     }
     if (globals.n_nodes == 0u) {
         return light;
@@ -136,12 +148,15 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
     let inv_dir = safe_inverse(ray.dir);
     var walk = Walk(0u, 0u);
     var visited = 0u;
+    var done = false;
     loop {
         let leaf = next_leaf(&walk, ray, inv_dir, 0.0, tmax, &visited);
         if (leaf.y == 0u) {
+            done = true;
             break;
         }
-        for (var i = leaf.x; i < leaf.x + leaf.y; i++) {
+        var i = leaf.x;
+        for (; i < leaf.x + leaf.y; i++) {
             let t = intersect_prim(i, ray, inv_dir);
             let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
             if (crossings > 0u) {
@@ -149,14 +164,19 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
                 if (m.t <= 0.0) {
                     return vec3<f32>(0.0);
                 }
-                for (var c = 0u; c < crossings; c++) {
+                var c = 0u;
+                for (; c < crossings; c++) {
                     light *= m.t * m.color;
                 }
+                cut_short = cut_short || c < crossings;
             }
         }
+        cut_short = cut_short || i < leaf.x + leaf.y;
         if (!pop(&walk)) {
+            done = true;
             break;
         }
     }
+    cut_short = cut_short || !done;
     return light;
 }

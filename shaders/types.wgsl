@@ -86,15 +86,23 @@ struct Tile {
     height: u32,
     out_base: u32,
     out_stride: u32,
-    _pad0: u32,
-    _pad1: u32,
+    sample_start: u32,
+    sample_count: u32,
 }
 
-// One traced pixel: its value and the number of rays traced for it.
+// One traced pixel: the sum of its samples so far (their mean once the last pass is
+// done) and the number of rays traced for it, PIXEL_CUT_SHORT set if any loop was cut.
 struct PixelOut {
     color: vec3<f32>,
     rays: u32,
 }
+
+const PIXEL_CUT_SHORT: u32 = 0x80000000u;
+
+// Set when a loop ends without reaching its own exit: the driver stopped it (lavapipe
+// ends every loop once an invocation has run 65535 loop iterations in all). Each loop
+// checks after itself; the pixel is then reported, never written darker in silence.
+var<private> cut_short: bool;
 
 const PRIM_SPHERE: u32 = 0u;
 const PRIM_TRIANGLE: u32 = 1u;

@@ -166,9 +166,10 @@ pub struct GpuGlobals {
     pub aov: u32,
 }
 
-/// The image region one dispatch traces, and where its pixels go in the output buffer:
-/// pixel (x + i, y + j) of the image is `output[out_base + j * out_stride + i]`. One per
-/// dispatch, at a dynamic offset into a uniform buffer.
+/// The image region one dispatch traces, which of its samples, and where its pixels go in
+/// the output buffer: pixel (x + i, y + j) of the image is `output[out_base + j *
+/// out_stride + i]`. One per dispatch, at a dynamic offset into a uniform buffer. A pass
+/// whose samples do not start at 0 adds to what the earlier passes left there.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTile {
@@ -178,9 +179,14 @@ pub struct GpuTile {
     pub height: u32,
     pub out_base: u32,
     pub out_stride: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    pub sample_start: u32,
+    pub sample_count: u32,
 }
+
+/// Bit of `PixelOut::rays` set when a pixel's work was cut short: the driver ended one of
+/// the shader's loops before it finished (lavapipe ends every loop once one invocation
+/// has run 65535 loop iterations). The other bits count the rays traced.
+pub const PIXEL_CUT_SHORT: u32 = 1 << 31;
 
 /// Fixed sizes of the per-pixel stacks in both renderers.
 /// The BVH builder guarantees a depth below `TRAVERSAL_STACK` (it falls back to a

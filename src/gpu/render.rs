@@ -17,7 +17,7 @@ use super::shaders;
 use super::specialization::Specialization;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
+use crate::gpu_types::{GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH};
 use crate::pack::SceneBuffers;
 
 /// Pixels a workgroup of `main.wgsl` covers along each axis (8 x 8, in 4 x 2 blocks).
@@ -38,21 +38,33 @@ struct Bound {
     readback: wgpu::Buffer,
 }
 
-/// How a frame is cut into work. Each tile is one dispatch whose work is bounded by its
-/// size and the samples per pixel (so that no dispatch runs long enough to trip a driver
-/// watchdog); each band of full-width rows is one submission with one readback, whose
-/// output fits `BAND_BYTES` and whose work fits `band_samples`.
+/// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
+/// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's
+/// samples (so that no dispatch runs long enough to trip a driver watchdog, and no
+/// invocation runs into lavapipe's loop limit for want of splitting); each band of
+/// full-width rows is one submission with one readback, whose output fits `BAND_BYTES`
+/// and whose work fits `band_samples`.
 #[derive(Clone, Copy, Debug)]
 struct Cut {
     width: u32,
     height: u32,
+    spp: u32,
+    pass_samples: u32,
     tile_side: u32,
     band_rows: u32,
 }
 
 impl Cut {
-    fn new(width: u32, height: u32, spp: u32, band_samples: u64, max_bytes: u64) -> Cut {
-        let tile_side = tile_side(spp);
+    fn new(
+        width: u32,
+        height: u32,
+        spp: u32,
+        pass_samples: u32,
+        band_samples: u64,
+        max_bytes: u64,
+    ) -> Cut {
+        let pass_samples = pass_samples.clamp(1, spp);
+        let tile_side = tile_side(pass_samples);
         let row_bytes = u64::from(width) * PIXEL_BYTES;
         let row_samples = u64::from(width) * u64::from(spp);
         let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
@@ -61,13 +73,22 @@ impl Cut {
         Cut {
             width,
             height,
+            spp,
+            pass_samples,
             tile_side,
             band_rows: band_rows.min(height.next_multiple_of(tile_side)),
         }
     }
 
-    fn tiles_per_band(&self) -> u32 {
-        self.width.div_ceil(self.tile_side) * self.band_rows.div_ceil(self.tile_side)
+    fn passes(&self) -> u32 {
+        self.spp.div_ceil(self.pass_samples)
+    }
+
+    /// Dispatches per band: each tile once per pass.
+    fn dispatches_per_band(&self) -> u32 {
+        self.width.div_ceil(self.tile_side)
+            * self.band_rows.div_ceil(self.tile_side)
+            * self.passes()
     }
 
     fn band_bytes(&self) -> u64 {
@@ -80,21 +101,25 @@ impl Cut {
         (0..h).step_by(n as usize).map(move |y| (y, n.min(h - y)))
     }
 
-    /// The tiles of the band starting at row `y0`, with their places in its output.
+    /// The dispatches of the band starting at row `y0`: every tile for the first pass's
+    /// samples, then every tile for the next pass's, and so on.
     fn tiles(&self, y0: u32, rows: u32) -> Vec<GpuTile> {
         let (w, side) = (self.width, self.tile_side);
         let mut tiles = Vec::new();
-        for y in (y0..y0 + rows).step_by(side as usize) {
-            for x in (0..w).step_by(side as usize) {
-                tiles.push(GpuTile {
-                    x,
-                    y,
-                    width: side.min(w - x),
-                    height: side.min(y0 + rows - y),
-                    out_base: (y - y0) * w + x,
-                    out_stride: w,
-                    ..Default::default()
-                });
+        for sample_start in (0..self.spp).step_by(self.pass_samples as usize) {
+            for y in (y0..y0 + rows).step_by(side as usize) {
+                for x in (0..w).step_by(side as usize) {
+                    tiles.push(GpuTile {
+                        x,
+                        y,
+                        width: side.min(w - x),
+                        height: side.min(y0 + rows - y),
+                        out_base: (y - y0) * w + x,
+                        out_stride: w,
+                        sample_start,
+                        sample_count: self.pass_samples.min(self.spp - sample_start),
+                    });
+                }
             }
         }
         tiles
@@ -398,11 +423,19 @@ impl GpuRenderer {
         let limits = device.limits();
         // Software adapters get small bands so that Ctrl-C and the progress bar respond
         // within a second; on a GPU a band is the most one submission should hold.
-        let band_samples = if self.software { 1 << 18 } else { 1 << 26 };
+        // One sample per pass on a software adapter: lavapipe ends every loop once an
+        // invocation has run 65535 loop iterations in all, and one sample of an ordinary
+        // scene needs far fewer. GPUs take up to 16 samples per pass.
+        let (pass_samples, band_samples) = if self.software {
+            (1, 1 << 18)
+        } else {
+            (16, 1 << 26)
+        };
         let cut = Cut::new(
             globals.width,
             globals.height,
             globals.spp,
+            pass_samples,
             band_samples,
             limits
                 .max_storage_buffer_binding_size
@@ -417,7 +450,7 @@ impl GpuRenderer {
             scene,
             globals,
             cut.band_bytes(),
-            cut.tiles_per_band(),
+            cut.dispatches_per_band(),
         )?;
         // The texture uploads are queued: finish them, so a failure surfaces here.
         queue.submit([]);
@@ -467,7 +500,7 @@ pub fn trace(
 ) -> Result<(Film, u64)> {
     let cut = scene.cut;
     let mut film = Film::new(cut.width, cut.height);
-    let mut rays = 0u64;
+    let (mut rays, mut cut_short) = (0u64, 0u64);
     for (y0, rows) in cut.bands() {
         if cancel.load(Ordering::Relaxed) {
             return Err(Error::Interrupted);
@@ -478,8 +511,20 @@ pub fn trace(
             enc.copy_buffer_to_buffer(&scene.bound.output, 0, &scene.bound.readback, 0, bytes);
             queue.submit([enc.finish()]);
         })?;
-        rays += read_band(device, &scene.bound.readback, bytes, y0, &mut film)?;
+        let (band_rays, band_cut) = read_band(device, &scene.bound.readback, bytes, y0, &mut film)?;
+        rays += band_rays;
+        cut_short += band_cut;
         progress(u64::from(cut.width) * u64::from(rows));
+    }
+    if cut_short > 0 {
+        return Err(Error::Gpu(format!(
+            "{cut_short} of {} pixels could not finish on {}: the driver ended a shader loop \
+             before its end (lavapipe stops every loop once one invocation has run 65535 \
+             loop iterations); lower --depth, --spp or the number of lights, or render \
+             with --backend cpu",
+            u64::from(cut.width) * u64::from(cut.height),
+            device.adapter_info().name
+        )));
     }
     Ok((film, rays))
 }
@@ -611,14 +656,14 @@ fn wait(device: &wgpu::Device) -> Result<()> {
 }
 
 /// Maps the readback buffer, copies the band (full rows from `y0`) into the film,
-/// returns its ray count.
+/// returns its ray count and the number of its pixels whose work was cut short.
 fn read_band(
     device: &wgpu::Device,
     readback: &wgpu::Buffer,
     bytes: u64,
     y0: u32,
     film: &mut Film,
-) -> Result<u64> {
+) -> Result<(u64, u64)> {
     let slice = readback.slice(..bytes);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
@@ -629,7 +674,7 @@ fn read_band(
     rx.recv()
         .map_err(|_| Error::Gpu("readback was never completed".into()))?
         .map_err(|e| Error::Gpu(format!("reading back a band: {e}")))?;
-    let mut rays = 0u64;
+    let (mut rays, mut cut_short) = (0u64, 0u64);
     {
         let view = slice
             .get_mapped_range()
@@ -638,11 +683,12 @@ fn read_band(
         let start = y0 as usize * film.width as usize;
         for (out, p) in film.pixels[start..start + px.len()].iter_mut().zip(px) {
             *out = [p[0], p[1], p[2]].map(f32::from_bits);
-            rays += u64::from(p[3]);
+            rays += u64::from(p[3] & !PIXEL_CUT_SHORT);
+            cut_short += u64::from(p[3] & PIXEL_CUT_SHORT != 0);
         }
     }
     readback.unmap();
-    Ok(rays)
+    Ok((rays, cut_short))
 }
 
 /// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.

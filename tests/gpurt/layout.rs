@@ -55,7 +55,16 @@ fn rust_layouts() -> Vec<Layout> {
         layout!(
             "Tile",
             GpuTile,
-            [x, y, width, height, out_base, out_stride, _pad0, _pad1]
+            [
+                x,
+                y,
+                width,
+                height,
+                out_base,
+                out_stride,
+                sample_start,
+                sample_count
+            ]
         ),
     ]
 }
@@ -150,6 +159,7 @@ fn shared_constants_match() {
         ("AOV_COST", AOV_COST),
         ("PLANE_FLAG", gpurt::cpu::types::PLANE_FLAG),
         ("NO_PRIM", gpurt::cpu::types::NO_PRIM),
+        ("PIXEL_CUT_SHORT", PIXEL_CUT_SHORT),
     ];
     for (name, value) in u32s {
         assert_eq!(
