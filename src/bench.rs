@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 use crate::error::Result;
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals};
+use crate::outln;
 use crate::pack::{self, RenderOptions};
 use crate::render;
 
@@ -118,12 +119,10 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     if config.cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
-    println!(
+    outln!(
         "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
     );
-    println!(
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for path in &config.scenes {
         let prepared = render::prepare(path)?;
         let name = path
@@ -291,7 +290,7 @@ fn print_row(r: &Row) {
         (Some(g), Some(c)) => format!("{:.1}x", c.time.as_secs_f64() / g.full.time.as_secs_f64()),
         _ => dash(),
     };
-    println!(
+    outln!(
         "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} |",
         r.scene,
         r.prims,

@@ -5,6 +5,7 @@
 
 pub mod bench;
 pub mod bvh;
+pub mod console;
 pub mod cpu;
 pub mod error;
 pub mod film;

@@ -14,7 +14,7 @@ use gpurt::film::{self, Thresholds};
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::pack::{self, RenderOptions};
 use gpurt::render::{self, Prepared};
-use gpurt::{Error, cpu};
+use gpurt::{Error, cpu, out, outln};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Parser)]
@@ -88,7 +88,8 @@ enum Backend {
     Gpu,
     /// The CPU reference renderer.
     Cpu,
-    /// Both, reporting how much their images differ (the GPU image is written).
+    /// Both, reporting how much their images differ; the GPU image is written if they
+    /// agree, otherwise nothing is and the exit code is 1.
     Both,
 }
 
@@ -225,9 +226,9 @@ fn main() -> ExitCode {
 fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
     let s = gpurt::scene::load(path)?;
     if json {
-        println!("{}", gpurt::info::to_json(&s));
+        outln!("{}", gpurt::info::to_json(&s));
     } else {
-        print!("{}", gpurt::info::to_text(&s));
+        out!("{}", gpurt::info::to_text(&s));
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -242,18 +243,18 @@ fn diff(
     let ia = film::load_rgb8(a)?;
     let ib = film::load_rgb8(b)?;
     let stats = film::diff(&ia, &ib, Thresholds::GPU_VS_CPU.tolerance_255)?;
-    println!("{stats}");
+    outln!("{stats}");
     if let Some(out) = output {
         film::save_rgb8(&film::heat_map(&ia, &ib)?, out)?;
-        println!("heat map written to {}", out.display());
+        outln!("heat map written to {}", out.display());
     }
     let mut failed = false;
     if let Some(m) = max_flip.filter(|&m| stats.flip_mean > m) {
-        println!("FLIP mean {:.4} exceeds {m}", stats.flip_mean);
+        outln!("FLIP mean {:.4} exceeds {m}", stats.flip_mean);
         failed = true;
     }
     if let Some(m) = max_bad.filter(|&m| stats.frac_over > m) {
-        println!(
+        outln!(
             "fraction of pixels over 2/255 {:.5} exceeds {m}",
             stats.frac_over
         );
@@ -416,12 +417,18 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         gpu_film = Some(film);
     }
     if let (Some(c), Some(g)) = (&cpu_film, &gpu_film) {
-        let stats = film::diff(
-            &render::display_film(c, opts.aov).to_rgb8(),
-            &render::display_film(g, opts.aov).to_rgb8(),
-            Thresholds::GPU_VS_CPU.tolerance_255,
-        )?;
-        eprintln!("cpu vs gpu  {stats}");
+        let agreement = render::agreement(&buffers, &globals, c, g)?;
+        eprintln!("cpu vs gpu  {}", agreement.stats);
+        if let Some(floor) = agreement.noise_floor {
+            eprintln!(
+                "cpu noise   {:.3}% of pixels change when the eye moves by one ulp",
+                floor * 100.0
+            );
+        }
+        if let Err(why) = agreement.verdict {
+            eprintln!("gpurt: the GPU and CPU images differ: {why}; no image written");
+            return Ok(ExitCode::from(1));
+        }
     }
     let film = gpu_film.or(cpu_film).expect("one backend rendered");
     let out_film = if is_float_format(&output) {

@@ -509,3 +509,31 @@ fn aovs_are_finite_and_depth_and_normal_match_at_the_centre() {
         "cost is a node count"
     );
 }
+
+/// `--backend both` fails on the verdict of `render::agreement`: a film equal to the
+/// reference agrees, one with a brightened block does not (and the noise floor, measured
+/// then, is zero on this scene, so it cannot excuse the block).
+#[test]
+fn agreement_rejects_a_perturbed_film() {
+    let scene = parse(
+        "v\nfrom 0 -6 2\nat 0 0 0.5\nup 0 0 1\nangle 40\nhither 0.01\nresolution 64 64\n\
+         l 3 -4 6\nf 0.8 0.3 0.2 0.8 0.2 20 0 1\ns 0 0 0.5 1\np 4\n-5 -5 -0.5\n5 -5 -0.5\n5 5 -0.5\n-5 5 -0.5\n",
+    );
+    let opts = RenderOptions::for_scene(&scene);
+    let buffers = pack::pack(&scene).expect("packs");
+    let globals = pack::globals(&scene, &buffers, &opts);
+    let reference = render_with(&scene, &opts);
+    let same = gpurt::render::agreement(&buffers, &globals, &reference, &reference.clone())
+        .expect("compares");
+    assert!(same.verdict.is_ok() && same.noise_floor.is_none());
+    let mut moved = reference.clone();
+    for y in 20..40 {
+        for x in 20..40 {
+            let p = moved.get(x, y);
+            moved.set(x, y, p.map(|c| c + 0.2));
+        }
+    }
+    let moved = gpurt::render::agreement(&buffers, &globals, &reference, &moved).expect("compares");
+    assert!(moved.verdict.is_err(), "{}", moved.stats);
+    assert_eq!(moved.noise_floor, Some(0.0));
+}
