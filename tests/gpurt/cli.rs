@@ -219,3 +219,34 @@ fn interrupt_stops_without_writing_a_partial_file() {
         .collect();
     assert_eq!(leftovers.len(), 1, "only the scene remains: {leftovers:?}");
 }
+
+/// A reader that goes away (`gpurt info scene | true`) ends the command quietly: no
+/// panic, exit 0, and `diff` still writes its heat map.
+#[test]
+fn closed_stdout_ends_quietly() {
+    let d = workdir("closed-stdout");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::copy(d.join("a.png"), d.join("b.png")).unwrap();
+    let closed = |args: &[&str]| {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(args)
+            .current_dir(&d)
+            .stdout(writer)
+            .output()
+            .expect("gpurt runs")
+    };
+    for args in [
+        &["info", "ball.nff"][..],
+        &["info", "ball.nff", "--json"],
+        &["diff", "a.png", "b.png", "-o", "heat.png"],
+    ] {
+        let o = closed(args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+    assert!(d.join("heat.png").is_file());
+}
