@@ -99,3 +99,136 @@ fn main(
     }
     output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
 }
+
+// The same computation as `main` for pixels whose work did not fit one invocation, in
+// steps that can stop and continue in the next dispatch: start a sample, trace one
+// pending ray, take one light sample. The pixel's state lives in `resume_state` between
+// dispatches; each dispatch runs until RESUME_BUDGET loop iterations, so lavapipe's loop
+// limit is never reached. Every step does what `main`, `trace` and `direct` do, in the
+// same order, so the result is the same to the bit. (GPU only: the CPU has no such limit.)
+// tile.width: how many pixels; tile.sample_start: 0 on the first dispatch.
+@compute @workgroup_size(64, 1, 1)
+fn resume(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+) {
+    stack_base = local_index;
+    let i = gid.x;
+    if (i >= tile.width) {
+        return;
+    }
+    let g = globals;
+    let px = resume_pixels[i] & 0xffffu;
+    let py = resume_pixels[i] >> 16u;
+    var st: PixelState;
+    if (tile.sample_start == 0u) {
+        st.sum = vec3<f32>(0.0);
+        st.sample = 0u;
+        st.rays = 0u;
+        st.phase = PHASE_SAMPLE;
+        st.cut = 0u;
+    } else {
+        st = resume_state[i];
+    }
+    if (st.phase == PHASE_DONE) {
+        return;
+    }
+    work = 0u;
+    loop {
+        if (work >= RESUME_BUDGET) {
+            break;
+        }
+        work += 1u;
+        if (st.phase == PHASE_SAMPLE) {
+            if (st.sample == g.spp) {
+                st.sum /= f32(g.spp);
+                st.phase = PHASE_DONE;
+                break;
+            }
+            var rng = rng_seed(py * g.width + px, st.sample, g.seed);
+            let off = sample_offset(st.sample, g.spp, &rng);
+            let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+            st.rays += 1u;
+            if (AOV != AOV_COLOR) {
+                st.sum += aov(ray);
+                st.sample += 1u;
+                continue;
+            }
+            st.rng = rng;
+            st.stack[0] = Pending(ray.origin, ray.dir, 1.0, 1u, g.hither);
+            st.sp = 1u;
+            st.colour = vec3<f32>(0.0);
+            st.phase = PHASE_RAY;
+        } else if (st.phase == PHASE_RAY) {
+            if (st.sp == 0u) {
+                st.sum += st.colour;
+                st.sample += 1u;
+                st.phase = PHASE_SAMPLE;
+                continue;
+            }
+            st.sp -= 1u;
+            let ray_in = st.stack[st.sp];
+            let ray = Ray(ray_in.origin, ray_in.dir);
+            let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+            if (hit.prim == NO_PRIM) {
+                st.colour += ray_in.weight * g.background;
+                continue;
+            }
+            let s = surface(ray, hit);
+            let m = materials[s.material];
+            st.ray_in = ray_in;
+            st.point = s.point;
+            st.ng = s.ng;
+            st.ns = s.ns;
+            st.entering = u32(s.entering);
+            st.material = s.material;
+            st.lit = g.ambient * m.kd * m.color;
+            st.light = 0u;
+            st.light_sample = 0u;
+            st.phase = PHASE_LIGHT;
+        } else {
+            let s = Surface(st.point, st.ng, st.ns, st.entering != 0u, st.material);
+            let ray_in = st.ray_in;
+            let m = materials[s.material];
+            if (st.light < g.n_lights) {
+                let light = lights[st.light];
+                let samples = light_samples(light);
+                if (st.light_sample < samples) {
+                    var rng = st.rng;
+                    let c = light_sample(s, m, reflect_dir(ray_in.dir, s.ns), light, st.light_sample, &rng);
+                    st.rng = rng;
+                    if (c.w > 0.0) {
+                        st.rays += 1u;
+                        st.lit += c.xyz;
+                    }
+                    st.light_sample += 1u;
+                }
+                if (st.light_sample >= samples) {
+                    st.light += 1u;
+                    st.light_sample = 0u;
+                }
+                continue;
+            }
+            st.colour += ray_in.weight * st.lit;
+            st.phase = PHASE_RAY;
+            if (ray_in.depth >= g.max_depth) {
+                continue;
+            }
+            if (REFLECTION && m.ks > 0.0) {
+                st.rays += 1u;
+                st.stack[st.sp] = secondary(s, reflect_dir(ray_in.dir, s.ns), ray_in, m.ks);
+                st.sp += 1u;
+            }
+            if (REFRACTION && m.t > 0.0) {
+                st.rays += 1u;
+                st.stack[st.sp] = secondary(s, refracted_dir(s, m, ray_in.dir), ray_in, m.t);
+                st.sp += 1u;
+            }
+        }
+    }
+    st.cut = st.cut | u32(cut_short);
+    resume_state[i] = st;
+    if (st.phase != PHASE_DONE) {
+        atomicAdd(&resume_pending, 1u);
+    }
+}

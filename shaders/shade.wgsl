@@ -62,6 +62,49 @@ fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return d - 2.0 * dot(n, d) * n;
 }
 
+// Samples a light takes: nu x nv for an area light, else one.
+fn light_samples(light: Light) -> u32 {
+    if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
+        return light.nu * light.nv;
+    }
+    return 1u;
+}
+
+// Sample k of `light` at surface `s` (material m, mirror direction r): Lambert and the
+// Phong highlight scaled by the shadow ray's transmission in xyz; w is 1 when the light is
+// above the surface and a shadow ray was traced, else 0 (and xyz is 0).
+fn light_sample(s: Surface, m: Material, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
+    let intensity = light.color / f32(light_samples(light));
+    var l: vec3<f32>;
+    var dist: f32;
+    if (DIRECTIONAL_LIGHTS && light.kind == LIGHT_DIRECTIONAL) {
+        l = light.pos;
+        dist = NO_HIT;
+    } else {
+        var lp = light.pos;
+        if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
+            let su = (f32(k % light.nu) + rand(rng)) / f32(light.nu);
+            let sv = (f32(k / light.nu) + rand(rng)) / f32(light.nv);
+            lp += su * light.u + sv * light.v;
+        }
+        let to = lp - s.point;
+        l = normalize(to);
+        dist = length(to);
+    }
+    let ndotl = dot(s.ns, l);
+    if (ndotl <= 0.0) {
+        return vec4<f32>(0.0);
+    }
+    let shadow_ray = Ray(offset_origin(s, l, globals.epsilon), l);
+    let shadow = transmission(shadow_ray, dist);
+    let rl = dot(r, l);
+    var highlight = 0.0;
+    if (rl > 0.0) {
+        highlight = m.ks * pow(rl, m.shine);
+    }
+    return vec4<f32>(shadow * intensity * (m.kd * m.color * ndotl + vec3<f32>(highlight)), 1.0);
+}
+
 fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
     let m = materials[s.material];
     var colour = globals.ambient * m.kd * m.color;
@@ -69,47 +112,31 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
     var li = 0u;
     for (; li < globals.n_lights; li++) {
         let light = lights[li];
-        var samples = 1u;
-        if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
-            samples = light.nu * light.nv;
-        }
-        let intensity = light.color / f32(samples);
+        let samples = light_samples(light);
         var k = 0u;
         for (; k < samples; k++) {
-            var l: vec3<f32>;
-            var dist: f32;
-            if (DIRECTIONAL_LIGHTS && light.kind == LIGHT_DIRECTIONAL) {
-                l = light.pos;
-                dist = NO_HIT;
-            } else {
-                var lp = light.pos;
-                if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
-                    let su = (f32(k % light.nu) + rand(rng)) / f32(light.nu);
-                    let sv = (f32(k / light.nu) + rand(rng)) / f32(light.nv);
-                    lp += su * light.u + sv * light.v;
-                }
-                let to = lp - s.point;
-                l = normalize(to);
-                dist = length(to);
+            let c = light_sample(s, m, r, light, k, rng);
+            if (c.w > 0.0) {
+                *rays += 1u;
+                colour += c.xyz;
             }
-            let ndotl = dot(s.ns, l);
-            if (ndotl <= 0.0) {
-                continue;
-            }
-            *rays += 1u;
-            let shadow_ray = Ray(offset_origin(s, l, globals.epsilon), l);
-            let shadow = transmission(shadow_ray, dist);
-            let rl = dot(r, l);
-            var highlight = 0.0;
-            if (rl > 0.0) {
-                highlight = m.ks * pow(rl, m.shine);
-            }
-            colour += shadow * intensity * (m.kd * m.color * ndotl + vec3<f32>(highlight));
         }
         cut_short = cut_short || k < samples;
     }
     cut_short = cut_short || li < globals.n_lights;
     return colour;
+}
+
+// The transmitted direction at `s` for material m; total internal reflection sends the
+// transmitted weight along the mirror ray.
+fn refracted_dir(s: Surface, m: Material, dir: vec3<f32>) -> vec3<f32> {
+    let eta = select(m.ior, 1.0 / m.ior, s.entering);
+    let cos_i = -dot(s.ns, dir);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if (k < 0.0) {
+        return reflect_dir(dir, s.ns);
+    }
+    return normalize(eta * dir + (eta * cos_i - sqrt(k)) * s.ns);
 }
 
 fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
@@ -139,18 +166,8 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
             sp += 1u;
         }
         if (REFRACTION && m.t > 0.0) {
-            let eta = select(m.ior, 1.0 / m.ior, s.entering);
-            let cos_i = -dot(s.ns, ray.dir);
-            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-            // Total internal reflection sends the transmitted weight along the mirror ray.
-            var dir: vec3<f32>;
-            if (k < 0.0) {
-                dir = reflect_dir(ray.dir, s.ns);
-            } else {
-                dir = normalize(eta * ray.dir + (eta * cos_i - sqrt(k)) * s.ns);
-            }
             *rays += 1u;
-            stack[sp] = secondary(s, dir, ray_in, m.t);
+            stack[sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
             sp += 1u;
         }
     }

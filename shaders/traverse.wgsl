@@ -55,6 +55,7 @@ fn next_leaf(
         let node = (*walk).node;
         let n = load_node(node);
         *cost += 1u;
+        work += 1u;
         if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax)) {
             let count = node_count(n);
             if (count > 0u) {
@@ -103,6 +104,7 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
         }
         var i = leaf.x;
         for (; i < leaf.x + leaf.y; i++) {
+            work += 1u;
             let t = intersect_prim(i, ray, inv_dir);
             let t_first = first_in(t, tmin, hit.t);
             if (t_first != NO_HIT) {
@@ -157,6 +159,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
         }
         var i = leaf.x;
         for (; i < leaf.x + leaf.y; i++) {
+            work += 1u;
             let t = intersect_prim(i, ray, inv_dir);
             let crossings = u32(t.x > 0.0 && t.x < tmax) + u32(t.y > 0.0 && t.y < tmax);
             if (crossings > 0u) {

@@ -104,6 +104,48 @@ const PIXEL_CUT_SHORT: u32 = 0x80000000u;
 // checks after itself; the pixel is then reported, never written darker in silence.
 var<private> cut_short: bool;
 
+// Loop iterations this invocation has run, counted where the work is (traversal steps,
+// primitive tests, light samples, rays): `resume` suspends a pixel once it passes
+// RESUME_BUDGET. Lavapipe's limit counts the iterations of all eight invocations of a
+// SIMD batch together, so eight budgets plus one traversal must stay under 65535.
+var<private> work: u32;
+const RESUME_BUDGET: u32 = 2048u;
+
+// A pixel whose work continues across dispatches (`resume` in main.wgsl): its samples so
+// far, the sample under way with its pending rays, and the hit whose lights are being
+// sampled. Mirrors GpuPixelState in src/gpu_types.rs.
+struct PixelState {
+    sum: vec3<f32>,
+    sample: u32,
+    colour: vec3<f32>,
+    rng: u32,
+    lit: vec3<f32>,
+    rays: u32,
+    point: vec3<f32>,
+    sp: u32,
+    ng: vec3<f32>,
+    light: u32,
+    ns: vec3<f32>,
+    light_sample: u32,
+    ray_in: Pending,
+    material: u32,
+    entering: u32,
+    phase: u32,
+    cut: u32,
+    stack: array<Pending, RAY_STACK>,
+}
+
+const PHASE_SAMPLE: u32 = 0u;
+const PHASE_RAY: u32 = 1u;
+const PHASE_LIGHT: u32 = 2u;
+const PHASE_DONE: u32 = 3u;
+
+// The pixels to resume (x | y << 16), their states, and how many are still unfinished
+// after this dispatch. Bound only for `resume`.
+@group(1) @binding(0) var<storage, read> resume_pixels: array<u32>;
+@group(1) @binding(1) var<storage, read_write> resume_state: array<PixelState>;
+@group(1) @binding(2) var<storage, read_write> resume_pending: atomic<u32>;
+
 const PRIM_SPHERE: u32 = 0u;
 const PRIM_TRIANGLE: u32 = 1u;
 const PRIM_CONE: u32 = 2u;

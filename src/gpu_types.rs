@@ -183,6 +183,36 @@ pub struct GpuTile {
     pub sample_count: u32,
 }
 
+/// A pixel whose work continues across dispatches (`resume` in `shaders/main.wgsl`). The
+/// host reads `sum` (the pixel's value once `phase` is `PHASE_DONE`), `rays` and `cut`;
+/// the rest is the shader's own bookkeeping, kept as words here (`ray_in` and `stack` hold
+/// WGSL `Pending` structs of 12 words).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuPixelState {
+    pub sum: Vec3,
+    pub sample: u32,
+    pub colour: Vec3,
+    pub rng: u32,
+    pub lit: Vec3,
+    pub rays: u32,
+    pub point: Vec3,
+    pub sp: u32,
+    pub ng: Vec3,
+    pub light: u32,
+    pub ns: Vec3,
+    pub light_sample: u32,
+    pub ray_in: [u32; 12],
+    pub material: u32,
+    pub entering: u32,
+    pub phase: u32,
+    pub cut: u32,
+    pub stack: [[u32; 12]; RAY_STACK],
+}
+
+/// `GpuPixelState::phase` of a finished pixel.
+pub const PHASE_DONE: u32 = 3;
+
 /// Bit of `PixelOut::rays` set when a pixel's work was cut short: the driver ended one of
 /// the shader's loops before it finished (lavapipe ends every loop once one invocation
 /// has run 65535 loop iterations). The other bits count the rays traced.
@@ -210,5 +240,6 @@ const _: () = {
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 128);
     assert!(size_of::<GpuTile>() == 32);
+    assert!(size_of::<GpuPixelState>() == 160 + 48 * RAY_STACK);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

@@ -86,6 +86,58 @@ fn reflect(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
 
+/// Samples a light takes: nu x nv for an area light, else one.
+pub fn light_samples(light: &GpuLight) -> u32 {
+    if light.kind == LIGHT_AREA {
+        light.nu * light.nv
+    } else {
+        1
+    }
+}
+
+/// Sample `k` of `light` at surface `s` (material `m`, mirror direction `r`): Lambert and
+/// the Phong highlight scaled by the shadow ray's transmission, or `None` when the light
+/// is below the surface (no shadow ray is traced).
+pub fn light_sample(
+    b: &Bindings,
+    s: &Surface,
+    m: &GpuMaterial,
+    r: Vec3,
+    light: &GpuLight,
+    k: u32,
+    rng: &mut u32,
+) -> Option<Vec3> {
+    let intensity = light.color / light_samples(light) as f32;
+    let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
+        (light.pos, NO_HIT)
+    } else {
+        let mut lp = light.pos;
+        if light.kind == LIGHT_AREA {
+            let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
+            let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
+            lp += su * light.u + sv * light.v;
+        }
+        let to = lp - s.point;
+        (to.normalize(), to.length())
+    };
+    let ndotl = s.ns.dot(l);
+    if ndotl <= 0.0 {
+        return None;
+    }
+    let shadow_ray = Ray {
+        origin: offset_origin(s, l, b.globals.epsilon),
+        dir: l,
+    };
+    let shadow = transmission(b, &shadow_ray, dist);
+    let rl = r.dot(l);
+    let highlight = if rl > 0.0 {
+        m.ks * rl.powf(m.shine)
+    } else {
+        0.0
+    };
+    Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(highlight)))
+}
+
 /// Direct light at a surface point: ambient plus, per light sample, Lambert and the Phong
 /// highlight, each scaled by the shadow ray's transmission.
 fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
@@ -94,45 +146,27 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
     let mut colour = g.ambient * m.kd * m.color;
     let r = reflect(dir, s.ns);
     for light in b.lights {
-        let samples = if light.kind == LIGHT_AREA {
-            light.nu * light.nv
-        } else {
-            1
-        };
-        let intensity = light.color / samples as f32;
-        for k in 0..samples {
-            let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
-                (light.pos, NO_HIT)
-            } else {
-                let mut lp = light.pos;
-                if light.kind == LIGHT_AREA {
-                    let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
-                    let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
-                    lp += su * light.u + sv * light.v;
-                }
-                let to = lp - s.point;
-                (to.normalize(), to.length())
-            };
-            let ndotl = s.ns.dot(l);
-            if ndotl <= 0.0 {
-                continue;
+        for k in 0..light_samples(light) {
+            if let Some(c) = light_sample(b, s, m, r, light, k, rng) {
+                counts.shadow += 1;
+                colour += c;
             }
-            counts.shadow += 1;
-            let shadow_ray = Ray {
-                origin: offset_origin(s, l, g.epsilon),
-                dir: l,
-            };
-            let shadow = transmission(b, &shadow_ray, dist);
-            let rl = r.dot(l);
-            let highlight = if rl > 0.0 {
-                m.ks * rl.powf(m.shine)
-            } else {
-                0.0
-            };
-            colour += shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(highlight));
         }
     }
     colour
+}
+
+/// The transmitted direction at `s` for material `m`; total internal reflection sends the
+/// transmitted weight along the mirror ray.
+pub fn refracted_dir(s: &Surface, m: &GpuMaterial, dir: Vec3) -> Vec3 {
+    let eta = if s.entering { 1.0 / m.ior } else { m.ior };
+    let cos_i = -s.ns.dot(dir);
+    let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+    if k < 0.0 {
+        reflect(dir, s.ns)
+    } else {
+        (eta * dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
+    }
 }
 
 /// Colour seen along an eye ray: Whitted shading with reflection and refraction.
@@ -173,17 +207,8 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
             sp += 1;
         }
         if m.t > 0.0 {
-            let eta = if s.entering { 1.0 / m.ior } else { m.ior };
-            let cos_i = -s.ns.dot(ray.dir);
-            let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-            // Total internal reflection sends the transmitted weight along the mirror ray.
-            let dir = if k < 0.0 {
-                reflect(ray.dir, s.ns)
-            } else {
-                (eta * ray.dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
-            };
             counts.refracted += 1;
-            stack[sp] = secondary(&s, dir, &ray_in, m.t, g.epsilon);
+            stack[sp] = secondary(&s, refracted_dir(&s, m, ray.dir), &ray_in, m.t, g.epsilon);
             sp += 1;
         }
     }

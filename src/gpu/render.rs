@@ -7,8 +7,8 @@
 
 use std::collections::HashMap;
 use std::path::PathBuf;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
@@ -17,7 +17,9 @@ use super::shaders;
 use super::specialization::Specialization;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::gpu_types::{GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH};
+use crate::gpu_types::{
+    GpuGlobals, GpuPixelState, GpuTile, PHASE_DONE, PIXEL_CUT_SHORT, TEXTURE_WIDTH,
+};
 use crate::pack::SceneBuffers;
 
 /// Pixels a workgroup of `main.wgsl` covers along each axis (8 x 8, in 4 x 2 blocks).
@@ -131,6 +133,9 @@ impl Cut {
 pub struct GpuRenderer {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
+    /// Group 1 of the `resume` entry point, and its pipeline layout (groups 0 and 1).
+    resume_layout: wgpu::BindGroupLayout,
+    resume_pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
     cache: Option<(wgpu::PipelineCache, PathBuf)>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
@@ -186,43 +191,55 @@ impl GpuRenderer {
             .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
         let layout = bind_group_layout(device);
-        let (pipeline_layout, module, cache) = scoped(device, "compiling the shader", || {
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("gpurt"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let desc = wgpu::ShaderModuleDescriptor {
-                label: Some("gpurt"),
-                source: wgpu::ShaderSource::Wgsl(shaders::source().into()),
-            };
-            // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
-            // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
-            // every index the shader follows (children, leaf ranges, materials, normal
-            // slots) in range, children after parents (so traversal ends), the tree depth
-            // within the stack and the ray depth within the ray stack. The checks cost
-            // lavapipe about a quarter of its tracing time.
-            let module = unsafe {
-                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            };
-            let cache = cache_file.map(|file| {
-                let data = std::fs::read(&file).ok();
-                // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
-                // with the same cache key; `fallback` makes wgpu ignore data it rejects.
-                let cache = unsafe {
-                    device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+        let resume_layout = resume_group_layout(device);
+        let (pipeline_layout, resume_pipeline_layout, module, cache) =
+            scoped(device, "compiling the shader", || {
+                let pipeline_layout =
+                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                         label: Some("gpurt"),
-                        data: data.as_deref(),
-                        fallback: true,
-                    })
+                        bind_group_layouts: &[Some(&layout)],
+                        immediate_size: 0,
+                    });
+                let resume_pipeline_layout =
+                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                        label: Some("gpurt resume"),
+                        bind_group_layouts: &[Some(&layout), Some(&resume_layout)],
+                        immediate_size: 0,
+                    });
+                let desc = wgpu::ShaderModuleDescriptor {
+                    label: Some("gpurt"),
+                    source: wgpu::ShaderSource::Wgsl(shaders::source().into()),
                 };
-                (cache, file)
-            });
-            (pipeline_layout, module, cache)
-        })?;
+                // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
+                // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
+                // every index the shader follows (children, leaf ranges, materials, normal
+                // slots) in range, children after parents (so traversal ends), the tree depth
+                // within the stack and the ray depth within the ray stack. The checks cost
+                // lavapipe about a quarter of its tracing time.
+                let module = unsafe {
+                    device
+                        .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+                };
+                let cache = cache_file.map(|file| {
+                    let data = std::fs::read(&file).ok();
+                    // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
+                    // with the same cache key; `fallback` makes wgpu ignore data it rejects.
+                    let cache = unsafe {
+                        device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                            label: Some("gpurt"),
+                            data: data.as_deref(),
+                            fallback: true,
+                        })
+                    };
+                    (cache, file)
+                });
+                (pipeline_layout, resume_pipeline_layout, module, cache)
+            })?;
         Ok(GpuRenderer {
             layout,
             pipeline_layout,
+            resume_layout,
+            resume_pipeline_layout,
             module,
             cache,
             pipelines: Mutex::new(HashMap::new()),
@@ -461,6 +478,13 @@ impl GpuRenderer {
             pipeline,
             cut,
             device_bytes,
+            resume: Resume {
+                layout: self.resume_layout.clone(),
+                pipeline_layout: self.resume_pipeline_layout.clone(),
+                module: self.module.clone(),
+                constants: Specialization::of(scene, globals).constants(),
+                pipeline: OnceLock::new(),
+            },
         })
     }
 
@@ -488,6 +512,170 @@ pub struct GpuScene {
     /// Device memory held by the scene's buffers and textures and a band's output and
     /// readback buffers, in bytes.
     pub device_bytes: u64,
+    resume: Resume,
+}
+
+/// What the `resume` entry point needs, its pipeline compiled on first use: most renders
+/// never need it.
+struct Resume {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+    constants: Vec<(&'static str, f64)>,
+    pipeline: OnceLock<wgpu::ComputePipeline>,
+}
+
+impl Resume {
+    fn pipeline(&self, device: &wgpu::Device) -> Result<&wgpu::ComputePipeline> {
+        if let Some(p) = self.pipeline.get() {
+            return Ok(p);
+        }
+        let p = scoped(device, "compiling the shader", || {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("gpurt resume"),
+                layout: Some(&self.pipeline_layout),
+                module: &self.module,
+                entry_point: Some("resume"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &self.constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        })?;
+        Ok(self.pipeline.get_or_init(|| p))
+    }
+}
+
+/// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
+const RESUME_CHUNK: usize = 16384;
+
+/// Finishes the pixels (x | y << 16) whose work did not fit one invocation, with the
+/// `resume` entry point, one dispatch after another until none is left, and writes them
+/// into the film. Returns their rays and how many were still cut short.
+fn resume(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    pixels: &[u32],
+    film: &mut Film,
+    cancel: &AtomicBool,
+) -> Result<(u64, u64)> {
+    let pipeline = scene.resume.pipeline(device)?;
+    let (mut rays, mut cut_short) = (0u64, 0u64);
+    for chunk in pixels.chunks(RESUME_CHUNK) {
+        let n = chunk.len() as u32;
+        let state_bytes = u64::from(n) * size_of::<GpuPixelState>() as u64;
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let (state, pending, pending_back, state_back, group) =
+            scoped(device, "resuming pixels", || {
+                let list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("resume pixels"),
+                    contents: bytemuck::cast_slice(chunk),
+                    usage: U::STORAGE,
+                });
+                let state = buffer("resume state", state_bytes, U::STORAGE | U::COPY_SRC);
+                let pending = buffer("resume pending", 4, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+                let pending_back = buffer("resume pending readback", 4, U::MAP_READ | U::COPY_DST);
+                let state_back = buffer(
+                    "resume state readback",
+                    state_bytes,
+                    U::MAP_READ | U::COPY_DST,
+                );
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpurt resume"),
+                    layout: &scene.resume.layout,
+                    entries: &[&list, &state, &pending]
+                        .iter()
+                        .enumerate()
+                        .map(|(i, b)| wgpu::BindGroupEntry {
+                            binding: i as u32,
+                            resource: b.as_entire_binding(),
+                        })
+                        .collect::<Vec<_>>(),
+                });
+                (state, pending, pending_back, state_back, group)
+            })?;
+        for round in 0u32.. {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Error::Interrupted);
+            }
+            let tile = GpuTile {
+                width: n,
+                sample_start: round,
+                ..Default::default()
+            };
+            scoped(device, "resuming pixels", || {
+                queue.write_buffer(&scene.bound.tile_buf, 0, bytemuck::bytes_of(&tile));
+                queue.write_buffer(&pending, 0, &[0; 4]);
+                let mut enc = device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &scene.bound.bind_group, &[0]);
+                    pass.set_bind_group(1, &group, &[]);
+                    pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
+                }
+                enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
+                queue.submit([enc.finish()]);
+            })?;
+            let left: u32 = read_mapped(device, &pending_back, 4, |b| {
+                bytemuck::pod_read_unaligned(b)
+            })?;
+            if left == 0 {
+                break;
+            }
+        }
+        scoped(device, "resuming pixels", || {
+            let mut enc = device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
+            queue.submit([enc.finish()]);
+        })?;
+        read_mapped(device, &state_back, state_bytes, |bytes| {
+            let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
+            for (&xy, st) in chunk.iter().zip(states) {
+                film.set(xy & 0xffff, xy >> 16, st.sum.to_array());
+                rays += u64::from(st.rays);
+                cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
+            }
+        })?;
+    }
+    Ok((rays, cut_short))
+}
+
+/// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps.
+fn read_mapped<T>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    // A lost device or a hung submission surfaces here as a poll error.
+    wait(device)?;
+    rx.recv()
+        .map_err(|_| Error::Gpu("readback was never completed".into()))?
+        .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
+    let out = {
+        let view = slice
+            .get_mapped_range()
+            .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
+        f(&view)
+    };
+    buffer.unmap();
+    Ok(out)
 }
 
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
@@ -501,6 +689,8 @@ pub fn trace(
     let cut = scene.cut;
     let mut film = Film::new(cut.width, cut.height);
     let (mut rays, mut cut_short) = (0u64, 0u64);
+    // Pixels whose work did not fit one invocation, finished by `resume`.
+    let mut unfinished = Vec::new();
     for (y0, rows) in cut.bands() {
         if cancel.load(Ordering::Relaxed) {
             return Err(Error::Interrupted);
@@ -513,15 +703,20 @@ pub fn trace(
         })?;
         let (band_rays, band_cut) = read_band(device, &scene.bound.readback, bytes, y0, &mut film)?;
         rays += band_rays;
-        cut_short += band_cut;
+        unfinished.extend(band_cut);
         progress(u64::from(cut.width) * u64::from(rows));
+    }
+    if !unfinished.is_empty() {
+        let (more_rays, cut) = resume(device, queue, scene, &unfinished, &mut film, cancel)?;
+        rays += more_rays;
+        cut_short += cut;
     }
     if cut_short > 0 {
         return Err(Error::Gpu(format!(
             "{cut_short} of {} pixels could not finish on {}: the driver ended a shader loop \
              before its end (lavapipe stops every loop once one invocation has run 65535 \
-             loop iterations); lower --depth, --spp or the number of lights, or render \
-             with --backend cpu",
+             loop iterations, and a single ray of these pixels needs more, crossing too \
+             many surfaces); render with --backend cpu",
             u64::from(cut.width) * u64::from(cut.height),
             device.adapter_info().name
         )));
@@ -626,6 +821,25 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of
+/// unfinished ones (read-write storage).
+fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("gpurt resume"),
+        entries: &[entry(0, true), entry(1, false), entry(2, false)],
+    })
+}
+
 /// A command encoder holding one compute pass with a dispatch per tile, each tile read
 /// from its slot of the tile buffer (written beforehand, in the same order).
 fn encode_band(
@@ -656,39 +870,35 @@ fn wait(device: &wgpu::Device) -> Result<()> {
 }
 
 /// Maps the readback buffer, copies the band (full rows from `y0`) into the film,
-/// returns its ray count and the number of its pixels whose work was cut short.
+/// returns its ray count and the pixels (x | y << 16) whose work was cut short, which
+/// are left to `resume` and their rays not counted.
 fn read_band(
     device: &wgpu::Device,
     readback: &wgpu::Buffer,
     bytes: u64,
     y0: u32,
     film: &mut Film,
-) -> Result<(u64, u64)> {
-    let slice = readback.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    // A lost device or a hung submission surfaces here as a poll error.
-    wait(device)?;
-    rx.recv()
-        .map_err(|_| Error::Gpu("readback was never completed".into()))?
-        .map_err(|e| Error::Gpu(format!("reading back a band: {e}")))?;
-    let (mut rays, mut cut_short) = (0u64, 0u64);
-    {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("reading back a band: {e}")))?;
-        let px: &[[u32; 4]] = bytemuck::cast_slice(&view);
-        let start = y0 as usize * film.width as usize;
-        for (out, p) in film.pixels[start..start + px.len()].iter_mut().zip(px) {
+) -> Result<(u64, Vec<u32>)> {
+    let width = film.width as usize;
+    read_mapped(device, readback, bytes, |view| {
+        let (mut rays, mut cut) = (0u64, Vec::new());
+        let px: &[[u32; 4]] = bytemuck::cast_slice(view);
+        let start = y0 as usize * width;
+        for (i, (out, p)) in film.pixels[start..start + px.len()]
+            .iter_mut()
+            .zip(px)
+            .enumerate()
+        {
             *out = [p[0], p[1], p[2]].map(f32::from_bits);
-            rays += u64::from(p[3] & !PIXEL_CUT_SHORT);
-            cut_short += u64::from(p[3] & PIXEL_CUT_SHORT != 0);
+            if p[3] & PIXEL_CUT_SHORT != 0 {
+                let j = start + i;
+                cut.push((j % width) as u32 | ((j / width) as u32) << 16);
+            } else {
+                rays += u64::from(p[3]);
+            }
         }
-    }
-    readback.unmap();
-    Ok((rays, cut_short))
+        (rays, cut)
+    })
 }
 
 /// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.

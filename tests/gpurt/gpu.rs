@@ -446,8 +446,9 @@ fn oversized_scene_is_refused_with_the_limit_named() {
 }
 
 /// Renders on both backends and checks agreement (with the noise floor) and ray counts:
-/// equal within one in 10^5, the drift grazing rays give (a dropped sample or bounce
-/// loses far more).
+/// equal within one in 10^4, the drift that lights grazing a surface give (lavapipe's
+/// normalize and sqrt are not the CPU's; 47 of 2.65 million shadow rays in the thousand
+/// lights case), where dropped samples or bounces lose a tenth or more.
 fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
     let buffers = pack::pack(scene).expect("scene packs");
     let globals = pack::globals(scene, &buffers, opts);
@@ -469,7 +470,7 @@ fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Out
     a.verdict
         .map_err(|why| format!("{label}: {why} ({})", a.stats))?;
     let drift = rays.abs_diff(counts.total()) as f64 / counts.total() as f64;
-    if drift > 1e-5 {
+    if drift > 1e-4 {
         return Err(format!(
             "{label}: the GPU traced {rays} rays, the CPU {}",
             counts.total()
@@ -540,19 +541,18 @@ fn many_samples_per_pixel_match_cpu() {
 }
 
 /// One sample whose work exceeds what one invocation may do on lavapipe (glass at depth
-/// 16; a thousand lights): the GPU either agrees with the CPU or fails naming the cause,
-/// never returns a darker image. (On lavapipe it fails today: a pixel's work cannot yet
-/// continue across dispatches.)
+/// 16; a thousand lights): such pixels continue across dispatches and agree with the CPU.
 #[test]
-fn unfinished_pixels_are_an_error_never_a_darker_image() {
+fn heavy_single_samples_match_cpu() {
     let Some(g) = gpu() else {
         return;
     };
     let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
-    let mut cases = vec![(
+    let mut cases = vec![check_heavy(
+        g,
         "glass at depth 16",
-        glass.clone(),
-        RenderOptions {
+        &glass,
+        &RenderOptions {
             width: 64,
             height: 64,
             max_depth: 16,
@@ -572,15 +572,35 @@ fn unfinished_pixels_are_an_error_never_a_darker_image() {
             height: 48,
             ..RenderOptions::for_scene(&lights)
         };
-        cases.push(("balls-3 with 1000 lights", lights, opts));
+        cases.push(check_heavy(g, "balls-3 with 1000 lights", &lights, &opts));
     }
-    for (label, scene, opts) in cases {
-        match check_heavy(g, label, &scene, &opts) {
-            Ok(_) => {}
-            Err(e) => assert!(
-                e.contains("GPU render failed") && e.contains("could not finish"),
-                "{e}"
-            ),
-        }
+    check_all(cases);
+}
+
+/// A ray whose one traversal is too long for lavapipe's loop limit cannot be split
+/// further: a shadow ray up a column of 40000 overlapping glass spheres visits every one.
+/// The GPU either agrees with the CPU or fails naming the cause, never returns a darker
+/// image.
+#[test]
+fn unfinished_pixels_are_an_error_never_a_darker_image() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let mut src = String::from(
+        "b 0.2 0.2 0.2\nv\nfrom 4 0 0.3\nat 0 0 0.2\nup 0 0 1\nangle 20\nhither 0.01\n\
+         resolution 32 32\nl 0 0 30\nf 0.8 0.8 0.8 0.8 0 1 0 1\n\
+         p 4\n-3 -3 0\n3 -3 0\n3 3 0\n-3 3 0\nf 0.9 0.9 1 0.1 0 1 0.9 1\n",
+    );
+    for i in 0..40_000 {
+        src.push_str(&format!("s 0 0 {:.4} 0.5\n", 1.0 + i as f32 * 0.0002));
+    }
+    let scene =
+        gpurt::scene::nff::parse(src.as_bytes(), "column.nff", Path::new(".")).expect("parses");
+    let opts = RenderOptions::for_scene(&scene);
+    if let Err(e) = check_heavy(g, "a column of 40000 glass spheres", &scene, &opts) {
+        assert!(
+            e.contains("GPU render failed") && e.contains("could not finish"),
+            "{e}"
+        );
     }
 }
