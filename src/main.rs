@@ -49,10 +49,10 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// Largest acceptable FLIP mean.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_limit)]
         max_flip: Option<f64>,
         /// Largest acceptable fraction of pixels differing by more than 2/255.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_limit)]
         max_bad: Option<f64>,
     },
     /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
@@ -165,6 +165,19 @@ fn parse_colour(s: &str) -> Result<Vec3, String> {
         [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
         _ => Err("expected one non-negative number or three separated by commas".into()),
     }
+}
+
+/// A threshold: a finite number, not negative (NaN would make every comparison pass).
+fn parse_limit(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a finite number, 0 or more")),
+    }
+}
+
+/// Whether an adapter was asked for by name (`--adapter` or `GPURT_ADAPTER`).
+fn adapter_named(args: &RenderArgs) -> bool {
+    args.adapter.is_some() || std::env::var("GPURT_ADAPTER").is_ok_and(|v| !v.is_empty())
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -357,7 +370,8 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     if backend != Backend::Cpu {
         match gpurt::gpu::open(args.adapter.as_deref()) {
             Ok(ctx) => gpu = Some(ctx),
-            Err(Error::NoAdapter(why)) if backend == Backend::Gpu => {
+            // An adapter asked for by name that is missing is an error, not a fallback.
+            Err(Error::NoAdapter(why)) if backend == Backend::Gpu && !adapter_named(&args) => {
                 eprintln!("gpurt: no GPU adapter{why}; rendering on the CPU");
                 backend = Backend::Cpu;
             }

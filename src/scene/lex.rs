@@ -33,6 +33,9 @@ fn show_bytes(b: &[u8]) -> String {
     }
 }
 
+/// The UTF-8 byte-order mark.
+pub const BOM: &[u8] = b"\xEF\xBB\xBF";
+
 pub struct Lexer<'a> {
     src: &'a [u8],
     pos: usize,
@@ -55,12 +58,15 @@ const fn delimiters() -> [bool; 256] {
 static DELIMITER: [bool; 256] = delimiters();
 
 impl<'a> Lexer<'a> {
+    /// A lexer over `src`, skipping a leading UTF-8 byte-order mark (which some editors
+    /// write) so that columns on the first line count from the first visible character.
     pub fn new(src: &'a [u8], name: &'a str) -> Self {
+        let start = if src.starts_with(BOM) { BOM.len() } else { 0 };
         Lexer {
             src,
-            pos: 0,
+            pos: start,
             line: 1,
-            line_start: 0,
+            line_start: start,
             name,
         }
     }

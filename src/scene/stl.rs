@@ -35,6 +35,7 @@ fn binary_size_matches(b: &[u8]) -> bool {
 }
 
 fn starts_with_solid(b: &[u8]) -> bool {
+    let b = b.strip_prefix(super::lex::BOM).unwrap_or(b);
     let start = b
         .iter()
         .position(|c| !c.is_ascii_whitespace())

@@ -250,3 +250,35 @@ fn closed_stdout_ends_quietly() {
     }
     assert!(d.join("heat.png").is_file());
 }
+
+/// An adapter asked for by name that does not exist is an error (exit 2, no image), not a
+/// silent fallback to the CPU; a non-finite `diff` threshold is refused.
+#[test]
+fn missing_named_adapter_and_nan_thresholds_are_refused() {
+    let d = workdir("named-adapter");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(
+        &[
+            "ball.nff",
+            "--adapter",
+            "no-such-adapter-xyz",
+            "-o",
+            "out.png",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no-such-adapter-xyz"), "{}", stderr(&o));
+    assert!(!d.join("out.png").exists());
+
+    let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for bad in ["nan", "inf", "-1"] {
+        let o = gpurt(&["diff", "a.png", "a.png", "--max-flip", bad], &d);
+        assert_eq!(o.status.code(), Some(2), "--max-flip {bad}: {}", stderr(&o));
+        let o = gpurt(&["diff", "a.png", "a.png", "--max-bad", bad], &d);
+        assert_eq!(o.status.code(), Some(2), "--max-bad {bad}: {}", stderr(&o));
+    }
+    let o = gpurt(&["diff", "a.png", "a.png", "--max-flip", "0.01"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

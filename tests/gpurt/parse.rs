@@ -1481,3 +1481,30 @@ fn docs_examples_read_as_documented() {
         "{parsed} parsed, {errors} errors"
     );
 }
+
+/// A leading UTF-8 byte-order mark is skipped by every text reader: the result is the one
+/// without it, and columns on the first line count from the first visible character.
+#[test]
+fn byte_order_mark_is_accepted() {
+    let bom = |s: &str| [b"\xEF\xBB\xBF".as_slice(), s.as_bytes()].concat();
+
+    let nff_src = "v\nfrom 0 -4 1\nat 0 0 0\nup 0 0 1\nangle 40\nresolution 8 8\nl 1 2 3\n\
+                   f 1 0 0 1 0 1 0 1\ns 0 0 0 1\n";
+    let plain = nff::parse(nff_src.as_bytes(), "a.nff", Path::new(".")).expect("parses");
+    let marked = nff::parse(&bom(nff_src), "a.nff", Path::new(".")).expect("parses with a BOM");
+    assert_eq!(plain.spheres, marked.spheres);
+    assert_eq!(plain.camera, marked.camera);
+    let err = nff::parse(&bom("q 1 2\n"), "a.nff", Path::new(".")).unwrap_err();
+    assert!(err.to_string().starts_with("a.nff:1:1:"), "{err}");
+
+    let obj_src = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n";
+    let plain = obj::parse(obj_src.as_bytes(), "a.obj").expect("parses");
+    let marked = obj::parse(&bom(obj_src), "a.obj").expect("parses with a BOM");
+    assert_eq!(plain, marked);
+    assert_eq!(marked.len(), 2);
+
+    let stl_src = ascii_stl(&tetra());
+    let plain = stl::parse(stl_src.as_bytes(), "a.stl").expect("parses");
+    let marked = stl::parse(&bom(&stl_src), "a.stl").expect("parses with a BOM as ASCII");
+    assert_eq!(plain, marked);
+}
