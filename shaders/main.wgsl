@@ -29,10 +29,14 @@ fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
         k += 1u;
     }
     cut_short = cut_short || k * k < n;
-    let rows = (n + k - 1u) / k;
+    // Rows of k cells, the last row holding the rest (n - k * (rows - 1) cells): each row
+    // is as tall as its share of the n cells, so every cell has area 1/n and the cells
+    // tile the pixel (a k x rows grid with empty cells would shift the image).
+    let row = s / k;
+    let cells = min(k, n - row * k);
     let jx = rand(rng);
     let jy = rand(rng);
-    return vec2<f32>((f32(s % k) + jx) / f32(k), (f32(s / k) + jy) / f32(rows));
+    return vec2<f32>((f32(s % k) + jx) / f32(cells), (f32(row * k) + jy * f32(cells)) / f32(n));
 }
 
 fn aov(ray: Ray) -> vec3<f32> {

@@ -31,7 +31,10 @@ pub fn camera_ray(g: &GpuGlobals, x: f32, y: f32, rng: &mut u32) -> Ray {
 }
 
 /// Offset of sample `s` of `n` inside the pixel: the centre for one sample, otherwise a
-/// jittered cell of a k x ceil(n/k) grid, k = ceil(sqrt(n)).
+/// jittered point in cell `s` of n equal cells: rows of k = ceil(sqrt(n)) cells, the last
+/// row holding the rest, each row as tall as its share of the cells. Every cell has area
+/// 1/n and the cells tile the pixel, so the estimate is unbiased for every n (a k x
+/// ceil(n/k) grid with empty cells shifted the image by up to a tenth of a pixel).
 pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
     if n <= 1 {
         return Vec2::splat(0.5);
@@ -40,12 +43,13 @@ pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
     while k * k < n {
         k += 1;
     }
-    let rows = n.div_ceil(k);
+    let row = s / k;
+    let cells = k.min(n - row * k);
     let jx = rand(rng);
     let jy = rand(rng);
     Vec2::new(
-        ((s % k) as f32 + jx) / k as f32,
-        ((s / k) as f32 + jy) / rows as f32,
+        ((s % k) as f32 + jx) / cells as f32,
+        ((row * k) as f32 + jy * cells as f32) / n as f32,
     )
 }
 

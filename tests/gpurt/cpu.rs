@@ -537,3 +537,42 @@ fn agreement_rejects_a_perturbed_film() {
     assert!(moved.verdict.is_err(), "{}", moved.stats);
     assert_eq!(moved.noise_floor, Some(0.0));
 }
+
+/// A white quad under ambient light 1 whose right edge runs through the centres of pixel
+/// column 100 (x = 0.013465 on the plane, 200x200, 30 degrees): every sample count
+/// covers half of that column, on average, within 0.02 (a k x ceil(n/k) grid with empty
+/// cells gave 0.667 at 3 spp and 0.568 at 7). One sample sits on the edge itself, so its
+/// value there is 0 or 1 by construction; it is checked on the columns beside it.
+pub const HALF_COLUMN: &str = "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nresolution 200 200\n\
+am 1 1 1\nb 0 0 0\nf 1 1 1 1 0 1 0 1\np 4\n-10 -10 0\n0.013465 -10 0\n0.013465 10 0\n-10 10 0\n";
+
+/// Mean of one column of the film's first channel.
+pub fn column_mean(film: &Film, x: u32) -> f64 {
+    (0..film.height)
+        .map(|y| f64::from(film.get(x, y)[0]))
+        .sum::<f64>()
+        / f64::from(film.height)
+}
+
+#[test]
+fn every_sample_count_is_unbiased_on_an_edge() {
+    let scene = parse(HALF_COLUMN);
+    for spp in 1..=16 {
+        let film = render_with(
+            &scene,
+            &RenderOptions {
+                spp,
+                ..RenderOptions::for_scene(&scene)
+            },
+        );
+        assert!(
+            (column_mean(&film, 99) - 1.0).abs() < 1e-6,
+            "{spp} spp: column 99"
+        );
+        assert!(column_mean(&film, 101) < 1e-6, "{spp} spp: column 101");
+        if spp > 1 {
+            let m = column_mean(&film, 100);
+            assert!((m - 0.5).abs() <= 0.02, "{spp} spp: column 100 mean {m}");
+        }
+    }
+}

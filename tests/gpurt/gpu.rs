@@ -623,3 +623,35 @@ fn sub_pixel_sphere_scenes_agree_within_their_noise_floor() {
         check_scene(g, &format!("spd/{name} spp4"), &scene, &opts)
     }));
 }
+
+/// The stratification of samples is the CPU's on the GPU too: the half-covered column of
+/// `cpu::HALF_COLUMN` at sample counts that are neither squares nor 2 x N.
+#[test]
+fn sample_pattern_matches_cpu_on_an_edge() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let scene = gpurt::scene::nff::parse(
+        crate::cpu::HALF_COLUMN.as_bytes(),
+        "edge.nff",
+        Path::new("."),
+    )
+    .expect("parses");
+    for spp in [3, 5, 7, 10] {
+        let opts = RenderOptions {
+            spp,
+            ..RenderOptions::for_scene(&scene)
+        };
+        let buffers = pack::pack(&scene).expect("packs");
+        let globals = pack::globals(&scene, &buffers, &opts);
+        let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
+        let (c, m) = (
+            crate::cpu::column_mean(&cpu, 100),
+            crate::cpu::column_mean(&gpu, 100),
+        );
+        assert!(
+            (m - 0.5).abs() <= 0.02 && (m - c).abs() < 1e-3,
+            "{spp} spp: GPU {m}, CPU {c}"
+        );
+    }
+}
