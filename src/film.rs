@@ -183,15 +183,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 /// Distinguishes temporary files of concurrent writes from one process (e.g. parallel tests).
 static TEMP_COUNTER: AtomicU64 = AtomicU64::new(0);
 
-/// Runs `write` on a fresh temporary file in `path`'s directory (`.NAME.tmp-PID-N`), syncs
-/// it, then renames it over `path`. Renaming within one directory is atomic, so readers see
-/// either the old file or the complete new one, never a partial write. On any error the
-/// temporary file is removed and `path` is left as it was.
+/// Runs `write` on a fresh temporary file in the target's directory (`.NAME.tmp-PID-N`),
+/// syncs it, then renames it over the target. Renaming within one directory is atomic, so
+/// readers see either the old file or the complete new one, never a partial write. On any
+/// error the temporary file is removed and the target is left as it was.
+///
+/// The target is `path` with symbolic links followed (`-o latest.png` where `latest.png`
+/// links elsewhere writes the file it points to and keeps the link), and an existing
+/// target keeps its permissions.
 pub fn write_atomic_with(
     path: &Path,
     write: impl FnOnce(&mut BufWriter<File>) -> Result<()>,
 ) -> Result<()> {
+    let target = follow_links(path);
+    let path = target.as_path();
     let temp = temp_path(path)?;
+    let permissions = fs::metadata(path).ok().map(|m| m.permissions());
     // create_new: never reuse (or clobber) a file we did not create.
     let file = OpenOptions::new()
         .write(true)
@@ -204,6 +211,9 @@ pub fn write_atomic_with(
         let file = w
             .into_inner()
             .map_err(|e| Error::io(path, e.into_error()))?;
+        if let Some(p) = permissions {
+            file.set_permissions(p).map_err(|e| Error::io(path, e))?;
+        }
         // Without the sync a crash soon after the rename can leave an empty file behind.
         file.sync_all().map_err(|e| Error::io(path, e))?;
         drop(file);
@@ -216,15 +226,53 @@ pub fn write_atomic_with(
     result
 }
 
+/// `path` with symbolic links followed to the file they name (which may not exist yet);
+/// `path` itself when it is no link, or after 40 links (a loop: the write then fails on
+/// the link as the system reports it).
+fn follow_links(path: &Path) -> PathBuf {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match fs::read_link(&p) {
+            Ok(to) => p = p.parent().unwrap_or(Path::new("")).join(to),
+            Err(_) => return p,
+        }
+    }
+    path.to_path_buf()
+}
+
+/// Longest file name most file systems take, in bytes.
+const NAME_MAX: usize = 255;
+
 fn temp_path(path: &Path) -> Result<PathBuf> {
     let name = path
         .file_name()
         .ok_or_else(|| Error::Image(format!("{}: not a file name to write to", path.display())))?;
     let n = TEMP_COUNTER.fetch_add(1, Ordering::Relaxed);
+    let suffix = format!(".tmp-{}-{n}", std::process::id());
     let mut temp_name = std::ffi::OsString::from(".");
-    temp_name.push(name);
-    temp_name.push(format!(".tmp-{}-{n}", std::process::id()));
+    if 1 + name.len() + suffix.len() <= NAME_MAX {
+        temp_name.push(name);
+    } else {
+        // A name near the limit: the temporary one must not be longer.
+        temp_name.push("gpurt");
+    }
+    temp_name.push(suffix);
     Ok(path.with_file_name(temp_name))
+}
+
+/// Fails when `path` cannot be written (its directory is missing, or is not writable), so
+/// that a render is refused before it starts rather than after it ends. Tries by creating
+/// and removing a temporary file where the real one will go.
+pub fn check_writable(path: &Path) -> Result<()> {
+    let target = follow_links(path);
+    let temp = temp_path(&target)?;
+    OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&temp)
+        .map_err(|e| Error::io(path, e))?;
+    let _ = fs::remove_file(&temp);
+    Ok(())
 }
 
 /// Reads and decodes an image, recognising the format by content (falling back to the

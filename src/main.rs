@@ -338,11 +338,14 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| default_output(scene_path));
     check_extension(&output)?;
+    film::check_writable(&output)?;
     let start = Instant::now();
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = cancel.clone();
-        // Ctrl-C stops the render; nothing is written. A second Ctrl-C is not needed.
+        // Ctrl-C (SIGINT), SIGTERM or SIGHUP stops the render; nothing is written. One that
+        // comes during the save lets the save finish (it is atomic), so no temporary file
+        // is ever left behind.
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
     let Prepared {

@@ -185,39 +185,117 @@ fn diff_exit_codes_and_heat_map() {
 /// Ctrl-C (SIGINT) stops a render cleanly: exit code 130, a message, and no output file.
 #[test]
 fn interrupt_stops_without_writing_a_partial_file() {
-    let d = workdir("interrupt");
+    for signal in ["INT", "TERM"] {
+        let d = workdir(&format!("interrupt-{signal}"));
+        std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+        // Some seconds of work on two cores; interrupted long before it ends.
+        let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([
+                "ball.nff",
+                "--backend",
+                "cpu",
+                "--width",
+                "2048",
+                "--height",
+                "2048",
+            ])
+            .args(["--spp", "64", "-o", "out.png"])
+            .current_dir(&d)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("gpurt starts");
+        std::thread::sleep(std::time::Duration::from_millis(700));
+        let killed = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(killed.success());
+        let out = child.wait_with_output().expect("gpurt ends");
+        assert_eq!(
+            out.status.code(),
+            Some(130),
+            "SIG{signal}: {}",
+            stderr(&out)
+        );
+        assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
+        assert!(!d.join("out.png").exists());
+        let leftovers: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(leftovers.len(), 1, "only the scene remains: {leftovers:?}");
+    }
+}
+
+/// Writing an output: through a symbolic link to its target (the link stays), keeping an
+/// existing file's permissions, with a 250-byte name (the temporary name stays within the
+/// limit), and refused before rendering when the directory is missing or not writable.
+#[test]
+fn outputs_follow_links_keep_permissions_and_are_checked_first() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = workdir("outputs");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
-    // Some seconds of work on two cores; interrupted long before it ends.
-    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args([
+    let render = |out: &str| gpurt(&["ball.nff", "--backend", "cpu", "-o", out], &d);
+
+    std::fs::create_dir(d.join("renders")).unwrap();
+    std::os::unix::fs::symlink("renders/v1.png", d.join("latest.png")).unwrap();
+    let o = render("latest.png");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::symlink_metadata(d.join("latest.png"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert!(d.join("renders/v1.png").is_file());
+
+    std::fs::write(d.join("private.png"), b"old").unwrap();
+    std::fs::set_permissions(
+        d.join("private.png"),
+        std::fs::Permissions::from_mode(0o600),
+    )
+    .unwrap();
+    let o = render("private.png");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mode = std::fs::metadata(d.join("private.png"))
+        .unwrap()
+        .permissions()
+        .mode();
+    assert_eq!(mode & 0o777, 0o600);
+    assert_ne!(std::fs::read(d.join("private.png")).unwrap(), b"old");
+
+    let long = format!("{}.png", "a".repeat(246));
+    assert_eq!(long.len(), 250);
+    let o = render(&long);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join(&long).is_file());
+
+    let t = std::time::Instant::now();
+    let o = gpurt(
+        &[
             "ball.nff",
             "--backend",
             "cpu",
-            "--width",
-            "2048",
-            "--height",
-            "2048",
-        ])
-        .args(["--spp", "64", "-o", "out.png"])
-        .current_dir(&d)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("gpurt starts");
-    std::thread::sleep(std::time::Duration::from_millis(700));
-    let killed = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .expect("kill runs");
-    assert!(killed.success());
-    let out = child.wait_with_output().expect("gpurt ends");
-    assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
-    assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
-    assert!(!d.join("out.png").exists());
+            "--spp",
+            "4096",
+            "-o",
+            "missing/out.png",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing/out.png"), "{}", stderr(&o));
+    assert!(
+        t.elapsed() < std::time::Duration::from_secs(5),
+        "refused only after rendering"
+    );
+
     let leftovers: Vec<_> = std::fs::read_dir(&d)
         .unwrap()
-        .map(|e| e.unwrap().file_name())
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
         .collect();
-    assert_eq!(leftovers.len(), 1, "only the scene remains: {leftovers:?}");
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
 /// A reader that goes away (`gpurt info scene | true`) ends the command quietly: no
