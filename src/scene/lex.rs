@@ -25,12 +25,26 @@ impl Token<'_> {
 
 fn show_bytes(b: &[u8]) -> String {
     const MAX: usize = 40;
-    let s = String::from_utf8_lossy(&b[..b.len().min(MAX)]);
+    let s = escape_controls(&String::from_utf8_lossy(&b[..b.len().min(MAX)]));
     if b.len() > MAX {
         format!("'{s}...'")
     } else {
         format!("'{s}'")
     }
+}
+
+/// Text from an input file, made safe to print: control characters (an ESC sequence would
+/// recolour the terminal) are written as escapes (`\u{1b}`, `\t`); the rest is kept.
+pub fn escape_controls(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_control() {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 /// The UTF-8 byte-order mark.

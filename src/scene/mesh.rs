@@ -6,10 +6,19 @@ use super::{FileKind, Triangle, obj, stl};
 use crate::error::Result;
 
 /// Parses a mesh file's bytes (already decompressed) into triangles with material 0.
-pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Vec<Triangle>> {
+/// A mesh file's triangles and what was dropped from it, as `FILE:LINE:COL: message`.
+pub struct Mesh {
+    pub triangles: Vec<Triangle>,
+    pub warnings: Vec<String>,
+}
+
+pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
     match kind {
-        FileKind::Stl => stl::parse(bytes, name),
-        FileKind::Obj => obj::parse(bytes, name),
+        FileKind::Stl => Ok(Mesh {
+            triangles: stl::parse(bytes, name)?,
+            warnings: Vec::new(),
+        }),
+        FileKind::Obj => obj::parse_with_warnings(bytes, name),
         FileKind::Nff => unreachable!("NFF is not a mesh format"),
     }
 }

@@ -350,10 +350,21 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     });
     let hint = isize.min(raw.len() as u64 * 1032).min(MAX_FILE_BYTES);
     let mut out = Vec::with_capacity(hint as usize + 64);
-    flate2::read::MultiGzDecoder::new(&raw[..])
-        .take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut out)
-        .map_err(|e| Error::io(path, e))?;
+    // Member after member, as gzip does; zero bytes after the last member are padding
+    // (tape blocks, `dd`), which `gzip -t` accepts too.
+    let mut rest = &raw[..];
+    while !rest.iter().all(|&b| b == 0) {
+        let mut member = flate2::bufread::GzDecoder::new(rest);
+        let room = (MAX_FILE_BYTES + 1).saturating_sub(out.len() as u64);
+        (&mut member)
+            .take(room)
+            .read_to_end(&mut out)
+            .map_err(|e| Error::io(path, e))?;
+        if out.len() as u64 > MAX_FILE_BYTES {
+            break;
+        }
+        rest = member.into_inner();
+    }
     if out.len() as u64 > MAX_FILE_BYTES {
         return Err(Error::Scene {
             file: path.display().to_string(),
@@ -374,8 +385,10 @@ pub fn load(path: &Path) -> Result<Scene> {
             nff::parse(&bytes, &name, base)
         }
         kind => {
-            let tris = mesh::parse_mesh(&bytes, kind, &name)?;
-            auto::scene_for_mesh(&name, tris)
+            let mesh = mesh::parse_mesh(&bytes, kind, &name)?;
+            let mut scene = auto::scene_for_mesh(&name, mesh.triangles)?;
+            scene.warnings.extend(mesh.warnings);
+            Ok(scene)
         }
     }
 }

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::lex::{Lexer, Token};
+use super::lex::{Lexer, Token, escape_controls};
 use super::mesh::{self, MeshTransform};
 use super::triangulate::triangulate;
 use super::{BoxPrim, Cone, FileKind, Light, Material, MaterialId, Plane, Scene, Sphere, Triangle};
@@ -476,19 +476,30 @@ impl Parser<'_> {
         if kind == FileKind::Nff {
             return Err(self.lx.error_at(
                 &ptok,
-                format!("mesh file '{rel}' must end in .stl or .obj (optionally .gz)"),
+                format!(
+                    "mesh file '{}' must end in .stl or .obj (optionally .gz)",
+                    escape_controls(rel)
+                ),
             ));
         }
         let bytes = super::read_file(&path).map_err(|e| match e {
             Error::Io { source, .. } => self.lx.error_at(
                 &ptok,
-                format!("cannot read mesh file '{}': {source}", path.display()),
+                format!(
+                    "cannot read mesh file '{}': {source}",
+                    escape_controls(&path.display().to_string())
+                ),
             ),
             other => other,
         })?;
-        let mut tris = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
+        let mesh = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
+        self.scene.warnings.extend(mesh.warnings);
+        let mut tris = mesh.triangles;
         if tris.is_empty() {
-            self.warn(tok, &format!("mesh '{rel}' has no triangles"));
+            self.warn(
+                tok,
+                &format!("mesh '{}' has no triangles", escape_controls(rel)),
+            );
         }
         let material = self.current_material();
         xf.apply(&mut tris);

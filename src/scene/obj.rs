@@ -9,6 +9,7 @@
 use glam::Vec3;
 
 use super::lex::{Lexer, Token, parse_f32};
+use super::mesh::Mesh;
 use super::triangulate::triangulate;
 use super::{MaterialId, Triangle};
 use crate::error::Result;
@@ -22,7 +23,14 @@ struct Corner {
     col: u32,
 }
 
+/// The triangles of an OBJ file (see `parse_with_warnings` for what is dropped).
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
+    parse_with_warnings(bytes, name).map(|m| m.triangles)
+}
+
+/// The triangles of an OBJ file, and a warning for each face dropped because it has fewer
+/// than three corners or no area (as the NFF reader warns of degenerate polygons).
+pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
     let mut lx = Lexer::new(bytes, name);
     let mut positions: Vec<Vec3> = Vec::new();
     let mut normals: Vec<Vec3> = Vec::new();
@@ -73,6 +81,7 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
         )
     };
     let mut tris = Vec::new();
+    let mut warnings = Vec::new();
     let mut poly = Vec::new();
     let mut poly_n = Vec::new();
     let mut idx = Vec::new();
@@ -109,8 +118,13 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
         // Shading normals only when every corner has a usable one; otherwise flat.
         let smooth = poly_n.len() == poly.len() && poly_n.iter().all(|n| n.length_squared() > 0.0);
         idx.clear();
-        if !triangulate(&poly, &mut idx) {
-            continue; // fewer than 3 corners, or no area
+        if poly.len() < 3 || !triangulate(&poly, &mut idx) {
+            let (line, col) = face.first().map_or((0, 0), |c| (c.line, c.col));
+            warnings.push(format!(
+                "{name}:{line}:{col}: degenerate face with {} corners dropped",
+                poly.len()
+            ));
+            continue;
         }
         for &[a, b, c] in &idx {
             let ix = [a, b, c].map(|i| i as usize);
@@ -121,7 +135,10 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
             });
         }
     }
-    Ok(tris)
+    Ok(Mesh {
+        triangles: tris,
+        warnings,
+    })
 }
 
 /// The next token if it is on `line` (OBJ statements end at the end of their line).

@@ -1508,3 +1508,65 @@ fn byte_order_mark_is_accepted() {
     let marked = stl::parse(&bom(&stl_src), "a.stl").expect("parses with a BOM as ASCII");
     assert_eq!(plain, marked);
 }
+
+/// OBJ faces with two corners, or with collinear corners, are dropped with a warning
+/// naming where they are, as NFF's degenerate polygons are.
+#[test]
+fn degenerate_obj_faces_are_dropped_with_a_warning() {
+    let src = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\nf 1 2 4\n";
+    let mesh = obj::parse_with_warnings(src.as_bytes(), "d.obj").expect("parses");
+    assert_eq!(mesh.triangles.len(), 1);
+    assert_eq!(
+        mesh.warnings,
+        [
+            "d.obj:5:3: degenerate face with 2 corners dropped",
+            "d.obj:6:3: degenerate face with 3 corners dropped"
+        ]
+    );
+    let dir = temp_dir("degenerate-obj");
+    std::fs::write(dir.join("d.obj"), src).unwrap();
+    let scene = scene::load(&dir.join("d.obj")).expect("loads");
+    assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
+}
+
+/// Input quoted in a message has its control characters escaped: an ESC sequence in a
+/// scene file must not reach the terminal.
+#[test]
+fn messages_escape_control_characters_from_the_input() {
+    let err = nff::parse(b"\x1b[31mred 1 2 3\n", "esc.nff", Path::new(".")).unwrap_err();
+    let msg = err.to_string();
+    assert!(!msg.contains('\x1b'), "{msg:?}");
+    assert!(msg.contains("\\u{1b}[31mred"), "{msg:?}");
+    let err = nff::parse(b"mesh \"a\x07b.ply\"\n", "esc.nff", Path::new(".")).unwrap_err();
+    assert!(!err.to_string().contains('\x07'), "{err}");
+}
+
+/// Zero bytes after the last gzip member are padding (`gzip -t` accepts them); other
+/// bytes after it are still an error, and a second member is read like the first.
+#[test]
+fn gzip_padding_with_zeros_is_accepted() {
+    let dir = temp_dir("gzip-padding");
+    let src = format!("{VIEW}f 1 1 1 1 0 1 0 1\ns 0 0 0 1\n");
+    let one = gzip(src.as_bytes());
+    let cases: [(&str, Vec<u8>, Option<usize>); 3] = [
+        (
+            "padded.nff.gz",
+            [one.clone(), vec![0; 1024]].concat(),
+            Some(1),
+        ),
+        ("two.nff.gz", [one.clone(), one.clone()].concat(), Some(2)),
+        (
+            "junk.nff.gz",
+            [one.clone(), b"junk".to_vec()].concat(),
+            None,
+        ),
+    ];
+    for (name, bytes, spheres) in cases {
+        write(&dir.join(name), &bytes);
+        match (scene::load(&dir.join(name)), spheres) {
+            (Ok(s), Some(n)) => assert_eq!(s.spheres.len(), n, "{name}"),
+            (Err(e), None) => assert!(e.to_string().contains(name), "{e}"),
+            (r, _) => panic!("{name}: {:?}", r.map(|s| s.spheres.len())),
+        }
+    }
+}
