@@ -115,7 +115,9 @@ impl Aov {
 #[derive(clap::Args)]
 struct RenderArgs {
     /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl or .obj, optionally .gz.
-    scene: Option<PathBuf>,
+    /// One at a time (several are refused with a message, rather than taken as a subcommand).
+    #[arg(value_name = "SCENE")]
+    scenes: Vec<PathBuf>,
     /// Output image; the format follows the extension (png, ppm, bmp, exr).
     /// Default: the scene's name with .png, in the current directory.
     #[arg(short, long)]
@@ -329,9 +331,23 @@ impl Progress {
 }
 
 fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
-    let Some(scene_path) = args.scene.as_deref() else {
-        eprintln!("gpurt: no scene given; try `gpurt --help`");
-        return Ok(ExitCode::from(2));
+    let scene_path = match &args.scenes[..] {
+        [one] => one.as_path(),
+        [] => {
+            eprintln!("gpurt: no scene given; try `gpurt --help`");
+            return Ok(ExitCode::from(2));
+        }
+        many => {
+            eprintln!(
+                "gpurt: one scene is rendered at a time, but {} were given ({}); run gpurt once per scene",
+                many.len(),
+                many.iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+            return Ok(ExitCode::from(2));
+        }
     };
     let output = args
         .output

@@ -69,7 +69,9 @@ pub fn scene_for_mesh(name: &str, mut tris: Vec<Triangle>) -> Result<Scene> {
         t: 0.0,
         ior: 1.0,
     });
-    let floor = b.min.dot(up);
+    // A little below the mesh's lowest point (a thousandth of its size), so that a flat
+    // mesh lying on that plane does not z-fight with the ground.
+    let floor = b.min.dot(up) - 1e-3 * radius;
     scene.planes.push(Plane {
         point: up * floor,
         normal: up,

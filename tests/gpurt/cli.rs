@@ -360,3 +360,20 @@ fn missing_named_adapter_and_nan_thresholds_are_refused() {
     let o = gpurt(&["diff", "a.png", "a.png", "--max-flip", "0.01"], &d);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+/// Two scenes are refused with a message saying one is rendered at a time (not clap's
+/// "the subcommand 'b.nff' cannot be used"), and nothing is written.
+#[test]
+fn two_scenes_are_refused_with_a_clear_message() {
+    let d = workdir("two-scenes");
+    std::fs::write(d.join("a.nff"), SCENE).unwrap();
+    std::fs::write(d.join("b.nff"), SCENE).unwrap();
+    let o = gpurt(&["a.nff", "b.nff", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("one scene is rendered at a time"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("a.png").exists() && !d.join("b.png").exists());
+}
