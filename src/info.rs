@@ -1,43 +1,107 @@
-//! `gpurt info`: what a scene holds, as text or as one JSON object.
+//! `gpurt info`: what a scene holds, as text or as one JSON object (its schema:
+//! `docs/info-json.md`).
 
-use serde_json::json;
+use glam::Vec3;
+use serde_json::{Value, json};
 
+use crate::pack::DEFAULT_AMBIENT;
 use crate::scene::{Light, Scene};
 
-/// Counts per primitive kind, after triangulation.
-pub fn to_json(s: &Scene) -> serde_json::Value {
+/// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the
+/// `0.05000000074505806` its f64 widening prints); null when not finite.
+fn num(x: f32) -> Value {
+    x.to_string()
+        .parse::<f64>()
+        .ok()
+        .and_then(serde_json::Number::from_f64)
+        .map_or(Value::Null, Value::Number)
+}
+
+fn vec3(v: Vec3) -> Value {
+    Value::Array(v.to_array().map(num).to_vec())
+}
+
+fn colour(c: Option<Vec3>) -> Value {
+    c.map_or(Value::Null, vec3)
+}
+
+fn light(l: &Light) -> Value {
+    match l {
+        Light::Point { position, color } => json!({
+            "kind": "point",
+            "position": vec3(*position),
+            "color": colour(*color),
+        }),
+        Light::Directional { direction, color } => json!({
+            "kind": "directional",
+            "direction": vec3(*direction),
+            "color": colour(*color),
+        }),
+        Light::Area {
+            corner,
+            u,
+            v,
+            color,
+            samples,
+        } => json!({
+            "kind": "area",
+            "corner": vec3(*corner),
+            "u": vec3(*u),
+            "v": vec3(*v),
+            "color": vec3(*color),
+            "samples": samples,
+        }),
+    }
+}
+
+/// The whole scene description: camera, image, background and ambient light, bounds,
+/// counts per primitive kind (after triangulation), every light and material with its
+/// parameters, and the reader's warnings.
+pub fn to_json(s: &Scene) -> Value {
     let b = s.bounds();
     let c = &s.camera;
     let bounds = if b.is_empty() {
-        serde_json::Value::Null
+        Value::Null
     } else {
-        json!({ "min": b.min.to_array(), "max": b.max.to_array() })
+        json!({ "min": vec3(b.min), "max": vec3(b.max) })
     };
-    let count = |f: fn(&Light) -> bool| s.lights.iter().filter(|l| f(l)).count();
+    let materials: Vec<Value> = s
+        .materials
+        .iter()
+        .map(|m| {
+            json!({
+                "color": vec3(m.color),
+                "kd": num(m.kd),
+                "ks": num(m.ks),
+                "shine": num(m.shine),
+                "t": num(m.t),
+                "ior": num(m.ior),
+            })
+        })
+        .collect();
     json!({
         "file": s.name,
         "camera": {
-            "from": c.from.to_array(),
-            "at": c.at.to_array(),
-            "up": c.up.to_array(),
-            "angle": c.angle,
-            "hither": c.hither,
-            "aperture": c.aperture,
-            "focal": c.focal_distance(),
+            "from": vec3(c.from),
+            "at": vec3(c.at),
+            "up": vec3(c.up),
+            "angle": num(c.angle),
+            "hither": num(c.hither),
+            "aperture": num(c.aperture),
+            "focal": num(c.focal_distance()),
         },
         "resolution": [c.width, c.height],
-        "background": s.background.to_array(),
+        "background": vec3(s.background),
+        "ambient": colour(s.ambient),
+        "ambient_used": vec3(s.ambient.unwrap_or(Vec3::splat(DEFAULT_AMBIENT))),
         "bounds": bounds,
         "spheres": s.spheres.len(),
         "triangles": s.triangles.len(),
         "planes": s.planes.len(),
         "cones": s.cones.len(),
         "boxes": s.boxes.len(),
-        "lights": s.lights.len(),
-        "point_lights": count(|l| matches!(l, Light::Point { .. })),
-        "directional_lights": count(|l| matches!(l, Light::Directional { .. })),
-        "area_lights": count(|l| matches!(l, Light::Area { .. })),
-        "materials": s.materials.len(),
+        "lights": s.lights.iter().map(light).collect::<Vec<_>>(),
+        "materials": materials,
         "warnings": s.warnings,
     })
 }
@@ -68,6 +132,17 @@ pub fn to_text(s: &Scene) -> String {
     }
     let _ = writeln!(o, "resolution  {}x{}", c.width, c.height);
     let _ = writeln!(o, "background  {}", v(s.background));
+    match s.ambient {
+        Some(a) => {
+            let _ = writeln!(o, "ambient     {}", v(a));
+        }
+        None => {
+            let _ = writeln!(
+                o,
+                "ambient     {DEFAULT_AMBIENT} (default; the scene sets none)"
+            );
+        }
+    }
     if b.is_empty() {
         let _ = writeln!(o, "bounds      (no bounded primitives)");
     } else {

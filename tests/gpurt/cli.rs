@@ -98,22 +98,47 @@ fn missing_scene_and_bad_arguments_fail_cleanly() {
 fn info_json_has_the_documented_keys() {
     let d = workdir("info");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    std::fs::write(
+        d.join("full.nff"),
+        format!("{SCENE}am 0.05 0.05 0.05\nal 0 0 5 1 0 0 0 1 0 0.5 0.5 0.5 2 3\n"),
+    )
+    .unwrap();
     let o = gpurt(&["info", "ball.nff", "--json"], &d);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
-    for key in [
-        "spheres",
-        "triangles",
-        "planes",
-        "cones",
-        "boxes",
-        "lights",
-        "materials",
-    ] {
+    for key in ["spheres", "triangles", "planes", "cones", "boxes"] {
         assert!(v[key].is_u64(), "{key} missing or not an integer in {v}");
     }
     assert_eq!(v["spheres"], 1);
     assert!(v["warnings"].is_array());
+    assert!(v["ambient"].is_null());
+    assert_eq!(v["ambient_used"], serde_json::json!([0.1, 0.1, 0.1]));
+
+    // docs/info-json.md: every light and material with its parameters, the ambient, and
+    // floats as the shortest decimal of the f32.
+    let o = gpurt(&["info", "full.nff", "--json"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(!text.contains("0.0500000"), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(v["ambient"], serde_json::json!([0.05, 0.05, 0.05]));
+    let lights = v["lights"].as_array().expect("lights array");
+    assert_eq!(lights.len(), 2, "{v}");
+    assert_eq!(lights[0]["kind"], "point");
+    assert_eq!(lights[0]["position"], serde_json::json!([2.0, -3.0, 4.0]));
+    assert!(lights[0]["color"].is_null());
+    assert_eq!(lights[1]["kind"], "area");
+    assert_eq!(lights[1]["samples"], serde_json::json!([2, 3]));
+    assert_eq!(lights[1]["color"], serde_json::json!([0.5, 0.5, 0.5]));
+    let m = &v["materials"][0];
+    assert_eq!(m["color"], serde_json::json!([1.0, 0.5, 0.2]));
+    assert_eq!(
+        (m["kd"].as_f64(), m["shine"].as_f64()),
+        (Some(0.8), Some(20.0))
+    );
+
+    let o = gpurt(&["info", "full.nff"], &d);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ambient     0.05 0.05 0.05"));
 }
 
 #[test]
