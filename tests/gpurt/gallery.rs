@@ -1,0 +1,70 @@
+//! The README's gallery matches what its commands render today: every image of
+//! `docs/gallery/list.txt` is rendered on the CPU and compared with the PNG in
+//! `docs/gallery/` under the GPU-vs-CPU thresholds. `docs/gallery/regenerate.sh` writes
+//! the images; this test never does, and a missing image fails it.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use gpurt::film::{self, Thresholds};
+use gpurt::pack::{self, RenderOptions};
+use gpurt::render::display_film;
+use gpurt::scene;
+
+use crate::common::shared_scenes;
+
+#[test]
+fn gallery_matches_its_commands() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let list = std::fs::read_to_string(root.join("docs/gallery/list.txt")).expect("list");
+    let needs_shared = list.contains("../shared/");
+    if needs_shared && shared_scenes().is_none() {
+        return;
+    }
+    let mut failures = Vec::new();
+    let mut checked = 0;
+    for line in list
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+    {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        let (name, scene_path) = (words[0], root.join(words[1]));
+        let scene = scene::load(&scene_path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let mut opts = RenderOptions::for_scene(&scene);
+        for pair in words[2..].chunks(2) {
+            let value: u32 = pair[1].parse().expect("a number");
+            match pair[0] {
+                "--width" => opts.width = value,
+                "--height" => opts.height = value,
+                "--spp" => opts.spp = value,
+                other => panic!("{name}: list.txt option {other} is not understood here"),
+            }
+        }
+        let buffers = pack::pack(&scene).expect("packs");
+        let globals = pack::globals(&scene, &buffers, &opts);
+        let never = AtomicBool::new(false);
+        let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("renders");
+        let rendered = display_film(&film, opts.aov).to_rgb8();
+        let png = root.join(format!("docs/gallery/{name}.png"));
+        let stored = match film::load_rgb8(Path::new(&png)) {
+            Ok(img) => img,
+            Err(e) => {
+                failures.push(format!("{name}: {e} (run docs/gallery/regenerate.sh)"));
+                continue;
+            }
+        };
+        let verdict = film::diff(&stored, &rendered, Thresholds::GPU_VS_CPU.tolerance_255)
+            .map_err(|e| e.to_string())
+            .and_then(|stats| {
+                Thresholds::GPU_VS_CPU
+                    .check(&stats)
+                    .map_err(|why| format!("{why} ({stats})"))
+            });
+        if let Err(why) = verdict {
+            failures.push(format!("{name}: {why}; run docs/gallery/regenerate.sh"));
+        }
+        checked += 1;
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(checked >= 9, "the gallery lists {checked} images");
+}
