@@ -203,8 +203,44 @@ fn diff_exit_codes_and_heat_map() {
         "A | B | difference"
     );
 
+    // With no flags the GPU-vs-CPU limits apply: the same images pass, different ones
+    // fail; a flag loosens the limit it names.
+    let o = gpurt(&["diff", "a.png", "same.png"], &d);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = gpurt(&["diff", "a.png", "b.png"], &d);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "b.png",
+            "--max-bad",
+            "1",
+            "--max-flip",
+            "1",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(1), "the bias limit still applies");
+
     let o = gpurt(&["diff", "a.png", "missing.png"], &d);
     assert_eq!(o.status.code(), Some(2));
+}
+
+/// A successful render prints no `error:` line (Mesa's device-select layer printed two on
+/// headless machines).
+#[test]
+fn a_successful_render_prints_no_error_lines() {
+    let d = workdir("no-error-lines");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-v", "-o", "out.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
 }
 
 /// Ctrl-C (SIGINT) stops a render cleanly: exit code 130, a message, and no output file.
