@@ -3,8 +3,10 @@
 //! Data flows one way: `scene` (readers, plain data) -> `bvh` -> `pack` (flat `#[repr(C)]`
 //! buffers) -> `gpu` (WGSL compute) or `cpu` (the reference) -> `film` (images, diffs).
 
+pub mod atomic;
 pub mod bench;
 pub mod bvh;
+pub mod compare;
 pub mod console;
 pub mod cpu;
 pub mod error;

@@ -10,11 +10,12 @@ use std::time::{Duration, Instant};
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
-use gpurt::film::{self, Thresholds};
+use gpurt::compare::{self, Thresholds};
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::pack::{self, RenderOptions};
 use gpurt::render::{self, Prepared};
 use gpurt::{Error, cpu, out, outln};
+use gpurt::{atomic, film};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Parser)]
@@ -270,10 +271,10 @@ fn diff(
 ) -> gpurt::Result<ExitCode> {
     let ia = film::load_rgb8(a)?;
     let ib = film::load_rgb8(b)?;
-    let stats = film::diff(&ia, &ib, Thresholds::GPU_VS_CPU.tolerance_255)?;
+    let stats = compare::diff(&ia, &ib, Thresholds::GPU_VS_CPU.tolerance_255)?;
     outln!("{stats}");
     if let Some(out) = output {
-        film::save_rgb8(&film::heat_map(&ia, &ib)?, out)?;
+        film::save_rgb8(&compare::heat_map(&ia, &ib)?, out)?;
         outln!("heat map written to {}", out.display());
     }
     // The project's GPU-vs-CPU limits unless loosened or tightened by the flags: a diff in
@@ -364,7 +365,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         .clone()
         .unwrap_or_else(|| default_output(scene_path));
     check_extension(&output)?;
-    film::check_writable(&output)?;
+    atomic::check_writable(&output)?;
     let start = Instant::now();
     let cancel = Arc::new(AtomicBool::new(false));
     {

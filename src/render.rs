@@ -8,8 +8,9 @@ use glam::Vec3;
 
 use image::RgbImage;
 
+use crate::compare::{self, Thresholds};
 use crate::error::Result;
-use crate::film::{self, Film, Thresholds};
+use crate::film::Film;
 use crate::gpu_types::{AOV_COST, AOV_DEPTH, GpuGlobals};
 use crate::pack::{self, SceneBuffers};
 use crate::scene::{self, Scene};
@@ -100,14 +101,14 @@ pub fn noise_floor(
             };
             let (nudged, _) = crate::cpu::render(buffers, &g, &|_| {}, &never)?;
             let nudged = display_film(&nudged, aov).to_rgb8();
-            Ok(film::diff(cpu, &nudged, Thresholds::GPU_VS_CPU.tolerance_255)?.frac_over)
+            Ok(compare::diff(cpu, &nudged, Thresholds::GPU_VS_CPU.tolerance_255)?.frac_over)
         })
         .try_fold(0.0, |a: f64, b: Result<f64>| Ok(a.max(b?)))
 }
 
 /// How a GPU image agrees with the CPU reference of the same render.
 pub struct Agreement {
-    pub stats: film::DiffStats,
+    pub stats: compare::DiffStats,
     /// The reference's one-ulp noise floor, measured only when the plain limits fail.
     pub noise_floor: Option<f64>,
     /// `Err` says which limit was exceeded.
@@ -125,7 +126,7 @@ pub fn agreement(
 ) -> Result<Agreement> {
     let cpu = display_film(cpu, globals.aov).to_rgb8();
     let gpu = display_film(gpu, globals.aov).to_rgb8();
-    let stats = film::diff(&cpu, &gpu, Thresholds::GPU_VS_CPU.tolerance_255)?;
+    let stats = compare::diff(&cpu, &gpu, Thresholds::GPU_VS_CPU.tolerance_255)?;
     let mut noise = None;
     let mut verdict = Thresholds::GPU_VS_CPU.check(&stats);
     if verdict.is_err() {

@@ -291,7 +291,7 @@ impl GpuRenderer {
         {
             // Best effort: a cache that cannot be written only costs time next run.
             let _ = std::fs::create_dir_all(file.parent().unwrap_or(file));
-            let _ = crate::film::write_atomic(file, &data);
+            let _ = crate::atomic::write_atomic(file, &data);
         }
         *self.compile_time.lock().expect("not poisoned") += start.elapsed();
         pipelines.insert(spec, pipeline.clone());

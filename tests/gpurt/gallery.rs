@@ -6,7 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use gpurt::film::{self, Thresholds};
+use gpurt::compare::{self, Thresholds};
+use gpurt::film;
 use gpurt::pack::{self, RenderOptions};
 use gpurt::render::display_film;
 use gpurt::scene;
@@ -53,7 +54,7 @@ fn gallery_matches_its_commands() {
                 continue;
             }
         };
-        let verdict = film::diff(&stored, &rendered, Thresholds::GPU_VS_CPU.tolerance_255)
+        let verdict = compare::diff(&stored, &rendered, Thresholds::GPU_VS_CPU.tolerance_255)
             .map_err(|e| e.to_string())
             .and_then(|stats| {
                 Thresholds::GPU_VS_CPU

@@ -10,7 +10,8 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::sync::atomic::AtomicBool;
 
-use gpurt::film::{self, DiffStats, Film, Thresholds};
+use gpurt::compare::{self, DiffStats, Thresholds};
+use gpurt::film::{self, Film};
 use gpurt::gpu::{GpuContext, GpuRenderer};
 use gpurt::gpu_types::*;
 use gpurt::pack::{self, RenderOptions, SceneBuffers};
@@ -87,7 +88,7 @@ fn compare(
     gpu: &RgbImage,
     floor: impl FnOnce() -> f64,
 ) -> Result<DiffStats, String> {
-    let stats = film::diff(cpu, gpu, Thresholds::GPU_VS_CPU.tolerance_255)
+    let stats = compare::diff(cpu, gpu, Thresholds::GPU_VS_CPU.tolerance_255)
         .map_err(|e| format!("{label}: {e}"))?;
     Thresholds::GPU_VS_CPU
         .check(&stats)
@@ -110,7 +111,7 @@ fn compare(
             let path = |suffix: &str| dir.join(format!("{stem}-{suffix}.png"));
             let _ = film::save_rgb8(cpu, &path("cpu"));
             let _ = film::save_rgb8(gpu, &path("actual"));
-            if let Ok(heat) = film::heat_map(cpu, gpu) {
+            if let Ok(heat) = compare::heat_map(cpu, gpu) {
                 let _ = film::save_rgb8(&heat, &path("difference"));
             }
             format!("{label}: {why} ({stats}); images in {}", dir.display())
