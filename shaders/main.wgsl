@@ -74,16 +74,13 @@ fn main(
     let py = tile.y + id.y;
     let g = globals;
     let slot = tile.out_base + id.y * tile.out_stride + id.x;
-    var rays = 0u;
-    var sum = vec3<f32>(0.0);
-    // Later passes continue the sum where the earlier ones left it, in sample order, so
-    // the result does not depend on how the samples were split.
-    if (tile.sample_start > 0u) {
-        let before = output[slot];
-        sum = before.color;
-        rays = before.rays & ~PIXEL_CUT_SHORT;
-        cut_short = (before.rays & PIXEL_CUT_SHORT) != 0u;
-    }
+    // Each pass continues the sum the earlier passes of this band left (the host clears
+    // the band first), in sample order, so the result does not depend on how the samples
+    // were split. The host divides by the number of samples.
+    let before = output[slot];
+    var sum = before.color;
+    var rays = before.rays & ~PIXEL_CUT_SHORT;
+    cut_short = (before.rays & PIXEL_CUT_SHORT) != 0u;
     let end = tile.sample_start + tile.sample_count;
     var s = tile.sample_start;
     for (; s < end; s++) {
@@ -98,9 +95,6 @@ fn main(
         }
     }
     cut_short = cut_short || s < end;
-    if (end == g.spp) {
-        sum /= f32(g.spp);
-    }
     output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
 }
 
@@ -110,7 +104,9 @@ fn main(
 // dispatches; each dispatch runs until RESUME_BUDGET loop iterations, so lavapipe's loop
 // limit is never reached. Every step does what `main`, `trace` and `direct` do, in the
 // same order, so the result is the same to the bit. (GPU only: the CPU has no such limit.)
-// tile.width: how many pixels; tile.sample_start: 0 on the first dispatch.
+// tile.width: how many pixels; tile.x and tile.y: the samples [x, y) to trace, from a sum
+// of zero (the host adds the result to what it holds); tile.sample_start: 0 on the first
+// dispatch.
 @compute @workgroup_size(64, 1, 1)
 fn resume(
     @builtin(global_invocation_id) gid: vec3<u32>,
@@ -127,7 +123,7 @@ fn resume(
     var st: PixelState;
     if (tile.sample_start == 0u) {
         st.sum = vec3<f32>(0.0);
-        st.sample = 0u;
+        st.sample = tile.x;
         st.rays = 0u;
         st.phase = PHASE_SAMPLE;
         st.cut = 0u;
@@ -144,8 +140,7 @@ fn resume(
         }
         work += 1u;
         if (st.phase == PHASE_SAMPLE) {
-            if (st.sample == g.spp) {
-                st.sum /= f32(g.spp);
+            if (st.sample == tile.y) {
                 st.phase = PHASE_DONE;
                 break;
             }

@@ -90,8 +90,8 @@ struct Tile {
     sample_count: u32,
 }
 
-// One traced pixel: the sum of its samples so far (their mean once the last pass is
-// done) and the number of rays traced for it, PIXEL_CUT_SHORT set if any loop was cut.
+// One traced pixel: the sum of its samples traced so far in this band (the host divides)
+// and the number of rays traced for it, PIXEL_CUT_SHORT set if any loop was cut.
 struct PixelOut {
     color: vec3<f32>,
     rays: u32,

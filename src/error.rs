@@ -37,6 +37,10 @@ pub enum Error {
     Gpu(String),
     #[error("{0}")]
     Image(String),
+    /// A library caller's render request that cannot be honoured (a frame the scene's
+    /// buffers or an accumulator do not fit).
+    #[error("{0}")]
+    Render(String),
     #[error("interrupted")]
     Interrupted,
 }

@@ -104,6 +104,60 @@ impl Film {
     }
 }
 
+/// Running sums of a frame's samples, for rendering it in steps (progressive rendering):
+/// tracing samples `0..k` and then `k..n` into one accumulator gives the image of `0..n`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Accumulator {
+    /// Per pixel, the sum of the samples traced so far.
+    pub sums: Film,
+    /// How many samples every pixel holds.
+    pub samples: u32,
+}
+
+impl Accumulator {
+    pub fn new(width: u32, height: u32) -> Self {
+        Accumulator {
+            sums: Film::new(width, height),
+            samples: 0,
+        }
+    }
+
+    /// The image so far: each sum divided by the number of samples, one f32 division as
+    /// the reference does it (so all n samples give the one-step image to the bit).
+    pub fn film(&self) -> Film {
+        let n = self.samples.max(1) as f32;
+        Film {
+            width: self.sums.width,
+            height: self.sums.height,
+            pixels: self.sums.pixels.iter().map(|p| p.map(|c| c / n)).collect(),
+        }
+    }
+
+    /// Refuses to add `samples` of a `width` x `height` frame of `spp` samples unless they
+    /// continue where this accumulator left off, within the frame's samples.
+    pub fn check(
+        &self,
+        width: u32,
+        height: u32,
+        spp: u32,
+        samples: &std::ops::Range<u32>,
+    ) -> Result<()> {
+        if (self.sums.width, self.sums.height) != (width, height) {
+            return Err(Error::Render(format!(
+                "the accumulator is {}x{}, the frame {width}x{height}",
+                self.sums.width, self.sums.height
+            )));
+        }
+        if samples.start != self.samples || samples.end <= samples.start || samples.end > spp {
+            return Err(Error::Render(format!(
+                "samples {samples:?} do not continue the {} already accumulated within the frame's {spp}",
+                self.samples
+            )));
+        }
+        Ok(())
+    }
+}
+
 /// Quantises one linear channel to 8 bits as the spec says: clamp to [0, 1], scale by 255,
 /// round to nearest (halves away from zero). NaN becomes 0 (Rust's float-to-int cast
 /// saturates and maps NaN to 0), so a stray NaN shows as black rather than aborting a save.

@@ -184,7 +184,7 @@ pub struct GpuTile {
 }
 
 /// A pixel whose work continues across dispatches (`resume` in `shaders/main.wgsl`). The
-/// host reads `sum` (the pixel's value once `phase` is `PHASE_DONE`), `rays` and `cut`;
+/// host reads `sum` (of the samples traced, once `phase` is `PHASE_DONE`), `rays` and `cut`;
 /// the rest is the shader's own bookkeeping, kept as words here (`ray_in` and `stack` hold
 /// WGSL `Pending` structs of 12 words).
 #[repr(C)]

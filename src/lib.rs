@@ -17,5 +17,6 @@ pub mod info;
 pub mod pack;
 pub mod render;
 pub mod scene;
+pub mod session;
 
 pub use error::{Error, Result};

@@ -55,9 +55,21 @@ pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
 
 /// One pixel's value (colour or AOV) and the rays traced for it.
 pub fn render_pixel(b: &Bindings, px: u32, py: u32, counts: &mut RayCounts) -> Vec3 {
+    sample_sum(b, px, py, 0..b.globals.spp, Vec3::ZERO, counts) / b.globals.spp as f32
+}
+
+/// `sum` plus samples `samples` of one pixel, added in sample order (as `main` in
+/// main.wgsl does within a band), and the rays traced for them.
+pub fn sample_sum(
+    b: &Bindings,
+    px: u32,
+    py: u32,
+    samples: std::ops::Range<u32>,
+    mut sum: Vec3,
+    counts: &mut RayCounts,
+) -> Vec3 {
     let g = b.globals;
-    let mut sum = Vec3::ZERO;
-    for s in 0..g.spp {
+    for s in samples {
         let mut rng = rng_seed(py * g.width + px, s, g.seed);
         let off = sample_offset(s, g.spp, &mut rng);
         let ray = camera_ray(g, px as f32 + off.x, py as f32 + off.y, &mut rng);
@@ -68,7 +80,7 @@ pub fn render_pixel(b: &Bindings, px: u32, py: u32, counts: &mut RayCounts) -> V
             aov(b, &ray)
         };
     }
-    sum / g.spp as f32
+    sum
 }
 
 /// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.

@@ -11,12 +11,15 @@ pub mod shade;
 pub mod traverse;
 pub mod types;
 
+use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
+
+use glam::Vec3;
 
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::film::Film;
+use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
 use types::Bindings;
@@ -33,8 +36,32 @@ pub fn render(
     progress: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<(Film, RayCounts)> {
-    let b = Bindings::new(buffers, globals);
+    let mut accum = Accumulator::new(globals.width, globals.height);
+    let counts = render_samples(
+        buffers,
+        globals,
+        0..globals.spp,
+        &mut accum,
+        progress,
+        cancel,
+    )?;
+    Ok((accum.film(), counts))
+}
+
+/// Traces samples `samples` of every pixel and adds them to `accum`, which must hold
+/// samples `0..samples.start` of the same frame: progressive rendering, whose result is
+/// the one-step image to the bit.
+pub fn render_samples(
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RayCounts> {
     let (w, h) = (globals.width, globals.height);
+    accum.check(w, h, globals.spp, &samples)?;
+    let b = Bindings::new(buffers, globals);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
         .collect();
@@ -48,23 +75,28 @@ pub fn render(
             let mut px = Vec::with_capacity((TILE * TILE) as usize);
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
-                    px.push(main::render_pixel(&b, x, y, &mut counts).to_array());
+                    let sum = Vec3::from(accum.sums.get(x, y));
+                    let sum = main::sample_sum(&b, x, y, samples.clone(), sum, &mut counts);
+                    px.push(sum.to_array());
                 }
             }
             progress(px.len() as u64);
             Some((px, counts))
         })
         .collect();
-    let mut film = Film::new(w, h);
     let mut total = RayCounts::default();
+    let mut sums = accum.sums.clone();
     for (&(x0, y0), tile) in tiles.iter().zip(done) {
         let (px, counts) = tile.ok_or(Error::Interrupted)?;
         total.add(&counts);
         let tw = (x0 + TILE).min(w) - x0;
         for (i, p) in px.into_iter().enumerate() {
             let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            film.pixels[(y * w + x) as usize] = p;
+            sums.pixels[(y * w + x) as usize] = p;
         }
     }
-    Ok((film, total))
+    // Only a finished pass changes the accumulator.
+    accum.sums = sums;
+    accum.samples = samples.end;
+    Ok(total)
 }

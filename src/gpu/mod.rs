@@ -8,4 +8,4 @@ pub mod shaders;
 pub mod specialization;
 
 pub use context::{GpuContext, open};
-pub use render::{GpuRenderer, GpuScene, render_gpu, trace, trace_on_device};
+pub use render::{GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_samples};

@@ -6,6 +6,7 @@
 //! buffer and read back before the next tile starts.
 
 use std::collections::HashMap;
+use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Mutex, OnceLock};
@@ -16,7 +17,7 @@ use wgpu::util::DeviceExt;
 use super::shaders;
 use super::specialization::Specialization;
 use crate::error::{Error, Result};
-use crate::film::Film;
+use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
     GpuGlobals, GpuPixelState, GpuTile, PHASE_DONE, PIXEL_CUT_SHORT, TEXTURE_WIDTH,
 };
@@ -103,12 +104,12 @@ impl Cut {
         (0..h).step_by(n as usize).map(move |y| (y, n.min(h - y)))
     }
 
-    /// The dispatches of the band starting at row `y0`: every tile for the first pass's
-    /// samples, then every tile for the next pass's, and so on.
-    fn tiles(&self, y0: u32, rows: u32) -> Vec<GpuTile> {
+    /// The dispatches of the band starting at row `y0` for `samples`: every tile for the
+    /// first pass's samples, then every tile for the next pass's, and so on.
+    fn tiles(&self, y0: u32, rows: u32, samples: &Range<u32>) -> Vec<GpuTile> {
         let (w, side) = (self.width, self.tile_side);
         let mut tiles = Vec::new();
-        for sample_start in (0..self.spp).step_by(self.pass_samples as usize) {
+        for sample_start in samples.clone().step_by(self.pass_samples as usize) {
             for y in (y0..y0 + rows).step_by(side as usize) {
                 for x in (0..w).step_by(side as usize) {
                     tiles.push(GpuTile {
@@ -119,7 +120,7 @@ impl Cut {
                         out_base: (y - y0) * w + x,
                         out_stride: w,
                         sample_start,
-                        sample_count: self.pass_samples.min(self.spp - sample_start),
+                        sample_count: self.pass_samples.min(samples.end - sample_start),
                     });
                 }
             }
@@ -344,7 +345,9 @@ impl GpuRenderer {
             let output = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("output"),
                 size: out_bytes,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
             let readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -420,7 +423,8 @@ impl GpuRenderer {
             1,
         )?;
         scoped(device, "compiling the shader", || {
-            let enc = encode_band(device, pipeline, &bound, &[GpuTile::default()]);
+            let mut enc = device.create_command_encoder(&Default::default());
+            encode_band(&mut enc, pipeline, &bound, &[GpuTile::default()]);
             queue.submit([enc.finish()]);
         })?;
         wait(device)?;
@@ -550,15 +554,16 @@ impl Resume {
 /// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
 const RESUME_CHUNK: usize = 16384;
 
-/// Finishes the pixels (x | y << 16) whose work did not fit one invocation, with the
-/// `resume` entry point, one dispatch after another until none is left, and writes them
-/// into the film. Returns their rays and how many were still cut short.
+/// Traces `samples` of the pixels (x | y << 16) whose work did not fit one invocation,
+/// with the `resume` entry point, one dispatch after another until none is left, and adds
+/// them to `sums`. Returns their rays and how many were still cut short.
 fn resume(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &GpuScene,
     pixels: &[u32],
-    film: &mut Film,
+    samples: &Range<u32>,
+    sums: &mut Film,
     cancel: &AtomicBool,
 ) -> Result<(u64, u64)> {
     let pipeline = scene.resume.pipeline(device)?;
@@ -609,6 +614,8 @@ fn resume(
                 return Err(Error::Interrupted);
             }
             let tile = GpuTile {
+                x: samples.start,
+                y: samples.end,
                 width: n,
                 sample_start: round,
                 ..Default::default()
@@ -642,7 +649,9 @@ fn resume(
         read_mapped(device, &state_back, state_bytes, |bytes| {
             let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
             for (&xy, st) in chunk.iter().zip(states) {
-                film.set(xy & 0xffff, xy >> 16, st.sum.to_array());
+                let (x, y) = (xy & 0xffff, xy >> 16);
+                let sum = sums.get(x, y);
+                sums.set(x, y, [0, 1, 2].map(|c| sum[c] + st.sum[c]));
                 rays += u64::from(st.rays);
                 cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
             }
@@ -686,8 +695,33 @@ pub fn trace(
     progress: &dyn Fn(u64),
     cancel: &AtomicBool,
 ) -> Result<(Film, u64)> {
+    let mut accum = Accumulator::new(scene.cut.width, scene.cut.height);
+    let rays = trace_samples(
+        device,
+        queue,
+        scene,
+        0..scene.cut.spp,
+        &mut accum,
+        progress,
+        cancel,
+    )?;
+    Ok((accum.film(), rays))
+}
+
+/// Traces samples `samples` of every pixel of an uploaded scene and adds them to
+/// `accum`, which must hold samples `0..samples.start` of the same frame (progressive
+/// rendering). Returns the rays traced.
+pub fn trace_samples(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
     let cut = scene.cut;
-    let mut film = Film::new(cut.width, cut.height);
+    accum.check(cut.width, cut.height, cut.spp, &samples)?;
     let (mut rays, mut cut_short) = (0u64, 0u64);
     // Pixels whose work did not fit one invocation, finished by `resume`.
     let mut unfinished = Vec::new();
@@ -697,17 +731,26 @@ pub fn trace(
         }
         let bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
         scoped(device, "tracing a band", || {
-            let mut enc = submit_band(device, queue, scene, y0, rows);
+            let mut enc = submit_band(device, queue, scene, y0, rows, &samples);
             enc.copy_buffer_to_buffer(&scene.bound.output, 0, &scene.bound.readback, 0, bytes);
             queue.submit([enc.finish()]);
         })?;
-        let (band_rays, band_cut) = read_band(device, &scene.bound.readback, bytes, y0, &mut film)?;
+        let (band_rays, band_cut) =
+            read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
         rays += band_rays;
         unfinished.extend(band_cut);
         progress(u64::from(cut.width) * u64::from(rows));
     }
     if !unfinished.is_empty() {
-        let (more_rays, cut) = resume(device, queue, scene, &unfinished, &mut film, cancel)?;
+        let (more_rays, cut) = resume(
+            device,
+            queue,
+            scene,
+            &unfinished,
+            &samples,
+            &mut accum.sums,
+            cancel,
+        )?;
         rays += more_rays;
         cut_short += cut;
     }
@@ -721,7 +764,8 @@ pub fn trace(
             device.adapter_info().name
         )));
     }
-    Ok((film, rays))
+    accum.samples = samples.end;
+    Ok(rays)
 }
 
 /// Traces an uploaded scene's image and waits for the GPU, reading nothing back: the
@@ -729,29 +773,35 @@ pub fn trace(
 pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
     for (y0, rows) in scene.cut.bands() {
         scoped(device, "tracing a band", || {
-            let enc = submit_band(device, queue, scene, y0, rows);
+            let enc = submit_band(device, queue, scene, y0, rows, &(0..scene.cut.spp));
             queue.submit([enc.finish()]);
         })?;
     }
     wait(device)
 }
 
-/// Writes the tiles of the band at row `y0` and encodes their dispatches.
+/// Writes the tiles of the band at row `y0` and encodes the clearing of its output (the
+/// passes add to it) and their dispatches.
 fn submit_band(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &GpuScene,
     y0: u32,
     rows: u32,
+    samples: &Range<u32>,
 ) -> wgpu::CommandEncoder {
-    let tiles = scene.cut.tiles(y0, rows);
+    let tiles = scene.cut.tiles(y0, rows, samples);
     let stride = scene.bound.tile_stride as usize;
     let mut bytes = vec![0u8; tiles.len() * stride];
     for (chunk, tile) in bytes.chunks_mut(stride).zip(&tiles) {
         chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
     }
     queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
-    encode_band(device, &scene.pipeline, &scene.bound, &tiles)
+    let band_bytes = u64::from(scene.cut.width) * u64::from(rows) * PIXEL_BYTES;
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
+    encode_band(&mut enc, &scene.pipeline, &scene.bound, &tiles);
+    enc
 }
 
 /// Device memory a scene's upload takes: the node and primitive textures (padded to
@@ -840,15 +890,14 @@ fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
-/// A command encoder holding one compute pass with a dispatch per tile, each tile read
-/// from its slot of the tile buffer (written beforehand, in the same order).
+/// Encodes one compute pass with a dispatch per tile, each tile read from its slot of the
+/// tile buffer (written beforehand, in the same order).
 fn encode_band(
-    device: &wgpu::Device,
+    enc: &mut wgpu::CommandEncoder,
     pipeline: &wgpu::ComputePipeline,
     bound: &Bound,
     tiles: &[GpuTile],
-) -> wgpu::CommandEncoder {
-    let mut enc = device.create_command_encoder(&Default::default());
+) {
     {
         let mut pass = enc.begin_compute_pass(&Default::default());
         pass.set_pipeline(pipeline);
@@ -858,7 +907,6 @@ fn encode_band(
             pass.dispatch_workgroups(groups[0], groups[1], 1);
         }
     }
-    enc
 }
 
 /// Blocks until the GPU has finished everything submitted.
@@ -869,31 +917,33 @@ fn wait(device: &wgpu::Device) -> Result<()> {
         .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
 }
 
-/// Maps the readback buffer, copies the band (full rows from `y0`) into the film,
-/// returns its ray count and the pixels (x | y << 16) whose work was cut short, which
-/// are left to `resume` and their rays not counted.
+/// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;
+/// returns its ray count and the pixels (x | y << 16) whose work was cut short, which are
+/// left to `resume` (neither their sums nor their rays are counted).
 fn read_band(
     device: &wgpu::Device,
     readback: &wgpu::Buffer,
     bytes: u64,
     y0: u32,
-    film: &mut Film,
+    sums: &mut Film,
 ) -> Result<(u64, Vec<u32>)> {
-    let width = film.width as usize;
+    let width = sums.width as usize;
     read_mapped(device, readback, bytes, |view| {
         let (mut rays, mut cut) = (0u64, Vec::new());
         let px: &[[u32; 4]] = bytemuck::cast_slice(view);
         let start = y0 as usize * width;
-        for (i, (out, p)) in film.pixels[start..start + px.len()]
+        for (i, (out, p)) in sums.pixels[start..start + px.len()]
             .iter_mut()
             .zip(px)
             .enumerate()
         {
-            *out = [p[0], p[1], p[2]].map(f32::from_bits);
             if p[3] & PIXEL_CUT_SHORT != 0 {
                 let j = start + i;
                 cut.push((j % width) as u32 | ((j / width) as u32) << 16);
             } else {
+                for c in 0..3 {
+                    out[c] += f32::from_bits(p[c]);
+                }
                 rays += u64::from(p[3]);
             }
         }

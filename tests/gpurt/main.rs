@@ -8,3 +8,4 @@ mod gallery;
 mod gpu;
 mod layout;
 mod parse;
+mod session;

@@ -1,0 +1,128 @@
+//! One scene, many frames: the `Renderer` trait both backends implement. A renderer holds
+//! a packed scene (uploaded once on the GPU) and traces frames against it, in steps if
+//! wanted: samples `0..k` and then `k..n` into one `Accumulator` give the image of `0..n`,
+//! to the bit on the CPU and within the GPU-vs-CPU limits on the GPU. `docs/api.md` has
+//! an example.
+
+use std::ops::Range;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use crate::error::Result;
+use crate::film::Accumulator;
+use crate::gpu::{self, GpuContext, GpuScene};
+use crate::gpu_types::GpuGlobals;
+use crate::pack::SceneBuffers;
+
+/// A backend that traces frames of one packed scene.
+pub trait Renderer {
+    /// One line naming what renders: the adapter, or the CPU and its threads.
+    fn describe(&self) -> String;
+
+    /// Traces samples `samples` of every pixel of the frame `globals` describes (camera,
+    /// size, samples per pixel, depth, AOV) and adds them to `accum`, which must hold
+    /// samples `0..samples.start` of the same frame. Returns the rays traced, counted
+    /// alike by both backends. `progress` gets the pixels finished as they finish;
+    /// `cancel` stops the render with `Error::Interrupted`, leaving `accum` as it was.
+    fn render(
+        &mut self,
+        globals: &GpuGlobals,
+        samples: Range<u32>,
+        accum: &mut Accumulator,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<u64>;
+}
+
+/// The CPU reference renderer, on all cores (rayon).
+pub struct CpuRenderer {
+    scene: Arc<SceneBuffers>,
+}
+
+impl CpuRenderer {
+    pub fn new(scene: Arc<SceneBuffers>) -> Self {
+        CpuRenderer { scene }
+    }
+}
+
+impl Renderer for CpuRenderer {
+    fn describe(&self) -> String {
+        format!("CPU, {} threads", rayon::current_num_threads())
+    }
+
+    fn render(
+        &mut self,
+        globals: &GpuGlobals,
+        samples: Range<u32>,
+        accum: &mut Accumulator,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<u64> {
+        // The same guard as the GPU's: a frame the fixed-size stacks cannot trace is an
+        // error, not a panic.
+        self.scene.check(globals)?;
+        crate::cpu::render_samples(&self.scene, globals, samples, accum, progress, cancel)
+            .map(|c| c.total())
+    }
+}
+
+/// The GPU renderer on its own device. The scene is uploaded on the first frame and
+/// again only when the frame's settings change (a new camera re-uploads it today; only
+/// its uniform would need to change).
+pub struct GpuSession {
+    ctx: GpuContext,
+    renderer: gpu::GpuRenderer,
+    scene: Arc<SceneBuffers>,
+    uploaded: Option<(GpuGlobals, GpuScene)>,
+}
+
+impl GpuSession {
+    /// Opens `ctx`'s device for `scene`; shader pipelines are compiled on first use (and
+    /// cached on disk where the device allows, keyed by the adapter).
+    pub fn new(ctx: GpuContext, scene: Arc<SceneBuffers>) -> Result<Self> {
+        let renderer = gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
+        Ok(GpuSession {
+            ctx,
+            renderer,
+            scene,
+            uploaded: None,
+        })
+    }
+
+    /// Time spent compiling shaders so far.
+    pub fn compile_time(&self) -> std::time::Duration {
+        self.renderer.compile_time()
+    }
+
+    /// Compiles the pipeline a frame needs, so that it can be timed apart from the frame.
+    pub fn prepare(&self, globals: &GpuGlobals) -> Result<()> {
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        self.renderer
+            .prepare(device, queue, &self.scene, globals)
+            .map(drop)
+    }
+}
+
+impl Renderer for GpuSession {
+    fn describe(&self) -> String {
+        self.ctx.describe()
+    }
+
+    fn render(
+        &mut self,
+        globals: &GpuGlobals,
+        samples: Range<u32>,
+        accum: &mut Accumulator,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
+    ) -> Result<u64> {
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let current = self.uploaded.as_ref().is_some_and(|(g, _)| g == globals);
+        if !current {
+            let uploaded = self.renderer.upload(device, queue, &self.scene, globals)?;
+            self.uploaded = Some((*globals, uploaded));
+        }
+        let (_, uploaded) = self.uploaded.as_ref().expect("uploaded above");
+        gpu::trace_samples(device, queue, uploaded, samples, accum, progress, cancel)
+    }
+}

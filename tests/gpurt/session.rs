@@ -1,0 +1,125 @@
+//! The render-session API: progressive rendering on both backends, and its guards.
+
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use gpurt::compare::{self, Thresholds};
+use gpurt::film::Accumulator;
+use gpurt::gpu_types::GpuGlobals;
+use gpurt::pack::{self, RenderOptions, SceneBuffers};
+use gpurt::session::{CpuRenderer, GpuSession, Renderer};
+use gpurt::{Error, scene};
+
+use crate::common::own_scenes;
+
+/// glass.nff at 64x48 and 8 samples: refraction, reflection, several lights.
+fn frame() -> (Arc<SceneBuffers>, GpuGlobals) {
+    let scene = scene::load(&own_scenes().join("glass.nff")).expect("loads");
+    let buffers = pack::pack(&scene).expect("packs");
+    let opts = RenderOptions {
+        width: 64,
+        height: 48,
+        spp: 8,
+        ..RenderOptions::for_scene(&scene)
+    };
+    let globals = pack::globals(&scene, &buffers, &opts);
+    (Arc::new(buffers), globals)
+}
+
+/// Samples in steps (3, then 5) and in one go, on one renderer: the two accumulators'
+/// films, and the rays traced by each.
+fn in_steps_and_at_once(r: &mut dyn Renderer, g: &GpuGlobals) -> [(Accumulator, u64); 2] {
+    let never = AtomicBool::new(false);
+    let mut steps = Accumulator::new(g.width, g.height);
+    let rays = r
+        .render(g, 0..3, &mut steps, &|_| {}, &never)
+        .expect("renders")
+        + r.render(g, 3..8, &mut steps, &|_| {}, &never)
+            .expect("renders");
+    let mut once = Accumulator::new(g.width, g.height);
+    let rays_once = r
+        .render(g, 0..8, &mut once, &|_| {}, &never)
+        .expect("renders");
+    [(steps, rays), (once, rays_once)]
+}
+
+#[test]
+fn progressive_cpu_rendering_is_the_one_step_image_to_the_bit() {
+    let (buffers, g) = frame();
+    let mut cpu = CpuRenderer::new(buffers.clone());
+    let [(steps, rays), (once, rays_once)] = in_steps_and_at_once(&mut cpu, &g);
+    assert_eq!(steps.samples, 8);
+    assert_eq!(steps.film(), once.film());
+    assert_eq!(rays, rays_once);
+    // And the one-step image is the reference renderer's.
+    let never = AtomicBool::new(false);
+    let (film, counts) = gpurt::cpu::render(&buffers, &g, &|_| {}, &never).expect("renders");
+    assert_eq!(once.film(), film);
+    assert_eq!(rays_once, counts.total());
+}
+
+#[test]
+fn progressive_gpu_rendering_agrees_with_one_step_and_the_cpu() {
+    let ctx = match gpurt::gpu::open(None) {
+        Ok(ctx) => ctx,
+        Err(e) if std::env::var("GPURT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("GPURT_REQUIRE_GPU=1 but: {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping: {e}");
+            return;
+        }
+    };
+    let (buffers, g) = frame();
+    let mut gpu = GpuSession::new(ctx, buffers.clone()).expect("session");
+    let [(steps, rays), (once, rays_once)] = in_steps_and_at_once(&mut gpu, &g);
+    assert_eq!(rays, rays_once);
+    let mut cpu = CpuRenderer::new(buffers);
+    let mut reference = Accumulator::new(g.width, g.height);
+    let never = AtomicBool::new(false);
+    let cpu_rays = cpu
+        .render(&g, 0..8, &mut reference, &|_| {}, &never)
+        .expect("renders");
+    assert_eq!(rays, cpu_rays);
+    let image = |a: &Accumulator| a.film().to_rgb8();
+    for (what, a, b) in [
+        ("steps vs at once", &once, &steps),
+        ("GPU vs CPU", &reference, &steps),
+    ] {
+        let stats = compare::diff(&image(a), &image(b), 2).expect("same size");
+        Thresholds::GPU_VS_CPU
+            .check(&stats)
+            .unwrap_or_else(|why| panic!("{what}: {why} ({stats})"));
+    }
+}
+
+/// Samples that do not continue the accumulator, and a depth the stacks cannot hold, are
+/// errors on the CPU path too, not panics.
+#[test]
+fn a_renderer_refuses_what_it_cannot_do() {
+    let (buffers, g) = frame();
+    let mut cpu = CpuRenderer::new(buffers);
+    let never = AtomicBool::new(false);
+    let mut accum = Accumulator::new(g.width, g.height);
+    for samples in [2..4, 0..9, 0..0] {
+        let err = cpu.render(&g, samples.clone(), &mut accum, &|_| {}, &never);
+        assert!(matches!(err, Err(Error::Render(_))), "{samples:?}: {err:?}");
+    }
+    let mut small = Accumulator::new(8, 8);
+    assert!(matches!(
+        cpu.render(&g, 0..8, &mut small, &|_| {}, &never),
+        Err(Error::Render(_))
+    ));
+    let deep = GpuGlobals {
+        max_depth: 1000,
+        ..g
+    };
+    assert!(
+        cpu.render(&deep, 0..8, &mut accum, &|_| {}, &never)
+            .is_err()
+    );
+    assert_eq!(
+        accum.samples, 0,
+        "a refused render leaves the accumulator as it was"
+    );
+}
