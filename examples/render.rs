@@ -1,0 +1,43 @@
+//! Renders a scene progressively through the library: `cargo run --release --example
+//! render -- scenes/spheres.nff out.png`. Uses the GPU when there is an adapter, else the
+//! CPU; traces 16 samples per pixel in four steps of 4, saving the image after each.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use gpurt::film::Accumulator;
+use gpurt::pack::{self, RenderOptions};
+use gpurt::session::{CpuRenderer, GpuSession, Renderer};
+
+fn main() -> gpurt::Result<()> {
+    let mut args = std::env::args().skip(1);
+    let scene_path = PathBuf::from(args.next().unwrap_or("scenes/spheres.nff".into()));
+    let out = PathBuf::from(args.next().unwrap_or("out.png".into()));
+
+    // Read and pack the scene; the tree is not needed once the frame is described.
+    let scene = gpurt::scene::load(&scene_path)?;
+    let buffers = Arc::new(pack::pack(&scene)?);
+    let opts = RenderOptions {
+        spp: 16,
+        ..RenderOptions::for_scene(&scene)
+    };
+    let frame = pack::globals(&scene, &buffers, &opts);
+    drop(scene);
+
+    let mut renderer: Box<dyn Renderer> = match gpurt::gpu::open(None) {
+        Ok(ctx) => Box::new(GpuSession::new(ctx, buffers)?),
+        Err(_) => Box::new(CpuRenderer::new(buffers)),
+    };
+    println!("rendering on {}", renderer.describe());
+
+    let mut accum = Accumulator::new(frame.width, frame.height);
+    let never = AtomicBool::new(false);
+    for step in 0..4 {
+        let samples = step * 4..step * 4 + 4;
+        let rays = renderer.render(&frame, samples.clone(), &mut accum, &|_| {}, &never)?;
+        accum.film().save(&out)?;
+        println!("samples {samples:?}: {rays} rays, saved {}", out.display());
+    }
+    Ok(())
+}
