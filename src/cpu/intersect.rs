@@ -16,7 +16,7 @@ pub fn safe_inverse(d: Vec3) -> Vec3 {
 
 /// Ray (unit direction) against a sphere, in the form that keeps precision for small
 /// spheres far from the origin (the chord's half-length from the closest approach).
-pub fn sphere(center: Vec3, radius: f32, ray: &Ray) -> Vec2 {
+pub fn intersect_sphere(center: Vec3, radius: f32, ray: &Ray) -> Vec2 {
     let oc = ray.origin - center;
     let b = oc.dot(ray.dir);
     let qc = oc - b * ray.dir;
@@ -29,7 +29,7 @@ pub fn sphere(center: Vec3, radius: f32, ray: &Ray) -> Vec2 {
 }
 
 /// Möller-Trumbore, two-sided: `(t, u, v)` with `t = NO_HIT` on a miss.
-pub fn triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
+pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
     let (e1, e2) = (p.p1, p.p2);
     let pvec = ray.dir.cross(e2);
     let det = e1.dot(pvec);
@@ -53,7 +53,7 @@ pub fn triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
 /// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
 /// Solved from the ray's closest approach to the cone's middle, as `sphere` is: far from a
 /// thin cone the quadratic's terms would otherwise cancel away the hit's precision.
-pub fn cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
+pub fn intersect_cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
     let axis = p.p1 - p.p0;
     let height = axis.length();
     let a = axis / height;
@@ -131,14 +131,14 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
 }
 
 /// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.
-pub fn prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
+pub fn intersect_prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
     match p.kind() {
-        PRIM_SPHERE => sphere(p.p0, p.f0, ray).extend(0.0).extend(0.0),
+        PRIM_SPHERE => intersect_sphere(p.p0, p.f0, ray).extend(0.0).extend(0.0),
         PRIM_TRIANGLE => {
-            let h = triangle(p, ray);
+            let h = intersect_triangle(p, ray);
             Vec4::new(h.x, NO_HIT, h.y, h.z)
         }
-        PRIM_CONE => cone(p, ray).extend(0.0).extend(0.0),
+        PRIM_CONE => intersect_cone(p, ray).extend(0.0).extend(0.0),
         _ => slabs(p.p0, p.p1, ray.origin, inv_dir)
             .extend(0.0)
             .extend(0.0),
@@ -146,7 +146,7 @@ pub fn prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
 }
 
 /// Ray against the plane `dot(n, x) = d`.
-pub fn plane(pl: &GpuPlane, ray: &Ray) -> f32 {
+pub fn intersect_plane(pl: &GpuPlane, ray: &Ray) -> f32 {
     let denom = pl.normal.dot(ray.dir);
     if denom == 0.0 {
         return NO_HIT;

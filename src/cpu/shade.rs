@@ -82,7 +82,7 @@ fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) ->
     }
 }
 
-fn reflect(d: Vec3, n: Vec3) -> Vec3 {
+fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
 
@@ -144,7 +144,7 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
     let g = b.globals;
     let m = &b.materials[s.material as usize];
     let mut colour = g.ambient * m.kd * m.color;
-    let r = reflect(dir, s.ns);
+    let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
             if let Some(c) = light_sample(b, s, m, r, light, k, rng) {
@@ -163,7 +163,7 @@ pub fn refracted_dir(s: &Surface, m: &GpuMaterial, dir: Vec3) -> Vec3 {
     let cos_i = -s.ns.dot(dir);
     let k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
     if k < 0.0 {
-        reflect(dir, s.ns)
+        reflect_dir(dir, s.ns)
     } else {
         (eta * dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
     }
@@ -201,7 +201,7 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
         }
         let m = &b.materials[s.material as usize];
         if m.ks > 0.0 {
-            let dir = reflect(ray.dir, s.ns);
+            let dir = reflect_dir(ray.dir, s.ns);
             counts.reflected += 1;
             stack[sp] = secondary(&s, dir, &ray_in, m.ks, g.epsilon);
             sp += 1;

@@ -89,7 +89,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         cost: 0,
     };
     for (i, pl) in b.planes.iter().enumerate() {
-        let t = intersect::plane(pl, ray);
+        let t = intersect::intersect_plane(pl, ray);
         if t > tmin && t < hit.t {
             hit.t = t;
             hit.prim = PLANE_FLAG | i as u32;
@@ -107,7 +107,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         }
         for i in first..first + count {
             let p = &b.prims[i as usize];
-            let t = intersect::prim(p, ray, inv_dir);
+            let t = intersect::intersect_prim(p, ray, inv_dir);
             let t_first = first_in(t, tmin, hit.t);
             if t_first != NO_HIT {
                 hit.t = t_first;
@@ -128,7 +128,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
 pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
     let mut light = Vec3::ONE;
     for pl in b.planes {
-        let t = intersect::plane(pl, ray);
+        let t = intersect::intersect_plane(pl, ray);
         if t > 0.0 && t < tmax {
             let m = &b.materials[pl.material as usize];
             if m.t <= 0.0 {
@@ -150,7 +150,7 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
         }
         for i in first..first + count {
             let p = &b.prims[i as usize];
-            let t = intersect::prim(p, ray, inv_dir);
+            let t = intersect::intersect_prim(p, ray, inv_dir);
             let crossings = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
             if crossings > 0 {
                 let m = &b.materials[p.material() as usize];

@@ -147,13 +147,13 @@ fn brute_closest(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> (f32, u32) {
     let inv_dir = intersect::safe_inverse(ray.dir);
     let (mut best_t, mut best) = (tmax, NO_PRIM);
     for (i, pl) in b.planes.iter().enumerate() {
-        let t = intersect::plane(pl, ray);
+        let t = intersect::intersect_plane(pl, ray);
         if t > tmin && t < best_t {
             (best_t, best) = (t, PLANE_FLAG | i as u32);
         }
     }
     for (i, p) in b.prims.iter().enumerate() {
-        let t = intersect::prim(p, ray, inv_dir);
+        let t = intersect::intersect_prim(p, ray, inv_dir);
         for t in [t.x, t.y] {
             if t > tmin && t < best_t {
                 (best_t, best) = (t, i as u32);
@@ -170,13 +170,13 @@ fn brute_transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut crossings: Vec<u32> = Vec::new();
     for pl in b.planes {
-        let t = intersect::plane(pl, ray);
+        let t = intersect::intersect_plane(pl, ray);
         if t > 0.0 && t < tmax {
             crossings.push(pl.material);
         }
     }
     for p in b.prims {
-        let t = intersect::prim(p, ray, inv_dir);
+        let t = intersect::intersect_prim(p, ray, inv_dir);
         for t in [t.x, t.y] {
             if t > 0.0 && t < tmax {
                 crossings.push(p.material());
@@ -197,9 +197,9 @@ fn brute_transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
 /// The distance at which primitive or plane `id` is first crossed in `(tmin, tmax)`.
 fn distance_to(b: &Bindings, ray: &Ray, id: u32, tmin: f32, tmax: f32) -> f32 {
     if id & PLANE_FLAG != 0 {
-        return intersect::plane(&b.planes[(id & !PLANE_FLAG) as usize], ray);
+        return intersect::intersect_plane(&b.planes[(id & !PLANE_FLAG) as usize], ray);
     }
-    let t = intersect::prim(&b.prims[id as usize], ray, intersect::safe_inverse(ray.dir));
+    let t = intersect::intersect_prim(&b.prims[id as usize], ray, intersect::safe_inverse(ray.dir));
     [t.x, t.y]
         .into_iter()
         .find(|&t| t > tmin && t < tmax)
@@ -234,7 +234,7 @@ fn all_transmitting(buffers: &SceneBuffers) -> SceneBuffers {
 fn stray_crossing(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Option<(usize, f32)> {
     let inv_dir = intersect::safe_inverse(ray.dir);
     for (i, p) in b.prims.iter().enumerate() {
-        let t = intersect::prim(p, ray, inv_dir);
+        let t = intersect::intersect_prim(p, ray, inv_dir);
         for t in [t.x, t.y] {
             if t > tmin && t < tmax {
                 let x = ray.origin + t * ray.dir;
@@ -581,7 +581,7 @@ fn worst_surface_error(
             origin,
             dir: (rng.point_in(pb.min, pb.max) - origin).normalize(),
         };
-        let t = intersect::prim(p, &ray, intersect::safe_inverse(ray.dir)).x;
+        let t = intersect::intersect_prim(p, &ray, intersect::safe_inverse(ray.dir)).x;
         if t > 0.0 && t < NO_HIT {
             hits += 1;
             worst = worst.max(off_surface(ray.origin + t * ray.dir).abs() / radius);

@@ -1,5 +1,6 @@
 //! Every struct shared with WGSL has the same size and field offsets in Rust and in the
-//! shader, as naga's layouter computes them for the joined source.
+//! shader, as naga's layouter computes them for the joined source; the shared constants
+//! agree; and every WGSL function has its CPU twin of the same name, in the same order.
 
 use std::mem::{offset_of, size_of};
 
@@ -178,5 +179,103 @@ fn shared_constants_match() {
             naga::Literal::F32(value),
             "{name}"
         );
+    }
+}
+
+/// WGSL functions without a CPU twin, and why.
+const WGSL_ONLY: &[(&str, &str)] = &[
+    ("prim_kind", "reads the tag the CPU matches on directly"),
+    ("prim_material", "reads the tag the CPU masks directly"),
+    ("texel", "texture fetch: the CPU indexes the arrays"),
+    ("load_node", "texture fetch: the CPU indexes the arrays"),
+    ("load_prim", "texture fetch: the CPU indexes the arrays"),
+    ("load_prim_tag", "texture fetch: the CPU indexes the arrays"),
+    ("node_count", "bit field the CPU's GpuNode methods read"),
+    ("node_axis", "bit field the CPU's GpuNode methods read"),
+    ("cone_valid", "inlined in the CPU's intersect_cone"),
+    ("max_element", "glam's Vec3::max_element"),
+    ("min_element", "glam's Vec3::min_element"),
+    ("sign_of", "f32::signum"),
+    (
+        "main",
+        "the entry point; the CPU's is render_pixel / sample_sum",
+    ),
+    (
+        "resume",
+        "GPU only: continues pixels cut short by a driver's loop limit",
+    ),
+];
+
+/// CPU functions without a WGSL twin, and why.
+const CPU_ONLY: &[(&str, &str)] = &[
+    (
+        "new",
+        "constructors (Walk, Bindings); WGSL writes the struct",
+    ),
+    (
+        "total",
+        "RayCounts: the CPU counts rays by kind, the GPU one total",
+    ),
+    (
+        "add",
+        "RayCounts: the CPU counts rays by kind, the GPU one total",
+    ),
+    ("render_pixel", "the CPU's per-pixel driver, `main` in WGSL"),
+    ("sample_sum", "the CPU's per-pixel driver, `main` in WGSL"),
+];
+
+/// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.
+fn function_names(src: &str) -> Vec<String> {
+    src.lines()
+        .take_while(|l| !l.starts_with("#[cfg(test)]"))
+        .filter_map(|l| {
+            let l = l.trim_start();
+            let l = l
+                .strip_prefix("pub(crate) ")
+                .or_else(|| l.strip_prefix("pub "))
+                .unwrap_or(l);
+            let rest = l.strip_prefix("fn ")?;
+            let end = rest.find(|c: char| !(c.is_alphanumeric() || c == '_'))?;
+            Some(rest[..end].to_string())
+        })
+        .collect()
+}
+
+/// Every WGSL function has a CPU function of the same name in the same-named module, in
+/// the same order, but for the documented exceptions (and naga knows every WGSL one).
+#[test]
+fn wgsl_functions_have_cpu_twins_in_order() {
+    let (module, _) = shaders::validate().expect("shader validates");
+    let known: Vec<String> = module
+        .functions
+        .iter()
+        .filter_map(|(_, f)| f.name.clone())
+        .chain(module.entry_points.iter().map(|e| e.name.clone()))
+        .collect();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seen = Vec::new();
+    for (file, text) in shaders::FILES {
+        let stem = file.trim_end_matches(".wgsl");
+        let wgsl = function_names(text);
+        for f in &wgsl {
+            assert!(known.contains(f), "{file}: naga does not list {f}");
+        }
+        seen.extend(wgsl.iter().cloned());
+        let cpu_src = std::fs::read_to_string(root.join(format!("src/cpu/{stem}.rs")))
+            .expect("the CPU twin exists");
+        let keep = |names: Vec<String>, except: &[(&str, &str)]| -> Vec<String> {
+            names
+                .into_iter()
+                .filter(|n| !except.iter().any(|(e, _)| e == n))
+                .collect()
+        };
+        assert_eq!(
+            keep(wgsl, WGSL_ONLY),
+            keep(function_names(&cpu_src), CPU_ONLY),
+            "shaders/{file} and src/cpu/{stem}.rs define different functions (or in another order)"
+        );
+    }
+    for (name, _) in WGSL_ONLY {
+        assert!(seen.iter().any(|s| s == name), "stale exception {name}");
     }
 }
