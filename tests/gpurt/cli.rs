@@ -90,8 +90,15 @@ fn missing_scene_and_bad_arguments_fail_cleanly() {
     let o = gpurt(&["nope.nff"], &d);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("nope.nff"), "{}", stderr(&o));
-    let o = gpurt(&["x.nff", "--depth", "99"], &d);
-    assert!(!o.status.success());
+    // A bad argument is refused for itself: the scene exists and is valid.
+    std::fs::write(d.join("x.nff"), SCENE).unwrap();
+    let o = gpurt(&["x.nff", "--depth", "99", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--depth"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("99"), "{}", stderr(&o));
+    assert!(!d.join("x.png").exists());
+    let o = gpurt(&["x.nff", "--backend", "cpu"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
 
 #[test]

@@ -9,6 +9,18 @@ pub fn in_ci() -> bool {
     std::env::var("CI").is_ok_and(|v| v == "true")
 }
 
+/// Says that a test skips, and why, on standard error itself: the test harness captures
+/// `eprintln!` of passing tests, which would hide the skip. Under `CI=true` (shared scenes)
+/// and `GPURT_REQUIRE_GPU=1` (an adapter) the callers fail instead of skipping.
+pub fn skip(why: &str) {
+    use std::io::Write;
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("a test")
+        .to_string();
+    let _ = writeln!(std::io::stderr(), "SKIPPED {test}: {why}");
+}
+
 /// `../shared/scenes` next to the checkout. When it is missing, tests skip with a message,
 /// except under `CI=true`, where they fail.
 pub fn shared_scenes() -> Option<PathBuf> {
@@ -18,7 +30,7 @@ pub fn shared_scenes() -> Option<PathBuf> {
     } else if in_ci() {
         panic!("{} is missing (required under CI=true)", dir.display());
     } else {
-        eprintln!("skipping: {} is missing", dir.display());
+        skip(&format!("{} is missing", dir.display()));
         None
     }
 }
