@@ -1,4 +1,4 @@
-//! CPU twin of `shaders/shade.wgsl`: the Whitted model of docs/shading.md, iterative with
+//! CPU twin of `shaders/shade.wgsl`: the Whitted model of ../shared/docs/shading.md, iterative with
 //! an explicit stack of pending rays, pushed and popped in the same order as the shader.
 
 use glam::Vec3;
