@@ -53,7 +53,7 @@ fn aov(ray: Ray) -> vec3<f32> {
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
 }
 
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn main(
     @builtin(workgroup_id) group: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
@@ -64,8 +64,8 @@ fn main(
     let block = local_index / 8u;
     let lane = local_index % 8u;
     let id = vec2<u32>(
-        group.x * 8u + (block % 2u) * 4u + lane % 4u,
-        group.y * 8u + (block / 2u) * 2u + lane / 4u,
+        group.x * WORKGROUP_SIDE + (block % 2u) * 4u + lane % 4u,
+        group.y * WORKGROUP_SIDE + (block / 2u) * 2u + lane / 4u,
     );
     if (id.x >= tile.width || id.y >= tile.height) {
         return;
@@ -107,7 +107,7 @@ fn main(
 // tile.width: how many pixels; tile.x and tile.y: the samples [x, y) to trace, from a sum
 // of zero (the host adds the result to what it holds); tile.sample_start: 0 on the first
 // dispatch.
-@compute @workgroup_size(64, 1, 1)
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn resume(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,

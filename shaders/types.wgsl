@@ -165,7 +165,9 @@ const AOV_COST: u32 = 3u;
 const TRAVERSAL_STACK: u32 = 64u;
 // Texels a row of node_texels and prim_texels (src/gpu_types.rs: TEXTURE_WIDTH).
 const TEXTURE_WIDTH: u32 = 4096u;
-// Invocations per workgroup: @workgroup_size(64, 1, 1) in main.wgsl, 8x8 pixels.
+// A workgroup of main.wgsl covers WORKGROUP_SIDE x WORKGROUP_SIDE pixels with
+// WORKGROUP_INVOCATIONS invocations (src/gpu_types.rs).
+const WORKGROUP_SIDE: u32 = 8u;
 const WORKGROUP_INVOCATIONS: u32 = 64u;
 const RAY_STACK: u32 = 16u;
 

@@ -218,16 +218,25 @@ pub const PHASE_DONE: u32 = 3;
 /// has run 65535 loop iterations). The other bits count the rays traced.
 pub const PIXEL_CUT_SHORT: u32 = 1 << 31;
 
+/// Pixels a workgroup of `main.wgsl` covers along each axis, and its invocations (8 x 8,
+/// in 4 x 2 blocks of neighbouring pixels).
+pub const WORKGROUP_SIDE: u32 = 8;
+pub const WORKGROUP_INVOCATIONS: u32 = WORKGROUP_SIDE * WORKGROUP_SIDE;
+
 /// Fixed sizes of the per-pixel stacks in both renderers.
 /// The BVH builder guarantees a depth below `TRAVERSAL_STACK` (it falls back to a
 /// median split otherwise); the CLI refuses a `--depth` above `MAX_DEPTH`, and a Whitted
 /// path with depth limit D never holds more than D pending rays (each pop pushes at most
 /// two rays one level deeper), so `RAY_STACK = MAX_DEPTH` cannot overflow.
 pub const TRAVERSAL_STACK: usize = 64;
+
 /// Texels (16 bytes) a row of the textures that carry `GpuNode`s and `GpuPrim`s to the
 /// shader; below WebGPU's guaranteed 8192, and 64 KiB a row, a multiple of the 256-byte
 /// row alignment of texture uploads.
 pub const TEXTURE_WIDTH: u32 = 4096;
+
+/// The deepest ray (the eye ray counting as 1), and the pending-ray stack it bounds (see
+/// the stack sizes above).
 pub const MAX_DEPTH: u32 = 16;
 pub const RAY_STACK: usize = MAX_DEPTH as usize;
 

@@ -125,10 +125,10 @@ struct RenderArgs {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Image width (overrides the scene's resolution; the vertical angle stays).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     width: Option<u32>,
     /// Image height.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=16384))]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     height: Option<u32>,
     /// Maximum ray depth, the eye ray counting as 1.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
@@ -195,13 +195,16 @@ fn adapter_named(args: &RenderArgs) -> bool {
     args.adapter.is_some() || std::env::var("GPURT_ADAPTER").is_ok_and(|v| !v.is_empty())
 }
 
+/// Largest image side the command line accepts.
+const MAX_IMAGE_SIDE: u32 = 16384;
+
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once('x')
         .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT"))?;
     let dim = |d: &str| match d.trim().parse::<u32>() {
-        Ok(v) if (1..=16384).contains(&v) => Ok(v),
-        _ => Err(format!("'{s}': each side must be 1 to 16384")),
+        Ok(v) if (1..=MAX_IMAGE_SIDE).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': each side must be 1 to {MAX_IMAGE_SIDE}")),
     };
     Ok((dim(w)?, dim(h)?))
 }

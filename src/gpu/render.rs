@@ -20,11 +20,10 @@ use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
     GpuGlobals, GpuPixelState, GpuTile, PHASE_DONE, PIXEL_CUT_SHORT, TEXTURE_WIDTH,
+    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
 
-/// Pixels a workgroup of `main.wgsl` covers along each axis (8 x 8, in 4 x 2 blocks).
-const WORKGROUP: u32 = 8;
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 const PIXEL_BYTES: u64 = 16;
 /// Largest output buffer a band of rows writes: far below the 128 MiB storage binding of
@@ -629,7 +628,7 @@ fn resume(
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, &scene.bound.bind_group, &[0]);
                     pass.set_bind_group(1, &group, &[]);
-                    pass.dispatch_workgroups(n.div_ceil(64), 1, 1);
+                    pass.dispatch_workgroups(n.div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
                 }
                 enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
                 queue.submit([enc.finish()]);
@@ -903,7 +902,7 @@ fn encode_band(
         pass.set_pipeline(pipeline);
         for (i, tile) in tiles.iter().enumerate() {
             pass.set_bind_group(0, &bound.bind_group, &[i as u32 * bound.tile_stride]);
-            let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP).max(1));
+            let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP_SIDE).max(1));
             pass.dispatch_workgroups(groups[0], groups[1], 1);
         }
     }

@@ -161,6 +161,8 @@ fn shared_constants_match() {
         ("PLANE_FLAG", gpurt::cpu::types::PLANE_FLAG),
         ("NO_PRIM", gpurt::cpu::types::NO_PRIM),
         ("PIXEL_CUT_SHORT", PIXEL_CUT_SHORT),
+        ("WORKGROUP_SIDE", WORKGROUP_SIDE),
+        ("WORKGROUP_INVOCATIONS", WORKGROUP_INVOCATIONS),
     ];
     for (name, value) in u32s {
         assert_eq!(
