@@ -85,7 +85,8 @@ pub fn render_samples(
         })
         .collect();
     let mut total = RayCounts::default();
-    let mut sums = accum.sums.clone();
+    // The tiles cover every pixel, so the new sums need no copy of the old ones.
+    let mut sums = Film::new(w, h);
     for (&(x0, y0), tile) in tiles.iter().zip(done) {
         let (px, counts) = tile.ok_or(Error::Interrupted)?;
         total.add(&counts);

@@ -1,9 +1,9 @@
 //! Upload, tiled dispatch and readback.
 //!
-//! The image is traced one bounded tile per submission, so that no dispatch runs long
-//! enough to trip a driver watchdog on a real GPU, the progress bar can advance per tile,
-//! and Ctrl-C is noticed between tiles. Each tile's results are copied to a mappable
-//! buffer and read back before the next tile starts.
+//! A frame is cut (`Cut`) into tiles, one bounded dispatch each, so that no dispatch runs
+//! long enough to trip a driver watchdog, and the tiles into bands of rows, one submission
+//! and one readback each, so that the host does not wait on the GPU per tile. Pixels whose
+//! work does not fit one invocation are finished by `resume`.
 
 use std::collections::HashMap;
 use std::ops::Range;
