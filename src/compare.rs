@@ -204,6 +204,23 @@ impl Thresholds {
         .check(stats)
     }
 
+    /// `check`, and where that fails, `check_with_noise_floor` with the floor `floor`
+    /// measures: measured only then, since it costs renders. Returns the floor when it was
+    /// measured, and the verdict.
+    pub fn check_allowing_noise<E>(
+        &self,
+        stats: &DiffStats,
+        floor: impl FnOnce() -> std::result::Result<f64, E>,
+    ) -> std::result::Result<(Option<f64>, std::result::Result<(), String>), E> {
+        match self.check(stats) {
+            Ok(()) => Ok((None, Ok(()))),
+            Err(_) => {
+                let floor = floor()?;
+                Ok((Some(floor), self.check_with_noise_floor(stats, floor)))
+            }
+        }
+    }
+
     /// `Ok` when `stats` is within every limit, otherwise one message naming every limit
     /// exceeded (separated by "; ").
     pub fn check(&self, stats: &DiffStats) -> std::result::Result<(), String> {

@@ -78,14 +78,10 @@ fn heat(v: f32) -> Vec3 {
 
 /// The fraction of pixels the CPU reference itself changes by more than the tolerance
 /// when its eye point moves by one ulp, along each axis and along all three: the largest
-/// of the four (see `Thresholds::check_with_noise_floor`). Scenes of sub-pixel mirror spheres (balls-4 at 128x128) change on 0.4% to
-/// 1.2% of their pixels; most scenes on none.
-pub fn noise_floor(
-    buffers: &SceneBuffers,
-    globals: &GpuGlobals,
-    cpu: &RgbImage,
-    aov: u32,
-) -> Result<f64> {
+/// of the four (see `Thresholds::check_with_noise_floor`). `cpu` is the displayed image of
+/// the render `globals` describes. Scenes of sub-pixel mirror spheres (balls-4 at 128x128)
+/// change on 0.4% to 1.2% of their pixels; most scenes on none.
+pub fn noise_floor(buffers: &SceneBuffers, globals: &GpuGlobals, cpu: &RgbImage) -> Result<f64> {
     let up = |v: f32| f32::from_bits(v.to_bits() + 1);
     let never = AtomicBool::new(false);
     (0..4)
@@ -100,7 +96,7 @@ pub fn noise_floor(
                 }
             };
             let (nudged, _) = crate::cpu::render(buffers, &g, &|_| {}, &never)?;
-            let nudged = display_film(&nudged, aov).to_rgb8();
+            let nudged = display_film(&nudged, globals.aov).to_rgb8();
             Ok(compare::diff(cpu, &nudged, Thresholds::GPU_VS_CPU.tolerance_255)?.frac_over)
         })
         .try_fold(0.0, |a: f64, b: Result<f64>| Ok(a.max(b?)))
@@ -117,7 +113,7 @@ pub struct Agreement {
 
 /// Compares the GPU film of a render with the CPU film of the same render under
 /// `Thresholds::GPU_VS_CPU`, allowing the CPU's own noise floor where the plain limits
-/// fail (`Thresholds::check_with_noise_floor`).
+/// fail (`Thresholds::check_allowing_noise`).
 pub fn agreement(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
@@ -127,16 +123,11 @@ pub fn agreement(
     let cpu = display_film(cpu, globals.aov).to_rgb8();
     let gpu = display_film(gpu, globals.aov).to_rgb8();
     let stats = compare::diff(&cpu, &gpu, Thresholds::GPU_VS_CPU.tolerance_255)?;
-    let mut noise = None;
-    let mut verdict = Thresholds::GPU_VS_CPU.check(&stats);
-    if verdict.is_err() {
-        let floor = noise_floor(buffers, globals, &cpu, globals.aov)?;
-        verdict = Thresholds::GPU_VS_CPU.check_with_noise_floor(&stats, floor);
-        noise = Some(floor);
-    }
+    let (noise_floor, verdict) = Thresholds::GPU_VS_CPU
+        .check_allowing_noise(&stats, || noise_floor(buffers, globals, &cpu))?;
     Ok(Agreement {
         stats,
-        noise_floor: noise,
+        noise_floor,
         verdict,
     })
 }

@@ -84,28 +84,26 @@ fn failure_dir() -> PathBuf {
 
 /// Compares GPU and CPU images under `Thresholds::GPU_VS_CPU`, with the pixel-count limit
 /// raised to the CPU's own noise floor where the plain limits fail (see
-/// `Thresholds::check_with_noise_floor`); on failure writes the images and returns a
+/// `Thresholds::check_allowing_noise`); on failure writes the images and returns a
 /// message.
 fn compare(
     label: &str,
     cpu: &RgbImage,
     gpu: &RgbImage,
-    floor: impl FnOnce() -> f64,
+    floor: impl FnOnce() -> gpurt::Result<f64>,
 ) -> Result<DiffStats, String> {
     let stats = compare::diff(cpu, gpu, Thresholds::GPU_VS_CPU.tolerance_255)
         .map_err(|e| format!("{label}: {e}"))?;
-    Thresholds::GPU_VS_CPU
-        .check(&stats)
-        .or_else(|_| {
-            let floor = floor();
-            Thresholds::GPU_VS_CPU
-                .check_with_noise_floor(&stats, floor)
-                .map_err(|why| {
-                    format!(
-                        "{why}; the CPU's own one-ulp noise floor is {:.3}%",
-                        floor * 100.0
-                    )
-                })
+    let (floor, verdict) = Thresholds::GPU_VS_CPU
+        .check_allowing_noise(&stats, floor)
+        .map_err(|e| format!("{label}: {e}"))?;
+    verdict
+        .map_err(|why| match floor {
+            Some(f) => format!(
+                "{why}; the CPU's own one-ulp noise floor is {:.3}%",
+                f * 100.0
+            ),
+            None => why,
         })
         .map(|()| stats)
         .map_err(|why| {
@@ -134,7 +132,7 @@ fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Out
     }
     let cpu = display_film(&cpu, opts.aov).to_rgb8();
     let stats = compare(label, &cpu, &display_film(&gpu, opts.aov).to_rgb8(), || {
-        noise_floor(&buffers, &globals, &cpu, opts.aov).expect("CPU renders")
+        noise_floor(&buffers, &globals, &cpu)
     })?;
     Ok((label.to_string(), stats))
 }
@@ -343,7 +341,7 @@ fn comparer_rejects_perturbed_gpu_images() {
         let globals = pack::globals(&scene, &buffers, &o);
         let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
         let (cpu, gpu) = (cpu.to_rgb8(), gpu.to_rgb8());
-        let floor = || noise_floor(&buffers, &globals, &cpu, o.aov).expect("CPU renders");
+        let floor = || noise_floor(&buffers, &globals, &cpu);
         let label = |what: &str| format!("self-test-{name}-{what}");
         compare(&label("unperturbed"), &cpu, &gpu, floor).expect("unperturbed GPU image passes");
 
