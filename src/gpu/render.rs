@@ -9,7 +9,7 @@ use std::collections::HashMap;
 use std::ops::Range;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
@@ -133,9 +133,8 @@ impl Cut {
 pub struct GpuRenderer {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
-    /// Group 1 of the `resume` entry point, and its pipeline layout (groups 0 and 1).
-    resume_layout: wgpu::BindGroupLayout,
-    resume_pipeline_layout: wgpu::PipelineLayout,
+    /// The `resume` entry point's layouts and pipelines, shared with the uploaded scenes.
+    resume: Arc<ResumePipelines>,
     module: wgpu::ShaderModule,
     cache: Option<(wgpu::PipelineCache, PathBuf)>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
@@ -236,10 +235,14 @@ impl GpuRenderer {
                 (pipeline_layout, resume_pipeline_layout, module, cache)
             })?;
         Ok(GpuRenderer {
+            resume: Arc::new(ResumePipelines {
+                layout: resume_layout,
+                pipeline_layout: resume_pipeline_layout,
+                module: module.clone(),
+                compiled: Mutex::new(HashMap::new()),
+            }),
             layout,
             pipeline_layout,
-            resume_layout,
-            resume_pipeline_layout,
             module,
             cache,
             pipelines: Mutex::new(HashMap::new()),
@@ -481,13 +484,8 @@ impl GpuRenderer {
             pipeline,
             cut,
             device_bytes,
-            resume: Resume {
-                layout: self.resume_layout.clone(),
-                pipeline_layout: self.resume_pipeline_layout.clone(),
-                module: self.module.clone(),
-                constants: Specialization::of(scene, globals).constants(),
-                pipeline: OnceLock::new(),
-            },
+            resume: self.resume.clone(),
+            spec: Specialization::of(scene, globals),
         })
     }
 
@@ -515,24 +513,27 @@ pub struct GpuScene {
     /// Device memory held by the scene's buffers and textures and a band's output and
     /// readback buffers, in bytes.
     pub device_bytes: u64,
-    resume: Resume,
+    resume: Arc<ResumePipelines>,
+    spec: Specialization,
 }
 
-/// What the `resume` entry point needs, its pipeline compiled on first use: most renders
-/// never need it.
-struct Resume {
+/// The `resume` entry point: its group 1 layout, its pipeline layout (groups 0 and 1),
+/// and its pipelines compiled so far, one per `Specialization`, each on first use (most
+/// renders never need one), shared by every scene a `GpuRenderer` uploads.
+struct ResumePipelines {
     layout: wgpu::BindGroupLayout,
     pipeline_layout: wgpu::PipelineLayout,
     module: wgpu::ShaderModule,
-    constants: Vec<(&'static str, f64)>,
-    pipeline: OnceLock<wgpu::ComputePipeline>,
+    compiled: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
 }
 
-impl Resume {
-    fn pipeline(&self, device: &wgpu::Device) -> Result<&wgpu::ComputePipeline> {
-        if let Some(p) = self.pipeline.get() {
-            return Ok(p);
+impl ResumePipelines {
+    fn get(&self, device: &wgpu::Device, spec: Specialization) -> Result<wgpu::ComputePipeline> {
+        let mut compiled = self.compiled.lock().expect("not poisoned");
+        if let Some(p) = compiled.get(&spec) {
+            return Ok(p.clone());
         }
+        let constants = spec.constants();
         let p = scoped(device, "compiling the shader", || {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some("gpurt resume"),
@@ -540,13 +541,14 @@ impl Resume {
                 module: &self.module,
                 entry_point: Some("resume"),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &self.constants,
+                    constants: &constants,
                     zero_initialize_workgroup_memory: false,
                 },
                 cache: None,
             })
         })?;
-        Ok(self.pipeline.get_or_init(|| p))
+        compiled.insert(spec, p.clone());
+        Ok(p)
     }
 }
 
@@ -565,7 +567,7 @@ fn resume(
     sums: &mut Film,
     cancel: &AtomicBool,
 ) -> Result<(u64, u64)> {
-    let pipeline = scene.resume.pipeline(device)?;
+    let pipeline = &scene.resume.get(device, scene.spec)?;
     let (mut rays, mut cut_short) = (0u64, 0u64);
     for chunk in pixels.chunks(RESUME_CHUNK) {
         let n = chunk.len() as u32;
