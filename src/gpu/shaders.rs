@@ -47,8 +47,9 @@ mod tests {
         }
     }
 
-    /// Writes SPIR-V (what wgpu hands Vulkan drivers) with the override constants of every
-    /// primitive kind on and off: naga's SPIR-V writer has rejected valid WGSL before.
+    /// Writes SPIR-V (what wgpu hands Vulkan drivers) of both entry points with the
+    /// override constants of every primitive kind on and off: naga's SPIR-V writer has
+    /// rejected valid WGSL before.
     #[test]
     fn every_specialisation_translates_to_spirv() {
         let (module, info) = super::validate().expect("shader validates");
@@ -57,7 +58,12 @@ mod tests {
             .iter()
             .filter_map(|(_, o)| o.name.clone())
             .collect();
-        for on in [0.0, 1.0] {
+        for (entry, on) in [
+            ("main", 0.0),
+            ("main", 1.0),
+            ("resume", 0.0),
+            ("resume", 1.0),
+        ] {
             let constants = names
                 .iter()
                 .map(|n| (n.clone(), if n == "AOV" { 0.0 } else { on }))
@@ -65,12 +71,12 @@ mod tests {
             let (module, info) = naga::back::pipeline_constants::process_overrides(
                 &module,
                 &info,
-                Some((naga::ShaderStage::Compute, "main")),
+                Some((naga::ShaderStage::Compute, entry)),
                 &constants,
             )
             .expect("overrides apply");
             naga::back::spv::write_vec(&module, &info, &Default::default(), None)
-                .unwrap_or_else(|e| panic!("SPIR-V for overrides = {on}: {e}"));
+                .unwrap_or_else(|e| panic!("SPIR-V of {entry} for overrides = {on}: {e}"));
         }
     }
 }
