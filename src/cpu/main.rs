@@ -53,11 +53,6 @@ pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
     )
 }
 
-/// One pixel's value (colour or AOV) and the rays traced for it.
-pub fn render_pixel(b: &Bindings, px: u32, py: u32, counts: &mut RayCounts) -> Vec3 {
-    sample_sum(b, px, py, 0..b.globals.spp, Vec3::ZERO, counts) / b.globals.spp as f32
-}
-
 /// `sum` plus samples `samples` of one pixel, added in sample order (as `main` in
 /// main.wgsl does within a band), and the rays traced for them.
 pub fn sample_sum(

@@ -198,10 +198,7 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     ("max_element", "glam's Vec3::max_element"),
     ("min_element", "glam's Vec3::min_element"),
     ("sign_of", "f32::signum"),
-    (
-        "main",
-        "the entry point; the CPU's is render_pixel / sample_sum",
-    ),
+    ("main", "the entry point; the CPU's is sample_sum"),
     (
         "resume",
         "GPU only: continues pixels cut short by a driver's loop limit",
@@ -222,7 +219,6 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "add",
         "RayCounts: the CPU counts rays by kind, the GPU one total",
     ),
-    ("render_pixel", "the CPU's per-pixel driver, `main` in WGSL"),
     ("sample_sum", "the CPU's per-pixel driver, `main` in WGSL"),
 ];
 
