@@ -9,10 +9,11 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use criterion::{
-    BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
+    BatchSize, BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
 use gpurt::pack::{self, RenderOptions};
-use gpurt::scene::{self, Bounds, Scene};
+use gpurt::scene::{self, Scene};
+use obvhs::aabb::Aabb;
 
 const BUILD_SCENES: [&str; 2] = ["mount-9.nff.gz", "balls-6.nff.gz"];
 
@@ -40,12 +41,10 @@ fn load(path: &Path) -> Option<Scene> {
 }
 
 /// The bounds `pack` builds over, in the same order.
-fn prim_bounds(s: &Scene) -> Vec<Bounds> {
-    let spheres = s.spheres.iter().map(|p| p.bounds());
-    let triangles = s.triangles.iter().map(|p| p.bounds());
-    let cones = s.cones.iter().map(|p| p.bounds());
-    let boxes = s.boxes.iter().map(|p| p.bounds());
-    spheres.chain(triangles).chain(cones).chain(boxes).collect()
+fn prim_bounds(s: &Scene) -> Vec<Aabb> {
+    s.bounded_prims()
+        .map(|p| gpurt::bvh::aabb(p.bounds()))
+        .collect()
 }
 
 fn bvh_build(c: &mut Criterion) {
@@ -66,7 +65,11 @@ fn bvh_build(c: &mut Criterion) {
             b.iter(|| gpurt::bvh::build(black_box(&bounds)))
         });
         g.bench_function(BenchmarkId::new("pack::pack", name), |b| {
-            b.iter(|| pack::pack(black_box(&scene)).expect("scene packs"))
+            b.iter_batched(
+                || scene.clone(),
+                |s| pack::pack(s).expect("scene packs"),
+                BatchSize::LargeInput,
+            )
         });
     }
     g.finish();
@@ -83,10 +86,10 @@ fn cpu_render(c: &mut Criterion) {
         let Some(scene) = load(&root().join(rel)) else {
             continue;
         };
-        let buffers = pack::pack(&scene).expect("scene packs");
-        let mut opts = RenderOptions::for_scene(&scene);
+        let buffers = pack::pack(scene.clone()).expect("scene packs");
+        let mut opts = RenderOptions::for_camera(&scene.camera);
         (opts.width, opts.height) = (RENDER_SIZE, RENDER_SIZE);
-        let globals = pack::globals(&scene, &buffers, &opts);
+        let globals = pack::globals(&buffers, &opts);
         let render = || gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("renders");
         // Every render traces the same rays: report rays per second.
         let (_, counts) = render();

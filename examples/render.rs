@@ -15,15 +15,14 @@ fn main() -> gpurt::Result<()> {
     let scene_path = PathBuf::from(args.next().unwrap_or("scenes/spheres.nff".into()));
     let out = PathBuf::from(args.next().unwrap_or("out.png".into()));
 
-    // Read and pack the scene; the tree is not needed once the frame is described.
-    let scene = gpurt::scene::load(&scene_path)?;
-    let buffers = Arc::new(pack::pack(&scene)?);
+    // Read and pack the scene; packing consumes the tree, and the camera, background
+    // and ambient travel on in the packed buffers.
+    let buffers = Arc::new(pack::pack(gpurt::scene::load(&scene_path)?)?);
     let opts = RenderOptions {
         spp: 16,
-        ..RenderOptions::for_scene(&scene)
+        ..RenderOptions::for_camera(&buffers.camera)
     };
-    let frame = pack::globals(&scene, &buffers, &opts);
-    drop(scene);
+    let frame = pack::globals(&buffers, &opts);
 
     let mut renderer: Box<dyn Renderer> = match gpurt::gpu::open(None) {
         Ok(ctx) => Box::new(GpuSession::new(ctx, buffers)?),

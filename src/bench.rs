@@ -137,9 +137,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     height,
                     spp,
                     max_depth: config.depth,
-                    ..RenderOptions::for_scene(&prepared.scene)
+                    ..RenderOptions::for_camera(&prepared.buffers.camera)
                 };
-                let globals = pack::globals(&prepared.scene, &prepared.buffers, &opts);
+                let globals = pack::globals(&prepared.buffers, &opts);
                 let gpu = match (&ctx, &renderer) {
                     (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
                     _ => None,
@@ -213,7 +213,7 @@ fn gpu_row(
             with_readback: median(with_readback),
             rays,
         };
-        Ok((pass, compile, upload, scene.device_bytes))
+        Ok((pass, compile, upload, scene.device_bytes()))
     };
     // The full pass first, so that its compile time is its own.
     let (full, compile, upload, device_bytes) = pass(globals)?;

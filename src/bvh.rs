@@ -28,23 +28,24 @@ pub struct FlatBvh {
     pub depth: usize,
 }
 
+/// A primitive's bounds as the builder takes them.
+pub fn aabb(b: Bounds) -> Aabb {
+    Aabb {
+        min: Vec3A::from(b.min),
+        max: Vec3A::from(b.max),
+    }
+}
+
 /// Builds a BVH over primitive bounds. An empty input gives an empty tree.
-pub fn build(bounds: &[Bounds]) -> FlatBvh {
-    if bounds.is_empty() {
+pub fn build(aabbs: &[Aabb]) -> FlatBvh {
+    if aabbs.is_empty() {
         return FlatBvh::default();
     }
-    let aabbs: Vec<Aabb> = bounds
-        .iter()
-        .map(|b| Aabb {
-            min: Vec3A::from(b.min),
-            max: Vec3A::from(b.max),
-        })
-        .collect();
-    let flat = flatten(&build_obvhs(&aabbs), &aabbs);
+    let flat = flatten(&build_obvhs(aabbs), aabbs);
     if flat.depth < TRAVERSAL_STACK {
         flat
     } else {
-        median_split(bounds)
+        median_split(aabbs)
     }
 }
 
@@ -139,14 +140,21 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
 }
 
 /// A balanced tree by object median on the widest centroid axis: depth <= log2(n) + 1.
-fn median_split(bounds: &[Bounds]) -> FlatBvh {
+fn median_split(aabbs: &[Aabb]) -> FlatBvh {
+    let bound = |i: u32| {
+        let b = &aabbs[i as usize];
+        Bounds {
+            min: b.min.into(),
+            max: b.max.into(),
+        }
+    };
+    let centre = |i: u32| bound(i).center();
     let mut out = FlatBvh {
-        order: (0..bounds.len() as u32).collect(),
+        order: (0..aabbs.len() as u32).collect(),
         ..FlatBvh::default()
     };
-    let centre = |i: u32| bounds[i as usize].center();
     // (range start, range end, output node to patch, depth)
-    let mut stack = vec![(0usize, bounds.len(), None::<usize>, 1usize)];
+    let mut stack = vec![(0usize, aabbs.len(), None::<usize>, 1usize)];
     while let Some((lo, hi, patch, depth)) = stack.pop() {
         let here = out.nodes.len();
         if let Some(p) = patch {
@@ -156,7 +164,7 @@ fn median_split(bounds: &[Bounds]) -> FlatBvh {
         let mut b = Bounds::EMPTY;
         let mut cb = Bounds::EMPTY;
         for &i in &out.order[lo..hi] {
-            b = b.union(bounds[i as usize]);
+            b = b.union(bound(i));
             cb.grow(centre(i));
         }
         let mut node = GpuNode {
@@ -187,21 +195,28 @@ fn median_split(bounds: &[Bounds]) -> FlatBvh {
 mod tests {
     use super::*;
 
-    fn unit_boxes(n: usize) -> Vec<Bounds> {
+    fn unit_boxes(n: usize) -> Vec<Aabb> {
         (0..n)
             .map(|i| {
                 let p = Vec3::new((i * 7 % 13) as f32, (i * 5 % 11) as f32, i as f32 * 0.1);
-                Bounds {
+                aabb(Bounds {
                     min: p,
                     max: p + Vec3::splat(0.5),
-                }
+                })
             })
             .collect()
     }
 
     /// Every primitive appears once, every leaf's bounds contain its primitives and every
     /// inner node's bounds contain its children.
-    fn check(bvh: &FlatBvh, bounds: &[Bounds]) {
+    fn check(bvh: &FlatBvh, aabbs: &[Aabb]) {
+        let bounds: Vec<Bounds> = aabbs
+            .iter()
+            .map(|b| Bounds {
+                min: b.min.into(),
+                max: b.max.into(),
+            })
+            .collect();
         let mut seen = vec![false; bounds.len()];
         for &i in &bvh.order {
             assert!(!std::mem::replace(&mut seen[i as usize], true));

@@ -379,15 +379,15 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
     let Prepared {
-        scene,
         buffers,
+        warnings,
         parse_time,
         build_time,
     } = render::prepare(scene_path)?;
-    for w in &scene.warnings {
+    for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
-    let mut opts = RenderOptions::for_scene(&scene);
+    let mut opts = RenderOptions::for_camera(&buffers.camera);
     opts.width = args.width.unwrap_or(opts.width);
     opts.height = args.height.unwrap_or(opts.height);
     opts.spp = args.spp;
@@ -395,7 +395,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     opts.ambient = args.ambient;
     opts.aov = args.aov.code();
     opts.seed = args.seed;
-    let globals = pack::globals(&scene, &buffers, &opts);
+    let globals = pack::globals(&buffers, &opts);
 
     let pixels = u64::from(opts.width) * u64::from(opts.height);
     let mut backend = args.backend;

@@ -6,7 +6,7 @@ use glam::Vec3;
 use crate::bvh::{self, FlatBvh};
 use crate::error::{Error, Result};
 use crate::gpu_types::*;
-use crate::scene::{Bounds, Light, Scene};
+use crate::scene::{Bounded, Bounds, Camera, Light, Scene};
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
 /// surface, along the geometric normal; shading.md leaves the constant to us. It must clear
@@ -32,6 +32,11 @@ pub struct SceneBuffers {
     pub bounds: Bounds,
     pub epsilon: f32,
     pub bvh_depth: usize,
+    /// The scene's camera, background and `am` (`None`: the default), kept here so that
+    /// the `Scene` can be dropped once packed.
+    pub camera: Camera,
+    pub background: Vec3,
+    pub ambient: Option<Vec3>,
 }
 
 /// How to render: everything that is not the scene.
@@ -49,10 +54,10 @@ pub struct RenderOptions {
 
 impl RenderOptions {
     /// The scene's own resolution, 1 sample, depth 5, colour output.
-    pub fn for_scene(scene: &Scene) -> Self {
+    pub fn for_camera(camera: &Camera) -> Self {
         RenderOptions {
-            width: scene.camera.width,
-            height: scene.camera.height,
+            width: camera.width,
+            height: camera.height,
             spp: 1,
             max_depth: 5,
             ambient: None,
@@ -66,8 +71,10 @@ fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
-/// Flattens a scene. Fails only on scenes beyond the layout's limits.
-pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
+/// Flattens a scene, consuming it: its primitives are freed once packed, before the
+/// BVH is built, so that the largest scenes do not hold two copies of their geometry
+/// at the peak. Fails only on scenes beyond the layout's limits.
+pub fn pack(scene: Scene) -> Result<SceneBuffers> {
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
         msg,
@@ -79,41 +86,56 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
             PRIM_MATERIAL_MASK
         )));
     }
-    // Bounded primitives in one list: spheres, triangles, cones, boxes.
-    let mut prims = Vec::with_capacity(scene.bounded_count());
-    let mut bounds = Vec::with_capacity(scene.bounded_count());
+    let count = scene.bounded_count();
+    let mut prims = Vec::with_capacity(count);
+    let mut aabbs = Vec::with_capacity(count);
     let mut tri_normals = Vec::new();
-    for s in &scene.spheres {
-        prims.push(GpuPrim {
-            p0: s.center,
-            f0: s.radius,
-            tag: kind_tag(PRIM_SPHERE, s.material.0),
-            ..Default::default()
-        });
-        bounds.push(s.bounds());
-    }
-    for t in &scene.triangles {
-        let slot = match t.n {
-            Some([n0, n1, n2]) => {
-                tri_normals.push(GpuTriNormals {
-                    n0,
-                    n1,
-                    n2,
+    for p in scene.bounded_prims() {
+        aabbs.push(bvh::aabb(p.bounds()));
+        prims.push(match p {
+            Bounded::Sphere(s) => GpuPrim {
+                p0: s.center,
+                f0: s.radius,
+                tag: kind_tag(PRIM_SPHERE, s.material.0),
+                ..Default::default()
+            },
+            Bounded::Triangle(t) => {
+                let slot = match t.n {
+                    Some([n0, n1, n2]) => {
+                        tri_normals.push(GpuTriNormals {
+                            n0,
+                            n1,
+                            n2,
+                            ..Default::default()
+                        });
+                        (tri_normals.len() - 1) as f32
+                    }
+                    None => -1.0,
+                };
+                GpuPrim {
+                    p0: t.v[0],
+                    p1: t.v[1] - t.v[0],
+                    f1: slot,
+                    p2: t.v[2] - t.v[0],
+                    tag: kind_tag(PRIM_TRIANGLE, t.material.0),
                     ..Default::default()
-                });
-                (tri_normals.len() - 1) as f32
+                }
             }
-            None => -1.0,
-        };
-        prims.push(GpuPrim {
-            p0: t.v[0],
-            p1: t.v[1] - t.v[0],
-            f1: slot,
-            p2: t.v[2] - t.v[0],
-            tag: kind_tag(PRIM_TRIANGLE, t.material.0),
-            ..Default::default()
+            Bounded::Cone(c) => GpuPrim {
+                p0: c.base,
+                f0: c.base_radius,
+                p1: c.apex,
+                f1: c.apex_radius,
+                tag: kind_tag(PRIM_CONE, c.material.0),
+                ..Default::default()
+            },
+            Bounded::Box(b) => GpuPrim {
+                p0: b.min,
+                p1: b.max,
+                tag: kind_tag(PRIM_BOX, b.material.0),
+                ..Default::default()
+            },
         });
-        bounds.push(t.bounds());
     }
     if tri_normals.len() > 1 << 24 {
         return Err(too_big(format!(
@@ -121,33 +143,8 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
             tri_normals.len()
         )));
     }
-    for c in &scene.cones {
-        prims.push(GpuPrim {
-            p0: c.base,
-            f0: c.base_radius,
-            p1: c.apex,
-            f1: c.apex_radius,
-            tag: kind_tag(PRIM_CONE, c.material.0),
-            ..Default::default()
-        });
-        bounds.push(c.bounds());
-    }
-    for b in &scene.boxes {
-        prims.push(GpuPrim {
-            p0: b.min,
-            p1: b.max,
-            tag: kind_tag(PRIM_BOX, b.material.0),
-            ..Default::default()
-        });
-        bounds.push(b.bounds());
-    }
-    let FlatBvh {
-        nodes,
-        order,
-        depth,
-    } = bvh::build(&bounds);
-    let prims = order.iter().map(|&i| prims[i as usize]).collect();
-
+    let bounds = scene.bounds();
+    let epsilon = epsilon(&scene);
     let planes = scene
         .planes
         .iter()
@@ -171,7 +168,15 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
         })
         .collect();
     let lights = pack_lights(&scene.lights);
-    let scene_bounds = scene.bounds();
+    let (camera, background, ambient) = (scene.camera.clone(), scene.background, scene.ambient);
+    drop(scene);
+    let FlatBvh {
+        nodes,
+        order,
+        depth,
+    } = bvh::build(&aabbs);
+    drop(aabbs);
+    let prims = order.iter().map(|&i| prims[i as usize]).collect();
     Ok(SceneBuffers {
         nodes,
         prims,
@@ -179,9 +184,12 @@ pub fn pack(scene: &Scene) -> Result<SceneBuffers> {
         planes,
         materials,
         lights,
-        bounds: scene_bounds,
-        epsilon: epsilon(scene),
+        bounds,
+        epsilon,
         bvh_depth: depth,
+        camera,
+        background,
+        ambient,
     })
 }
 
@@ -291,8 +299,8 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
 }
 
 /// Per-render constants: the camera basis of shading.md and the options.
-pub fn globals(scene: &Scene, buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
-    let c = &scene.camera;
+pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
+    let c = &buffers.camera;
     let forward = (c.at - c.from).normalize();
     let right = forward.cross(c.up).normalize();
     let up = right.cross(forward);
@@ -308,11 +316,11 @@ pub fn globals(scene: &Scene, buffers: &SceneBuffers, opts: &RenderOptions) -> G
         aperture: c.aperture,
         cam_up: up,
         focal: c.focal_distance(),
-        background: scene.background,
+        background: buffers.background,
         epsilon: buffers.epsilon,
         ambient: opts
             .ambient
-            .or(scene.ambient)
+            .or(buffers.ambient)
             .unwrap_or(Vec3::splat(DEFAULT_AMBIENT)),
         max_depth: opts.max_depth,
         width: opts.width,
@@ -344,8 +352,8 @@ mod tests {
     #[test]
     fn packed_scene_passes_its_checks_and_corruption_is_caught() {
         let scene = balls();
-        let b = pack(&scene).unwrap();
-        let g = globals(&scene, &b, &RenderOptions::for_scene(&scene));
+        let b = pack(scene.clone()).unwrap();
+        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
         b.check(&g).unwrap();
         let inner = b.nodes.iter().position(|n| n.count() == 0).unwrap();
 
@@ -368,7 +376,7 @@ mod tests {
 
     #[test]
     fn uncoloured_lights_share_spd_intensity_and_coloured_keep_theirs() {
-        let b = pack(&balls()).unwrap();
+        let b = pack(balls()).unwrap();
         let grey = 1.0 / 2f32.sqrt();
         assert_eq!(b.lights[0].color, Vec3::splat(grey));
         assert_eq!(b.lights[1].color, Vec3::splat(0.5));
@@ -377,8 +385,8 @@ mod tests {
     #[test]
     fn camera_basis_and_pixel_pitch_follow_the_nff_angle() {
         let scene = balls();
-        let b = pack(&scene).unwrap();
-        let g = globals(&scene, &b, &RenderOptions::for_scene(&scene));
+        let b = pack(scene.clone()).unwrap();
+        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
         // 40 degrees between the centres of the 8 rows: 7 pitches.
         let want = 2.0 * 20f32.to_radians().tan() / 7.0;
         assert!((g.pixel_pitch - want).abs() < 1e-7);

@@ -13,24 +13,25 @@ use crate::error::Result;
 use crate::film::Film;
 use crate::gpu_types::{AOV_COST, AOV_DEPTH, GpuGlobals};
 use crate::pack::{self, SceneBuffers};
-use crate::scene::{self, Scene};
+use crate::scene;
 
-/// A scene read and flattened, with the time each step took.
+/// A scene read and flattened, with the time each step took and the reader's warnings.
 pub struct Prepared {
-    pub scene: Scene,
     pub buffers: SceneBuffers,
+    pub warnings: Vec<String>,
     pub parse_time: Duration,
     pub build_time: Duration,
 }
 
 pub fn prepare(path: &Path) -> Result<Prepared> {
     let t0 = Instant::now();
-    let scene = scene::load(path)?;
+    let mut scene = scene::load(path)?;
     let t1 = Instant::now();
-    let buffers = pack::pack(&scene)?;
+    let warnings = std::mem::take(&mut scene.warnings);
+    let buffers = pack::pack(scene)?;
     Ok(Prepared {
-        scene,
         buffers,
+        warnings,
         parse_time: t1 - t0,
         build_time: t1.elapsed(),
     })

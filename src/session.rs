@@ -66,14 +66,15 @@ impl Renderer for CpuRenderer {
     }
 }
 
-/// The GPU renderer on its own device. The scene is uploaded on the first frame and
-/// again only when the frame's settings change (a new camera re-uploads it today; only
-/// its uniform would need to change).
+/// The GPU renderer on its own device. The scene is uploaded once, on the first frame;
+/// a later frame with another camera rewrites only a uniform, one of another size
+/// remakes only the output buffers (`GpuRenderer::set_frame`).
 pub struct GpuSession {
     ctx: GpuContext,
     renderer: gpu::GpuRenderer,
     scene: Arc<SceneBuffers>,
     uploaded: Option<(GpuGlobals, GpuScene)>,
+    uploads: u32,
 }
 
 impl GpuSession {
@@ -86,7 +87,13 @@ impl GpuSession {
             renderer,
             scene,
             uploaded: None,
+            uploads: 0,
         })
+    }
+
+    /// How many times the scene's arrays have been uploaded: once for any number of frames.
+    pub fn scene_uploads(&self) -> u32 {
+        self.uploads
     }
 
     /// Time spent compiling shaders so far.
@@ -117,10 +124,18 @@ impl Renderer for GpuSession {
         cancel: &AtomicBool,
     ) -> Result<u64> {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        let current = self.uploaded.as_ref().is_some_and(|(g, _)| g == globals);
-        if !current {
-            let uploaded = self.renderer.upload(device, queue, &self.scene, globals)?;
-            self.uploaded = Some((*globals, uploaded));
+        match &mut self.uploaded {
+            Some((current, _)) if current == globals => {}
+            Some((current, uploaded)) => {
+                self.renderer
+                    .set_frame(device, queue, uploaded, &self.scene, globals)?;
+                *current = *globals;
+            }
+            None => {
+                let uploaded = self.renderer.upload(device, queue, &self.scene, globals)?;
+                self.uploads += 1;
+                self.uploaded = Some((*globals, uploaded));
+            }
         }
         let (_, uploaded) = self.uploaded.as_ref().expect("uploaded above");
         gpu::trace_samples(device, queue, uploaded, samples, accum, progress, cancel)

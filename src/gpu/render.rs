@@ -23,6 +23,7 @@ use crate::gpu_types::{
     WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
+use crate::scene::{Scene, nff_default_camera};
 
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 const PIXEL_BYTES: u64 = 16;
@@ -30,9 +31,22 @@ const PIXEL_BYTES: u64 = 16;
 /// lavapipe, large enough that a 4K frame at one sample takes two submissions.
 const BAND_BYTES: u64 = 64 << 20;
 
-/// What one render binds.
+/// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
+struct SceneData {
+    nodes: wgpu::TextureView,
+    prims: wgpu::TextureView,
+    tri_normals: wgpu::Buffer,
+    planes: wgpu::Buffer,
+    materials: wgpu::Buffer,
+    lights: wgpu::Buffer,
+}
+
+/// What a frame binds besides the scene: its constants (a uniform rewritten when only
+/// the camera or the other constants change), the tiles, and a band's output and the
+/// buffer it is read back through (remade when the image size or the cut changes).
 struct Bound {
     bind_group: wgpu::BindGroup,
+    globals: wgpu::Buffer,
     /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
     tile_buf: wgpu::Buffer,
     tile_stride: u32,
@@ -46,7 +60,7 @@ struct Bound {
 /// invocation runs into lavapipe's loop limit for want of splitting); each band of
 /// full-width rows is one submission with one readback, whose output fits `BAND_BYTES`
 /// and whose work fits `band_samples`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 struct Cut {
     width: u32,
     height: u32,
@@ -301,33 +315,22 @@ impl GpuRenderer {
         Ok(pipeline)
     }
 
-    /// Uploads the scene and creates the bind group, the tile's output buffer and the
-    /// buffer it is read back through.
+    /// Creates a frame's uniforms, its band output and readback buffers, and the bind
+    /// group that joins them to the scene's arrays.
     fn bind(
         &self,
         device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &SceneBuffers,
+        data: &SceneData,
         globals: &GpuGlobals,
         out_bytes: u64,
         tile_slots: u32,
     ) -> Result<Bound> {
-        let storage = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::STORAGE,
-            })
-        };
-        let uniform = |label: &str, bytes: &[u8]| {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
+        scoped(device, "binding the frame", || {
+            let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("globals"),
+                contents: bytemuck::bytes_of(globals),
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            })
-        };
-        scoped(device, "uploading the scene", || {
-            let globals_buf = uniform("globals", bytemuck::bytes_of(globals));
+            });
             let tile_stride = (size_of::<GpuTile>() as u32)
                 .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
             let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {
@@ -336,14 +339,6 @@ impl GpuRenderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
-            let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
-            let nodes = nodes.create_view(&Default::default());
-            let prims = prims.create_view(&Default::default());
-            let normals = storage("tri_normals", non_empty(&scene.tri_normals));
-            let planes = storage("planes", non_empty(&scene.planes));
-            let materials = storage("materials", non_empty(&scene.materials));
-            let lights = storage("lights", non_empty(&scene.lights));
             let output = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("output"),
                 size: out_bytes,
@@ -365,12 +360,12 @@ impl GpuRenderer {
                     offset: 0,
                     size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
                 }),
-                wgpu::BindingResource::TextureView(&nodes),
-                wgpu::BindingResource::TextureView(&prims),
-                normals.as_entire_binding(),
-                planes.as_entire_binding(),
-                materials.as_entire_binding(),
-                lights.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&data.nodes),
+                wgpu::BindingResource::TextureView(&data.prims),
+                data.tri_normals.as_entire_binding(),
+                data.planes.as_entire_binding(),
+                data.materials.as_entire_binding(),
+                data.lights.as_entire_binding(),
                 output.as_entire_binding(),
             ];
             let entries: Vec<wgpu::BindGroupEntry> = resources
@@ -388,6 +383,7 @@ impl GpuRenderer {
             });
             Bound {
                 bind_group,
+                globals: globals_buf,
                 tile_buf,
                 tile_stride,
                 output,
@@ -404,26 +400,10 @@ impl GpuRenderer {
         queue: &wgpu::Queue,
         pipeline: &wgpu::ComputePipeline,
     ) -> Result<()> {
-        let empty = SceneBuffers {
-            nodes: Vec::new(),
-            prims: Vec::new(),
-            tri_normals: Vec::new(),
-            planes: Vec::new(),
-            materials: Vec::new(),
-            lights: Vec::new(),
-            bounds: crate::scene::Bounds::EMPTY,
-            epsilon: 0.0,
-            bvh_depth: 0,
-        };
+        let empty = crate::pack::pack(Scene::new("", nff_default_camera()))?;
+        let data = upload_scene(device, queue, &empty)?;
         // A tile of no pixels: every invocation returns at once.
-        let bound = self.bind(
-            device,
-            queue,
-            &empty,
-            &GpuGlobals::default(),
-            PIXEL_BYTES,
-            1,
-        )?;
+        let bound = self.bind(device, &data, &GpuGlobals::default(), PIXEL_BYTES, 1)?;
         scoped(device, "compiling the shader", || {
             let mut enc = device.create_command_encoder(&Default::default());
             encode_band(&mut enc, pipeline, &bound, &[GpuTile::default()]);
@@ -433,28 +413,20 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Uploads a scene for the image described by `globals` and gets its pipeline ready.
-    /// The result can be traced any number of times (`trace`), each time giving the same
-    /// image.
-    pub fn upload(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &SceneBuffers,
-        globals: &GpuGlobals,
-    ) -> Result<GpuScene> {
+    /// How a frame of `globals`' size and samples is cut on this device. Software
+    /// adapters get small bands so that Ctrl-C and the progress bar respond within a
+    /// second, and one sample per pass: lavapipe ends every loop once an invocation has run
+    /// 65535 loop iterations in all, and one sample of an ordinary scene needs far fewer.
+    /// GPUs take up to 16 samples per pass, and a band is the most one submission should
+    /// hold.
+    fn cut(&self, device: &wgpu::Device, globals: &GpuGlobals) -> Cut {
         let limits = device.limits();
-        // Software adapters get small bands so that Ctrl-C and the progress bar respond
-        // within a second; on a GPU a band is the most one submission should hold.
-        // One sample per pass on a software adapter: lavapipe ends every loop once an
-        // invocation has run 65535 loop iterations in all, and one sample of an ordinary
-        // scene needs far fewer. GPUs take up to 16 samples per pass.
         let (pass_samples, band_samples) = if self.software {
             (1, 1 << 18)
         } else {
             (16, 1 << 26)
         };
-        let cut = Cut::new(
+        Cut::new(
             globals.width,
             globals.height,
             globals.spp,
@@ -463,14 +435,28 @@ impl GpuRenderer {
             limits
                 .max_storage_buffer_binding_size
                 .min(limits.max_buffer_size),
-        );
+        )
+    }
+
+    /// Uploads a scene for the frame described by `globals` and gets its pipeline ready.
+    /// The result can be traced any number of times (`trace`), each time giving the same
+    /// image, and moved to other frames of the same scene with `set_frame`.
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<GpuScene> {
+        let cut = self.cut(device, globals);
         check_sizes(device, scene, cut.band_bytes())?;
         scene.check(globals)?;
+        let spec = Specialization::of(scene, globals);
         let pipeline = self.prepare(device, queue, scene, globals)?;
+        let data = upload_scene(device, queue, scene)?;
         let bound = self.bind(
             device,
-            queue,
-            scene,
+            &data,
             globals,
             cut.band_bytes(),
             cut.dispatches_per_band(),
@@ -478,15 +464,51 @@ impl GpuRenderer {
         // The texture uploads are queued: finish them, so a failure surfaces here.
         queue.submit([]);
         wait(device)?;
-        let device_bytes = device_bytes(scene, &cut);
         Ok(GpuScene {
+            data,
             bound,
             pipeline,
             cut,
-            device_bytes,
+            scene_bytes: scene_bytes(scene),
             resume: self.resume.clone(),
-            spec: Specialization::of(scene, globals),
+            spec,
         })
+    }
+
+    /// Moves an uploaded scene to another frame of it (camera, size, samples, depth,
+    /// AOV): the scene's arrays stay where they are. A frame of the same size and
+    /// samples per pixel rewrites only the constants' uniform; another size remakes the
+    /// band's output buffers and the bind group; other settings may pick another
+    /// pipeline (compiled once).
+    pub fn set_frame(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        uploaded: &mut GpuScene,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<()> {
+        scene.check(globals)?;
+        let spec = Specialization::of(scene, globals);
+        if spec != uploaded.spec {
+            uploaded.pipeline = self.prepare(device, queue, scene, globals)?;
+            uploaded.spec = spec;
+        }
+        let cut = self.cut(device, globals);
+        if cut == uploaded.cut {
+            queue.write_buffer(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
+        } else {
+            check_sizes(device, scene, cut.band_bytes())?;
+            uploaded.bound = self.bind(
+                device,
+                &uploaded.data,
+                globals,
+                cut.band_bytes(),
+                cut.dispatches_per_band(),
+            )?;
+            uploaded.cut = cut;
+        }
+        Ok(())
     }
 
     /// Renders the image described by `globals` on `device`. Returns the film and the
@@ -505,16 +527,23 @@ impl GpuRenderer {
     }
 }
 
-/// A scene on the device with the bindings and pipeline for one image's settings.
+/// A scene on the device with the bindings and pipeline for one frame's settings.
 pub struct GpuScene {
+    data: SceneData,
     bound: Bound,
     pipeline: wgpu::ComputePipeline,
     cut: Cut,
-    /// Device memory held by the scene's buffers and textures and a band's output and
-    /// readback buffers, in bytes.
-    pub device_bytes: u64,
+    /// Device memory held by the scene's textures and buffers, in bytes.
+    scene_bytes: u64,
     resume: Arc<ResumePipelines>,
     spec: Specialization,
+}
+
+impl GpuScene {
+    /// Device memory held by the scene and a band's output and readback buffers, in bytes.
+    pub fn device_bytes(&self) -> u64 {
+        self.scene_bytes + 2 * self.cut.band_bytes()
+    }
 }
 
 /// The `resume` entry point: its group 1 layout, its pipeline layout (groups 0 and 1),
@@ -805,9 +834,9 @@ fn submit_band(
     enc
 }
 
-/// Device memory a scene's upload takes: the node and primitive textures (padded to
-/// whole rows), the other arrays, a band's output and readback buffers and the tiles.
-fn device_bytes(scene: &SceneBuffers, cut: &Cut) -> u64 {
+/// Device memory a scene's arrays take: the node and primitive textures (padded to whole
+/// rows) and the other arrays.
+fn scene_bytes(scene: &SceneBuffers) -> u64 {
     let texture = |bytes: usize| u64::from(texel_rows(bytes)) * u64::from(TEXTURE_WIDTH) * 16;
     texture(size_of_val(&scene.nodes[..]))
         + texture(size_of_val(&scene.prims[..]))
@@ -820,7 +849,33 @@ fn device_bytes(scene: &SceneBuffers, cut: &Cut) -> u64 {
         .iter()
         .map(|&b| b as u64)
         .sum::<u64>()
-        + 2 * cut.band_bytes()
+}
+
+/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage.
+fn upload_scene(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+) -> Result<SceneData> {
+    let storage = |label: &str, bytes: &[u8]| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    scoped(device, "uploading the scene", || {
+        let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
+        let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
+        SceneData {
+            nodes: nodes.create_view(&Default::default()),
+            prims: prims.create_view(&Default::default()),
+            tri_normals: storage("tri_normals", non_empty(&scene.tri_normals)),
+            planes: storage("planes", non_empty(&scene.planes)),
+            materials: storage("materials", non_empty(&scene.materials)),
+            lights: storage("lights", non_empty(&scene.lights)),
+        }
+    })
 }
 
 /// The bindings of `types.wgsl`: globals and tile (uniform), nodes and primitives

@@ -264,6 +264,26 @@ impl BoxPrim {
     }
 }
 
+/// A bounded primitive of a scene (`Scene::bounded_prims`).
+#[derive(Clone, Copy, Debug)]
+pub enum Bounded<'a> {
+    Sphere(&'a Sphere),
+    Triangle(&'a Triangle),
+    Cone(&'a Cone),
+    Box(&'a BoxPrim),
+}
+
+impl Bounded<'_> {
+    pub fn bounds(&self) -> Bounds {
+        match self {
+            Bounded::Sphere(s) => s.bounds(),
+            Bounded::Triangle(t) => t.bounds(),
+            Bounded::Cone(c) => c.bounds(),
+            Bounded::Box(b) => b.bounds(),
+        }
+    }
+}
+
 impl Scene {
     /// An empty scene with the given camera.
     pub fn new(name: impl Into<String>, camera: Camera) -> Self {
@@ -285,20 +305,19 @@ impl Scene {
 
     /// Bounds of every bounded primitive (planes are infinite and excluded).
     pub fn bounds(&self) -> Bounds {
-        let mut b = Bounds::EMPTY;
-        for s in &self.spheres {
-            b = b.union(s.bounds());
-        }
-        for t in &self.triangles {
-            b = b.union(t.bounds());
-        }
-        for c in &self.cones {
-            b = b.union(c.bounds());
-        }
-        for x in &self.boxes {
-            b = b.union(x.bounds());
-        }
-        b
+        self.bounded_prims()
+            .fold(Bounds::EMPTY, |b, p| b.union(p.bounds()))
+    }
+
+    /// Every bounded primitive in the one order the BVH is built over and the packed
+    /// buffers, the tests and the benchmarks index them by: spheres, triangles, cones,
+    /// boxes.
+    pub fn bounded_prims(&self) -> impl Iterator<Item = Bounded<'_>> {
+        let spheres = self.spheres.iter().map(Bounded::Sphere);
+        let triangles = self.triangles.iter().map(Bounded::Triangle);
+        let cones = self.cones.iter().map(Bounded::Cone);
+        let boxes = self.boxes.iter().map(Bounded::Box);
+        spheres.chain(triangles).chain(cones).chain(boxes)
     }
 
     /// Number of bounded primitives (what the BVH is built over).

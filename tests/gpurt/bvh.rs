@@ -15,7 +15,7 @@ use gpurt::gpu_types::*;
 use gpurt::pack::{self, RenderOptions, SceneBuffers};
 use gpurt::scene::{self, Bounds, Cone, MaterialId, Scene};
 
-use crate::common::shared_scenes;
+use crate::common::{files_with, shared_scenes};
 
 /// Scenes larger than this are left to the render tests: brute force is quadratic-ish.
 const SMALL_SCENE_BYTES: u64 = 400 * 1024;
@@ -58,32 +58,12 @@ impl XorShift {
     }
 }
 
-/// Scene files under `dir` and its subdirectories whose names end in one of `suffixes`,
-/// sorted (also used by the render tests in `cpu.rs`).
-pub fn scene_files(dir: &Path, suffixes: &[&str]) -> Vec<PathBuf> {
-    let mut out = Vec::new();
-    let mut dirs = vec![dir.to_path_buf()];
-    while let Some(d) = dirs.pop() {
-        let entries = std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
-        for e in entries {
-            let p = e.expect("directory entry").path();
-            if p.is_dir() {
-                dirs.push(p);
-            } else if suffixes.iter().any(|s| p.to_string_lossy().ends_with(s)) {
-                out.push(p);
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 /// Every shared scene small enough for brute force (plain text, under 400 KB).
 fn small_scenes() -> Vec<PathBuf> {
     let Some(dir) = shared_scenes() else {
         return Vec::new();
     };
-    let scenes: Vec<PathBuf> = scene_files(&dir, &[".nff"])
+    let scenes: Vec<PathBuf> = files_with(&dir, &[".nff"])
         .into_iter()
         .filter(|p| std::fs::metadata(p).is_ok_and(|m| m.len() < SMALL_SCENE_BYTES))
         .collect();
@@ -98,7 +78,7 @@ fn small_scenes() -> Vec<PathBuf> {
 
 fn load(path: &Path) -> (Scene, SceneBuffers) {
     let scene = scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    let buffers = pack::pack(&scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let buffers = pack::pack(scene.clone()).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     (scene, buffers)
 }
 
@@ -266,7 +246,7 @@ fn check_rays(
     seed: u64,
     closest: bool,
 ) -> Counts {
-    let globals = pack::globals(scene, buffers, &RenderOptions::for_scene(scene));
+    let globals = pack::globals(buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(buffers, &globals);
     let diag = buffers.bounds.extent().length().max(1e-3);
     let mut rng = XorShift(seed ^ 0x9e37_79b9_7f4a_7c15);
@@ -453,15 +433,9 @@ fn bvh_build_orders_every_primitive_once_with_exact_bounds() {
     for path in small_scenes() {
         let name = path.display().to_string();
         let scene = scene::load(&path).unwrap();
-        let bounds: Vec<Bounds> = scene
-            .spheres
-            .iter()
-            .map(|s| s.bounds())
-            .chain(scene.triangles.iter().map(|t| t.bounds()))
-            .chain(scene.cones.iter().map(|c| c.bounds()))
-            .chain(scene.boxes.iter().map(|b| b.bounds()))
-            .collect();
-        let flat = bvh::build(&bounds);
+        let bounds: Vec<Bounds> = scene.bounded_prims().map(|p| p.bounds()).collect();
+        let aabbs: Vec<_> = bounds.iter().map(|&b| bvh::aabb(b)).collect();
+        let flat = bvh::build(&aabbs);
         let mut sorted = flat.order.clone();
         sorted.sort_unstable();
         assert!(
@@ -487,9 +461,9 @@ fn planes_only_scene_has_no_nodes_and_still_hits() {
     let src = b"v from 0 0 5 at 0 0 0 up 0 1 0 angle 40 hither 0 resolution 8 8\n\
                 f 1 1 1 1 0 1 0 0\npl 0 0 0 1 0 0 0 1 0\n";
     let scene = scene::nff::parse(src, "planes", Path::new(".")).unwrap();
-    let buffers = pack::pack(&scene).unwrap();
+    let buffers = pack::pack(scene.clone()).unwrap();
     assert!(buffers.nodes.is_empty());
-    let globals = pack::globals(&scene, &buffers, &RenderOptions::for_scene(&scene));
+    let globals = pack::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(&buffers, &globals);
     let ray = Ray {
         origin: Vec3::new(0.3, -0.2, 5.0),

@@ -21,6 +21,21 @@ pub fn skip(why: &str) {
     let _ = writeln!(std::io::stderr(), "SKIPPED {test}: {why}");
 }
 
+/// A device for the tests that need one. Without an adapter they skip with a message,
+/// except under `GPURT_REQUIRE_GPU=1`, where they fail.
+pub fn gpu_context() -> Option<gpurt::gpu::GpuContext> {
+    match gpurt::gpu::open(None) {
+        Ok(ctx) => Some(ctx),
+        Err(e) if std::env::var("GPURT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("GPURT_REQUIRE_GPU=1 but: {e}")
+        }
+        Err(e) => {
+            skip(&format!("no GPU adapter: {e}"));
+            None
+        }
+    }
+}
+
 /// `../shared/scenes` next to the checkout. When it is missing, tests skip with a message,
 /// except under `CI=true`, where they fail.
 pub fn shared_scenes() -> Option<PathBuf> {
@@ -40,16 +55,16 @@ pub fn own_scenes() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes")
 }
 
-/// Files under `dir` (recursively) whose names end with one of `suffixes`, sorted.
-pub fn files_with(dir: &std::path::Path, suffixes: &[&str]) -> Vec<PathBuf> {
+/// Files under `dir` (recursively) whose names end with one of `suffixes`, sorted: the
+/// one walker every test that lists scene files uses. A directory that cannot be read
+/// fails the test rather than shrinking the list.
+pub fn files_with(dir: &Path, suffixes: &[&str]) -> Vec<PathBuf> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        let Ok(entries) = std::fs::read_dir(&d) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let p = e.path();
+        let entries = std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+        for e in entries {
+            let p = e.expect("directory entry").path();
             if p.is_dir() {
                 stack.push(p);
             } else if suffixes.iter().any(|s| p.to_string_lossy().ends_with(s)) {

@@ -15,8 +15,7 @@ use gpurt::gpu_types::*;
 use gpurt::pack::{self, DEFAULT_AMBIENT, RenderOptions};
 use gpurt::scene::{self, Scene};
 
-use crate::bvh::scene_files;
-use crate::common::shared_scenes;
+use crate::common::{files_with, shared_scenes};
 
 /// The spec's 8-bit quantum: analytic values must match to within one level.
 const ONE_LEVEL: f64 = 1.0 / 255.0;
@@ -26,8 +25,8 @@ fn parse(src: &str) -> Scene {
 }
 
 fn render_with(scene: &Scene, opts: &RenderOptions) -> Film {
-    let buffers = pack::pack(scene).expect("scene packs");
-    let globals = pack::globals(scene, &buffers, opts);
+    let buffers = pack::pack(scene.clone()).expect("scene packs");
+    let globals = pack::globals(&buffers, opts);
     let never = AtomicBool::new(false);
     let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never)
         .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
@@ -35,7 +34,7 @@ fn render_with(scene: &Scene, opts: &RenderOptions) -> Film {
 }
 
 fn render(scene: &Scene) -> Film {
-    render_with(scene, &RenderOptions::for_scene(scene))
+    render_with(scene, &RenderOptions::for_camera(&scene.camera))
 }
 
 fn pixel(film: &Film, x: u32, y: u32) -> DVec3 {
@@ -126,7 +125,7 @@ fn empty_scene_is_background_everywhere() {
         "b 0.2 0.4 0.6\n\
          v from 1 2 3 at 0 0 0 up 0 0 1 angle 50 hither 0.01 resolution 20 12\n",
     );
-    let mut opts = RenderOptions::for_scene(&scene);
+    let mut opts = RenderOptions::for_camera(&scene.camera);
     for spp in [1, 5] {
         opts.spp = spp;
         let film = render_with(&scene, &opts);
@@ -289,7 +288,7 @@ fn mirror_reflects_with_weight_ks_up_to_the_depth_limit() {
     let ball_colour = ball.kd as f64 * d(ball.color);
     let ks = mirror.ks as f64;
     let cam = Camera::of(&scene);
-    let mut opts = RenderOptions::for_scene(&scene);
+    let mut opts = RenderOptions::for_camera(&scene.camera);
     let film = render_with(&scene, &opts);
     opts.max_depth = 1;
     let flat = render_with(&scene, &opts);
@@ -339,8 +338,8 @@ fn glass_slab_displaces_rays_as_snell_says() {
          f 0 1 0 1 0 1 0 0\n\
          p 4 -50 -50 -2 0 -50 -2 0 50 -2 -50 50 -2\n",
     );
-    let buffers = pack::pack(&scene).unwrap();
-    let globals = pack::globals(&scene, &buffers, &RenderOptions::for_scene(&scene));
+    let buffers = pack::pack(scene.clone()).unwrap();
+    let globals = pack::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(&buffers, &globals);
     let theta = 40f64.to_radians();
     let dir = Vec3::new(theta.sin() as f32, 0.0, -theta.cos() as f32);
@@ -390,7 +389,7 @@ fn glass_slab_displaces_rays_as_snell_says() {
 fn check_renders_finite(files: &[PathBuf]) {
     for path in files {
         let scene = scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        let mut opts = RenderOptions::for_scene(&scene);
+        let mut opts = RenderOptions::for_camera(&scene.camera);
         (opts.width, opts.height) = (64, 64);
         let film = render_with(&scene, &opts);
         for (i, p) in film.pixels.iter().enumerate() {
@@ -412,7 +411,7 @@ fn check_renders_finite(files: &[PathBuf]) {
 #[test]
 fn every_shared_scene_renders_finite_at_64() {
     let Some(dir) = shared_scenes() else { return };
-    let files = scene_files(&dir, &[".nff", ".nff.gz"]);
+    let files = files_with(&dir, &[".nff", ".nff.gz"]);
     assert!(files.len() >= 30, "only {} shared scenes", files.len());
     check_renders_finite(&files);
 }
@@ -420,7 +419,7 @@ fn every_shared_scene_renders_finite_at_64() {
 #[test]
 fn every_scene_of_ours_renders_finite_at_64() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let files = scene_files(&dir, &[".nff"]);
+    let files = files_with(&dir, &[".nff"]);
     assert!(files.len() >= 8, "only {} scenes in scenes/", files.len());
     check_renders_finite(&files);
 }
@@ -442,7 +441,7 @@ fn renders_are_bit_for_bit_deterministic() {
          f 0.9 0.5 0.2 0.3 0.7 30 0 0\n\
          s 1 0.5 0.8 0.8\n",
     );
-    let mut opts = RenderOptions::for_scene(&scene);
+    let mut opts = RenderOptions::for_camera(&scene.camera);
     opts.spp = 4;
     opts.seed = 17;
     let a = render_with(&scene, &opts);
@@ -473,7 +472,7 @@ fn aovs_are_finite_and_depth_and_normal_match_at_the_centre() {
          l 5 -5 5\nf 1 1 1 1 0 1 0 0\ns {} {} {} {r}\ns 2 2 0 0.5\n",
         from.x, from.y, from.z, c.x, c.y, c.z, c.x, c.y, c.z
     ));
-    let mut opts = RenderOptions::for_scene(&scene);
+    let mut opts = RenderOptions::for_camera(&scene.camera);
     let mut aov = |code| {
         opts.aov = code;
         let film = render_with(&scene, &opts);
@@ -519,9 +518,9 @@ fn agreement_rejects_a_perturbed_film() {
         "v\nfrom 0 -6 2\nat 0 0 0.5\nup 0 0 1\nangle 40\nhither 0.01\nresolution 64 64\n\
          l 3 -4 6\nf 0.8 0.3 0.2 0.8 0.2 20 0 1\ns 0 0 0.5 1\np 4\n-5 -5 -0.5\n5 -5 -0.5\n5 5 -0.5\n-5 5 -0.5\n",
     );
-    let opts = RenderOptions::for_scene(&scene);
-    let buffers = pack::pack(&scene).expect("packs");
-    let globals = pack::globals(&scene, &buffers, &opts);
+    let opts = RenderOptions::for_camera(&scene.camera);
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let globals = pack::globals(&buffers, &opts);
     let reference = render_with(&scene, &opts);
     let same = gpurt::render::agreement(&buffers, &globals, &reference, &reference.clone())
         .expect("compares");
@@ -562,7 +561,7 @@ fn every_sample_count_is_unbiased_on_an_edge() {
             &scene,
             &RenderOptions {
                 spp,
-                ..RenderOptions::for_scene(&scene)
+                ..RenderOptions::for_camera(&scene.camera)
             },
         );
         assert!(

@@ -31,7 +31,7 @@ fn gallery_matches_its_commands() {
         let words: Vec<&str> = line.split_whitespace().collect();
         let (name, scene_path) = (words[0], root.join(words[1]));
         let scene = scene::load(&scene_path).unwrap_or_else(|e| panic!("{name}: {e}"));
-        let mut opts = RenderOptions::for_scene(&scene);
+        let mut opts = RenderOptions::for_camera(&scene.camera);
         for pair in words[2..].chunks(2) {
             let value: u32 = pair[1].parse().expect("a number");
             match pair[0] {
@@ -41,8 +41,8 @@ fn gallery_matches_its_commands() {
                 other => panic!("{name}: list.txt option {other} is not understood here"),
             }
         }
-        let buffers = pack::pack(&scene).expect("packs");
-        let globals = pack::globals(&scene, &buffers, &opts);
+        let buffers = pack::pack(scene.clone()).expect("packs");
+        let globals = pack::globals(&buffers, &opts);
         let never = AtomicBool::new(false);
         let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("renders");
         let rendered = display_film(&film, opts.aov).to_rgb8();

@@ -124,8 +124,8 @@ fn compare(
 type Outcome = Result<(String, DiffStats), String>;
 
 fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
-    let buffers = pack::pack(scene).expect("scene packs");
-    let globals = pack::globals(scene, &buffers, opts);
+    let buffers = pack::pack(scene.clone()).expect("scene packs");
+    let globals = pack::globals(&buffers, opts);
     let (cpu, gpu) = render_both(g, scene, &buffers, &globals);
     if cpu.pixels.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{label}: CPU image has non-finite values"));
@@ -181,7 +181,7 @@ fn opts(scene: &Scene) -> RenderOptions {
     RenderOptions {
         width: SIZE,
         height: SIZE,
-        ..RenderOptions::for_scene(scene)
+        ..RenderOptions::for_camera(&scene.camera)
     }
 }
 
@@ -337,8 +337,8 @@ fn comparer_rejects_perturbed_gpu_images() {
     }
     for (name, scene) in scenes {
         let o = opts(&scene);
-        let buffers = pack::pack(&scene).expect("scene packs");
-        let globals = pack::globals(&scene, &buffers, &o);
+        let buffers = pack::pack(scene.clone()).expect("scene packs");
+        let globals = pack::globals(&buffers, &o);
         let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
         let (cpu, gpu) = (cpu.to_rgb8(), gpu.to_rgb8());
         let floor = || noise_floor(&buffers, &globals, &cpu);
@@ -396,8 +396,8 @@ fn with_triangles(n: usize) -> Scene {
 }
 
 fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
-    let buffers = pack::pack(scene).expect("packs");
-    let globals = pack::globals(scene, &buffers, &opts(scene));
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let globals = pack::globals(&buffers, &opts(scene));
     let renderer = GpuRenderer::new(device, None).expect("shader module");
     renderer
         .render(
@@ -453,8 +453,8 @@ fn oversized_scene_is_refused_with_the_limit_named() {
 /// normalize and sqrt are not the CPU's; 47 of 2.65 million shadow rays in the thousand
 /// lights case), where dropped samples or bounces lose a tenth or more.
 fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
-    let buffers = pack::pack(scene).expect("scene packs");
-    let globals = pack::globals(scene, &buffers, opts);
+    let buffers = pack::pack(scene.clone()).expect("scene packs");
+    let globals = pack::globals(&buffers, opts);
     let never = AtomicBool::new(false);
     let (cpu, counts) =
         gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");
@@ -521,7 +521,7 @@ fn many_samples_per_pixel_match_cpu() {
         &area,
         &RenderOptions {
             spp: 64,
-            ..RenderOptions::for_scene(&area)
+            ..RenderOptions::for_camera(&area.camera)
         },
     )];
     if let Some(root) = shared_scenes() {
@@ -535,7 +535,7 @@ fn many_samples_per_pixel_match_cpu() {
                 width: side,
                 height: side,
                 spp,
-                ..RenderOptions::for_scene(&scene)
+                ..RenderOptions::for_camera(&scene.camera)
             };
             cases.push(check_heavy(g, &format!("{name} {spp} spp"), &scene, &opts));
         }
@@ -559,7 +559,7 @@ fn heavy_single_samples_match_cpu() {
             width: 64,
             height: 64,
             max_depth: 16,
-            ..RenderOptions::for_scene(&glass)
+            ..RenderOptions::for_camera(&glass.camera)
         },
     )];
     if let Some(root) = shared_scenes() {
@@ -573,7 +573,7 @@ fn heavy_single_samples_match_cpu() {
         let opts = RenderOptions {
             width: 48,
             height: 48,
-            ..RenderOptions::for_scene(&lights)
+            ..RenderOptions::for_camera(&lights.camera)
         };
         cases.push(check_heavy(g, "balls-3 with 1000 lights", &lights, &opts));
     }
@@ -599,7 +599,7 @@ fn unfinished_pixels_are_an_error_never_a_darker_image() {
     }
     let scene =
         gpurt::scene::nff::parse(src.as_bytes(), "column.nff", Path::new(".")).expect("parses");
-    let opts = RenderOptions::for_scene(&scene);
+    let opts = RenderOptions::for_camera(&scene.camera);
     if let Err(e) = check_heavy(g, "a column of 40000 glass spheres", &scene, &opts) {
         assert!(
             e.contains("GPU render failed") && e.contains("could not finish"),
@@ -643,10 +643,10 @@ fn sample_pattern_matches_cpu_on_an_edge() {
     for spp in [3, 5, 7, 10] {
         let opts = RenderOptions {
             spp,
-            ..RenderOptions::for_scene(&scene)
+            ..RenderOptions::for_camera(&scene.camera)
         };
-        let buffers = pack::pack(&scene).expect("packs");
-        let globals = pack::globals(&scene, &buffers, &opts);
+        let buffers = pack::pack(scene.clone()).expect("packs");
+        let globals = pack::globals(&buffers, &opts);
         let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
         let (c, m) = (
             crate::cpu::column_mean(&cpu, 100),

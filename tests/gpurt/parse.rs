@@ -4,7 +4,7 @@
 
 use std::io::Write;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use glam::{DVec2, DVec3, Vec3};
 use gpurt::Error;
@@ -13,7 +13,7 @@ use gpurt::scene::{
     triangulate::triangulate,
 };
 
-use crate::common::{shared_scenes, temp_dir};
+use crate::common::{files_with, shared_scenes, temp_dir};
 
 // ---------------------------------------------------------------------------------------
 // Exact primitive counts for every shared scene
@@ -132,12 +132,7 @@ fn size_formulas_give_the_landmark_counts() {
 #[test]
 fn every_shared_scene_parses_with_exact_counts() {
     let Some(dir) = shared_scenes() else { return };
-    let mut files: Vec<PathBuf> = ["spd", "p3d"]
-        .iter()
-        .flat_map(|sub| std::fs::read_dir(dir.join(sub)).expect("scene directory lists"))
-        .map(|e| e.expect("directory entry").path())
-        .collect();
-    files.sort();
+    let files = files_with(&dir, &[""]);
     let mut seen = Vec::new();
     for path in &files {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();

@@ -10,19 +10,19 @@ use gpurt::pack::{self, RenderOptions, SceneBuffers};
 use gpurt::session::{CpuRenderer, GpuSession, Renderer};
 use gpurt::{Error, scene};
 
-use crate::common::own_scenes;
+use crate::common::{gpu_context, own_scenes};
 
 /// glass.nff at 64x48 and 8 samples: refraction, reflection, several lights.
 fn frame() -> (Arc<SceneBuffers>, GpuGlobals) {
     let scene = scene::load(&own_scenes().join("glass.nff")).expect("loads");
-    let buffers = pack::pack(&scene).expect("packs");
+    let buffers = pack::pack(scene.clone()).expect("packs");
     let opts = RenderOptions {
         width: 64,
         height: 48,
         spp: 8,
-        ..RenderOptions::for_scene(&scene)
+        ..RenderOptions::for_camera(&scene.camera)
     };
-    let globals = pack::globals(&scene, &buffers, &opts);
+    let globals = pack::globals(&buffers, &opts);
     (Arc::new(buffers), globals)
 }
 
@@ -60,16 +60,7 @@ fn progressive_cpu_rendering_is_the_one_step_image_to_the_bit() {
 
 #[test]
 fn progressive_gpu_rendering_agrees_with_one_step_and_the_cpu() {
-    let ctx = match gpurt::gpu::open(None) {
-        Ok(ctx) => ctx,
-        Err(e) if std::env::var("GPURT_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
-            panic!("GPURT_REQUIRE_GPU=1 but: {e}")
-        }
-        Err(e) => {
-            crate::common::skip(&format!("no GPU adapter: {e}"));
-            return;
-        }
-    };
+    let Some(ctx) = gpu_context() else { return };
     let (buffers, g) = frame();
     let mut gpu = GpuSession::new(ctx, buffers.clone()).expect("session");
     let [(steps, rays), (once, rays_once)] = in_steps_and_at_once(&mut gpu, &g);
@@ -91,6 +82,53 @@ fn progressive_gpu_rendering_agrees_with_one_step_and_the_cpu() {
             .check(&stats)
             .unwrap_or_else(|why| panic!("{what}: {why} ({stats})"));
     }
+}
+
+/// One session renders a frame, then the same scene from another camera, at another
+/// size, and at another depth: the scene is uploaded once, and each frame's image is the
+/// one a new session renders of it, to the bit (same device, same pipeline).
+#[test]
+fn a_gpu_session_changes_frames_without_uploading_the_scene_again() {
+    let Some(ctx) = gpu_context() else { return };
+    let (buffers, first) = frame();
+    let mut moved = first;
+    moved.cam_pos += moved.cam_right * 0.5;
+    let smaller = pack::globals(
+        &buffers,
+        &RenderOptions {
+            width: 40,
+            height: 30,
+            spp: 8,
+            ..RenderOptions::for_camera(&buffers.camera)
+        },
+    );
+    let shallow = GpuGlobals {
+        max_depth: 2,
+        ..smaller
+    };
+    let never = AtomicBool::new(false);
+    let render = |session: &mut GpuSession, g: &GpuGlobals| {
+        let mut accum = Accumulator::new(g.width, g.height);
+        session
+            .render(g, 0..g.spp, &mut accum, &|_| {}, &never)
+            .expect("renders");
+        accum.film()
+    };
+    let mut session = GpuSession::new(ctx, buffers.clone()).expect("session");
+    let mut previous = render(&mut session, &first);
+    for (what, g) in [("camera", &moved), ("size", &smaller), ("depth", &shallow)] {
+        let image = render(&mut session, g);
+        assert_ne!(image, previous, "{what}: the frame changes the image");
+        let ctx = gpurt::gpu::open(None).expect("a second device");
+        let mut fresh = GpuSession::new(ctx, buffers.clone()).expect("session");
+        assert_eq!(
+            image,
+            render(&mut fresh, g),
+            "{what}: as a new session renders it"
+        );
+        previous = image;
+    }
+    assert_eq!(session.scene_uploads(), 1);
 }
 
 /// Samples that do not continue the accumulator, and a depth the stacks cannot hold, are
