@@ -11,7 +11,8 @@ use std::time::Duration;
 use criterion::{
     BatchSize, BenchmarkId, Criterion, SamplingMode, Throughput, criterion_group, criterion_main,
 };
-use gpurt::pack::{self, RenderOptions};
+use gpurt::frame::{self, RenderOptions};
+use gpurt::pack;
 use gpurt::scene::{self, Scene};
 use obvhs::aabb::Aabb;
 
@@ -89,7 +90,7 @@ fn cpu_render(c: &mut Criterion) {
         let buffers = pack::pack(scene.clone()).expect("scene packs");
         let mut opts = RenderOptions::for_camera(&scene.camera);
         (opts.width, opts.height) = (RENDER_SIZE, RENDER_SIZE);
-        let globals = pack::globals(&buffers, &opts);
+        let globals = frame::globals(&buffers, &opts);
         let render = || gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("renders");
         // Every render traces the same rays: report rays per second.
         let (_, counts) = render();

@@ -7,7 +7,8 @@ use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
 use gpurt::film::Accumulator;
-use gpurt::pack::{self, RenderOptions};
+use gpurt::frame::{self, RenderOptions};
+use gpurt::pack;
 use gpurt::session::{CpuRenderer, GpuSession, Renderer};
 
 fn main() -> gpurt::Result<()> {
@@ -22,7 +23,7 @@ fn main() -> gpurt::Result<()> {
         spp: 16,
         ..RenderOptions::for_camera(&buffers.camera)
     };
-    let frame = pack::globals(&buffers, &opts);
+    let frame = frame::globals(&buffers, &opts);
 
     let mut renderer: Box<dyn Renderer> = match gpurt::gpu::open(None) {
         Ok(ctx) => Box::new(GpuSession::new(ctx, buffers)?),

@@ -20,11 +20,12 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use crate::error::Result;
+use crate::frame::{self, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals};
 use crate::outln;
-use crate::pack::{self, RenderOptions};
-use crate::render;
+use crate::pack;
+use crate::run;
 
 /// What to measure.
 pub struct BenchConfig {
@@ -124,7 +125,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     );
     outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for path in &config.scenes {
-        let prepared = render::prepare(path)?;
+        let prepared = run::prepare(path)?;
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -139,7 +140,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     max_depth: config.depth,
                     ..RenderOptions::for_camera(&prepared.buffers.camera)
                 };
-                let globals = pack::globals(&prepared.buffers, &opts);
+                let globals = frame::globals(&prepared.buffers, &opts);
                 let gpu = match (&ctx, &renderer) {
                     (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
                     _ => None,

@@ -140,11 +140,11 @@ pub fn heat_map(a: &RgbImage, b: &RgbImage) -> Result<RgbImage> {
     }))
 }
 
-/// Black -> red -> yellow -> white for a difference `d` in 1/255 units, after the gain.
+/// The colour of a difference `d` in 1/255 units: `film::heat_ramp` after the gain, so
+/// that 3 * 255 / `HEAT_MAP_GAIN` levels and more are white.
 fn heat_ramp(d: u8) -> [u8; 3] {
-    let v = (u32::from(d) * HEAT_MAP_GAIN).min(3 * 255);
-    let part = |lo: u32| (v.saturating_sub(lo)).min(255) as u8;
-    [part(0), part(255), part(510)]
+    let v = (u32::from(d) * HEAT_MAP_GAIN) as f32 / (3.0 * 255.0);
+    crate::film::heat_ramp(v).map(crate::film::quantize)
 }
 
 /// Acceptance limits for a [`DiffStats`]. A comparison passes when `frac_over <=

@@ -13,10 +13,8 @@ use image::{
 };
 
 use crate::atomic::write_atomic_with;
+use crate::gpu_types::{AOV_COST, AOV_DEPTH};
 use crate::{Error, Result};
-
-/// File extensions [`Film::save`] and [`save_rgb8`] understand (case-insensitive).
-pub const SUPPORTED_EXTENSIONS: &[&str] = &["png", "ppm", "bmp", "exr"];
 
 /// A rendered image: linear RGB, row-major, top row first.
 ///
@@ -88,6 +86,42 @@ impl Film {
                     .map_err(|e| image_error(path, e))
             }),
             format => write_rgb8(&self.to_rgb8(), format, path),
+        }
+    }
+
+    /// What an 8-bit image shows of an AOV: depth as grey scaled by the largest finite
+    /// distance, cost as a heat ramp scaled by the largest count; colour and normals as
+    /// they are.
+    pub fn for_display(&self, aov: u32) -> Film {
+        if aov != AOV_DEPTH && aov != AOV_COST {
+            return self.clone();
+        }
+        let max = self
+            .pixels
+            .iter()
+            .map(|p| p[0])
+            .filter(|v| v.is_finite())
+            .fold(0.0f32, f32::max)
+            .max(1e-30);
+        let mut out = self.clone();
+        for p in &mut out.pixels {
+            let v = (p[0] / max).clamp(0.0, 1.0);
+            *p = if aov == AOV_DEPTH {
+                [v; 3]
+            } else {
+                heat_ramp(v)
+            };
+        }
+        out
+    }
+
+    /// Writes a render of `aov`: float formats (EXR) keep the raw values, 8-bit ones
+    /// get [`Film::for_display`].
+    pub fn save_aov(&self, path: &Path, aov: u32) -> Result<()> {
+        if Format::from_path(path)?.is_float() {
+            self.save(path)
+        } else {
+            self.for_display(aov).save(path)
         }
     }
 
@@ -190,9 +224,10 @@ fn write_rgb8(img: &RgbImage, format: Format, path: &Path) -> Result<()> {
     })
 }
 
-/// Output formats, chosen by file extension.
+/// The image formats [`Film::save`] and [`save_rgb8`] write, chosen by file extension
+/// (case-insensitive): the one list of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Format {
+pub enum Format {
     Png,
     Ppm,
     Bmp,
@@ -200,27 +235,53 @@ enum Format {
 }
 
 impl Format {
-    fn from_path(path: &Path) -> Result<Format> {
+    pub const ALL: [Format; 4] = [Format::Png, Format::Ppm, Format::Bmp, Format::Exr];
+
+    pub fn extension(self) -> &'static str {
+        match self {
+            Format::Png => "png",
+            Format::Ppm => "ppm",
+            Format::Bmp => "bmp",
+            Format::Exr => "exr",
+        }
+    }
+
+    /// Whether the format keeps the film's linear floats (unclamped) rather than 8 bits.
+    pub fn is_float(self) -> bool {
+        self == Format::Exr
+    }
+
+    /// The format a path's extension names; an error naming the path and the supported
+    /// extensions otherwise (checked before a render, so one never ends in it).
+    pub fn from_path(path: &Path) -> Result<Format> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        match ext.as_deref() {
-            Some("png") => Ok(Format::Png),
-            Some("ppm") => Ok(Format::Ppm),
-            Some("bmp") => Ok(Format::Bmp),
-            Some("exr") => Ok(Format::Exr),
-            other => Err(Error::Image(format!(
+        let known = Format::ALL
+            .into_iter()
+            .find(|f| Some(f.extension()) == ext.as_deref());
+        known.ok_or_else(|| {
+            let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
+            Error::Image(format!(
                 "{}: {}; supported: {}",
                 path.display(),
-                match other {
+                match ext {
                     Some(ext) => format!("unsupported image extension '.{ext}'"),
                     None => "no image file extension".to_string(),
                 },
-                SUPPORTED_EXTENSIONS.join(", ")
-            ))),
-        }
+                supported.join(", ")
+            ))
+        })
     }
+}
+
+/// The colour ramp of every heat map gpurt draws (the cost AOV, `gpurt diff`'s
+/// difference panel): black -> red -> yellow -> white as `v` goes from 0 to 1, each
+/// channel rising in its own third.
+pub fn heat_ramp(v: f32) -> [f32; 3] {
+    let x = v.clamp(0.0, 1.0) * 3.0;
+    [0.0, 1.0, 2.0].map(|lo| (x - lo).clamp(0.0, 1.0))
 }
 
 fn image_error(path: &Path, e: image::ImageError) -> Error {

@@ -11,11 +11,14 @@ use std::time::{Duration, Instant};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::compare::{self, Thresholds};
+use gpurt::frame::{
+    self, DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, RenderOptions,
+};
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
-use gpurt::pack::{self, RenderOptions};
-use gpurt::render::{self, Prepared};
-use gpurt::{Error, cpu, out, outln};
-use gpurt::{atomic, film};
+use gpurt::run::{self, Prepared};
+use gpurt::session::{CpuRenderer, GpuSession, Renderer};
+use gpurt::{Error, out, outln};
+use gpurt::{agreement, atomic, film};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Parser)]
@@ -67,10 +70,10 @@ enum Command {
         #[arg(long, default_value = "1920x1080", value_delimiter = ',', value_parser = parse_size)]
         sizes: Vec<(u32, u32)>,
         /// Samples per pixel, comma-separated.
-        #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=4096))]
+        #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
         spp: Vec<u32>,
         /// Maximum ray depth.
-        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+        #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
         depth: u32,
         /// Timed GPU frames per pass; the median is reported.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
@@ -131,13 +134,14 @@ struct RenderArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
     height: Option<u32>,
     /// Maximum ray depth, the eye ray counting as 1.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     depth: u32,
     /// Samples per pixel (stratified and jittered).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, default_value_t = DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     spp: u32,
-    /// Ambient light: one grey level or r,g,b (default: the scene's `am`, else 0.1).
-    #[arg(long, value_parser = parse_colour)]
+    #[arg(long, value_parser = parse_colour, help = format!(
+        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
+    ))]
     ambient: Option<Vec3>,
     /// Seed of the sample hash.
     #[arg(long, default_value_t = 0)]
@@ -194,9 +198,6 @@ fn parse_limit(s: &str) -> Result<f64, String> {
 fn adapter_named(args: &RenderArgs) -> bool {
     args.adapter.is_some() || std::env::var("GPURT_ADAPTER").is_ok_and(|v| !v.is_empty())
 }
-
-/// Largest image side the command line accepts.
-const MAX_IMAGE_SIDE: u32 = 16384;
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
@@ -367,7 +368,8 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(scene_path));
-    check_extension(&output)?;
+    // Checked before rendering, so a long render never ends in "unknown format".
+    film::Format::from_path(&output)?;
     atomic::check_writable(&output)?;
     let start = Instant::now();
     let cancel = Arc::new(AtomicBool::new(false));
@@ -383,88 +385,71 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         warnings,
         parse_time,
         build_time,
-    } = render::prepare(scene_path)?;
+    } = run::prepare(scene_path)?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
-    let mut opts = RenderOptions::for_camera(&buffers.camera);
-    opts.width = args.width.unwrap_or(opts.width);
-    opts.height = args.height.unwrap_or(opts.height);
-    opts.spp = args.spp;
-    opts.max_depth = args.depth;
-    opts.ambient = args.ambient;
-    opts.aov = args.aov.code();
-    opts.seed = args.seed;
-    let globals = pack::globals(&buffers, &opts);
+    let defaults = RenderOptions::for_camera(&buffers.camera);
+    let opts = RenderOptions {
+        width: args.width.unwrap_or(defaults.width),
+        height: args.height.unwrap_or(defaults.height),
+        spp: args.spp,
+        max_depth: args.depth,
+        ambient: args.ambient,
+        aov: args.aov.code(),
+        seed: args.seed,
+    };
+    let globals = frame::globals(&buffers, &opts);
+    let buffers = Arc::new(buffers);
 
-    let pixels = u64::from(opts.width) * u64::from(opts.height);
-    let mut backend = args.backend;
-    let mut gpu = None;
-    if backend != Backend::Cpu {
+    // The renderers to run, in order: the CPU first, so that with `both` the GPU's
+    // image is compared against it.
+    let mut renderers: Vec<(&str, Box<dyn Renderer>)> = Vec::new();
+    if args.backend != Backend::Gpu {
+        renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
+    }
+    if args.backend != Backend::Cpu {
         match gpurt::gpu::open(args.adapter.as_deref()) {
-            Ok(ctx) => gpu = Some(ctx),
+            Ok(ctx) => renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?))),
             // An adapter asked for by name that is missing is an error, not a fallback.
-            Err(Error::NoAdapter(why)) if backend == Backend::Gpu && !adapter_named(&args) => {
+            Err(Error::NoAdapter(why)) if args.backend == Backend::Gpu && !adapter_named(&args) => {
                 eprintln!("gpurt: no GPU adapter{why}; rendering on the CPU");
-                backend = Backend::Cpu;
+                renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
             }
             Err(e) => return Err(e),
         }
     }
-    if let (Some(ctx), true) = (&gpu, args.verbose || args.stats) {
-        eprintln!("adapter     {}", ctx.describe());
-    }
     let mut report = Vec::new();
-    let mut cpu_film = None;
-    if backend != Backend::Gpu {
-        let progress = Progress::new(pixels);
-        let t = Instant::now();
-        let result = cpu::render(&buffers, &globals, &|n| progress.advance(n), &cancel);
-        progress.finish();
-        let (film, counts) = result?;
-        report.push(format!(
-            "cpu         {:.3} s, {} rays ({} eye, {} shadow, {} reflected, {} refracted), {:.2} Mrays/s, {} threads",
-            t.elapsed().as_secs_f64(),
-            counts.total(),
-            counts.eye,
-            counts.shadow,
-            counts.reflected,
-            counts.refracted,
-            counts.total() as f64 / t.elapsed().as_secs_f64() / 1e6,
-            rayon::current_num_threads()
-        ));
-        cpu_film = Some(film);
-    }
-    let mut gpu_film = None;
-    if let Some(ctx) = &gpu {
-        let renderer = gpurt::gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
-        renderer.prepare(&ctx.device, &ctx.queue, &buffers, &globals)?;
-        report.push(format!(
-            "shader      {:.3} s (module, pipeline and first-dispatch compilation)",
-            renderer.compile_time().as_secs_f64()
-        ));
-        let progress = Progress::new(pixels);
-        let t = Instant::now();
-        let result = renderer.render(
-            &ctx.device,
-            &ctx.queue,
-            &buffers,
+    let mut films = Vec::new();
+    for (name, renderer) in &mut renderers {
+        if args.verbose || args.stats {
+            eprintln!("{name:<11} {}", renderer.describe());
+        }
+        let progress = Progress::new(u64::from(opts.width) * u64::from(opts.height));
+        let result = run::render_frame(
+            renderer.as_mut(),
             &globals,
             &|n| progress.advance(n),
             &cancel,
         );
         progress.finish();
-        let (film, rays) = result?;
+        let r = result?;
+        if !r.compile.is_zero() {
+            report.push(format!(
+                "shader      {:.3} s (module, pipeline and first-dispatch compilation)",
+                r.compile.as_secs_f64()
+            ));
+        }
         report.push(format!(
-            "gpu         {:.3} s, {} rays, {:.2} Mrays/s",
-            t.elapsed().as_secs_f64(),
-            rays,
-            rays as f64 / t.elapsed().as_secs_f64() / 1e6
+            "{name:<11} {:.3} s, {} rays, {:.2} Mrays/s",
+            r.trace.as_secs_f64(),
+            r.rays,
+            r.mrays_per_s()
         ));
-        gpu_film = Some(film);
+        films.push(r.film);
     }
-    if let (Some(c), Some(g)) = (&cpu_film, &gpu_film) {
-        let agreement = render::agreement(&buffers, &globals, c, g)?;
+    if let [cpu, gpu] = &films[..] {
+        let agreement = agreement::agreement(&buffers, &globals, cpu, gpu)?;
         eprintln!("cpu vs gpu  {}", agreement.stats);
         if let Some(floor) = agreement.noise_floor {
             eprintln!(
@@ -477,13 +462,8 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     }
-    let film = gpu_film.or(cpu_film).expect("one backend rendered");
-    let out_film = if is_float_format(&output) {
-        film
-    } else {
-        render::display_film(&film, opts.aov)
-    };
-    out_film.save(&output)?;
+    let film = films.pop().expect("one renderer ran");
+    film.save_aov(&output, opts.aov)?;
     if args.stats {
         eprintln!(
             "image       {}x{}, {} spp, depth {}",
@@ -506,31 +486,9 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
             eprintln!("{line}");
         }
         eprintln!("total       {:.3} s", start.elapsed().as_secs_f64());
-        if let Some(m) = render::peak_memory() {
+        if let Some(m) = run::peak_memory() {
             eprintln!("peak memory {:.1} MiB", m as f64 / (1 << 20) as f64);
         }
     }
     Ok(ExitCode::SUCCESS)
-}
-
-fn is_float_format(path: &Path) -> bool {
-    path.extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-}
-
-/// Checked before rendering, so a long render never ends in "unknown format".
-fn check_extension(path: &Path) -> gpurt::Result<()> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if film::SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-        Ok(())
-    } else {
-        Err(Error::Image(format!(
-            "{}: unknown image format '{ext}' (supported: {})",
-            path.display(),
-            film::SUPPORTED_EXTENSIONS.join(", ")
-        )))
-    }
 }

@@ -1,5 +1,5 @@
 //! Scene + BVH -> `SceneBuffers`: the flat arrays both renderers read (one `Vec` per GPU
-//! binding), plus the per-render `GpuGlobals` built from the camera and render options.
+//! binding), with the camera, background and ambient the frames of `frame` start from.
 
 use glam::Vec3;
 
@@ -14,9 +14,6 @@ use crate::scene::{Bounded, Bounds, Camera, Light, Scene};
 /// bounds) with a wide margin, and stay below the smallest features: balls-6, whose floor
 /// makes the diagonal 34, has spheres of radius 7e-4, which this keeps at 1.7e-4.
 pub const EPSILON_REL: f32 = 5e-6;
-
-/// Default ambient light (shading.md).
-pub const DEFAULT_AMBIENT: f32 = 0.1;
 
 /// The flat scene: what is uploaded to the GPU and what the CPU reference traverses.
 #[derive(Clone, Debug)]
@@ -37,34 +34,6 @@ pub struct SceneBuffers {
     pub camera: Camera,
     pub background: Vec3,
     pub ambient: Option<Vec3>,
-}
-
-/// How to render: everything that is not the scene.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    pub width: u32,
-    pub height: u32,
-    pub spp: u32,
-    pub max_depth: u32,
-    /// Overrides the scene's `am` and the default.
-    pub ambient: Option<Vec3>,
-    pub aov: u32,
-    pub seed: u32,
-}
-
-impl RenderOptions {
-    /// The scene's own resolution, 1 sample, depth 5, colour output.
-    pub fn for_camera(camera: &Camera) -> Self {
-        RenderOptions {
-            width: camera.width,
-            height: camera.height,
-            spp: 1,
-            max_depth: 5,
-            ambient: None,
-            aov: AOV_COLOR,
-            seed: 0,
-        }
-    }
 }
 
 fn kind_tag(kind: u32, material: u32) -> u32 {
@@ -298,45 +267,10 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
         .collect()
 }
 
-/// Per-render constants: the camera basis of shading.md and the options.
-pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
-    let c = &buffers.camera;
-    let forward = (c.at - c.from).normalize();
-    let right = forward.cross(c.up).normalize();
-    let up = right.cross(forward);
-    // `angle` spans the centres of the top and bottom rows: H - 1 pixel pitches.
-    let rows = (opts.height.max(2) - 1) as f32;
-    let pixel_pitch = 2.0 * (c.angle.to_radians() * 0.5).tan() / rows;
-    GpuGlobals {
-        cam_pos: c.from,
-        hither: c.hither,
-        cam_forward: forward,
-        pixel_pitch,
-        cam_right: right,
-        aperture: c.aperture,
-        cam_up: up,
-        focal: c.focal_distance(),
-        background: buffers.background,
-        epsilon: buffers.epsilon,
-        ambient: opts
-            .ambient
-            .or(buffers.ambient)
-            .unwrap_or(Vec3::splat(DEFAULT_AMBIENT)),
-        max_depth: opts.max_depth,
-        width: opts.width,
-        height: opts.height,
-        spp: opts.spp,
-        seed: opts.seed,
-        n_nodes: buffers.nodes.len() as u32,
-        n_planes: buffers.planes.len() as u32,
-        n_lights: buffers.lights.len() as u32,
-        aov: opts.aov,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::{RenderOptions, globals};
     use crate::scene::nff;
 
     fn balls() -> Scene {
@@ -380,18 +314,5 @@ mod tests {
         let grey = 1.0 / 2f32.sqrt();
         assert_eq!(b.lights[0].color, Vec3::splat(grey));
         assert_eq!(b.lights[1].color, Vec3::splat(0.5));
-    }
-
-    #[test]
-    fn camera_basis_and_pixel_pitch_follow_the_nff_angle() {
-        let scene = balls();
-        let b = pack(scene.clone()).unwrap();
-        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
-        // 40 degrees between the centres of the 8 rows: 7 pitches.
-        let want = 2.0 * 20f32.to_radians().tan() / 7.0;
-        assert!((g.pixel_pitch - want).abs() < 1e-7);
-        assert!(g.cam_forward.dot(g.cam_right).abs() < 1e-6);
-        assert!(g.cam_up.z > 0.9, "up stays up");
-        assert!((b.epsilon - EPSILON_REL * scene.bounds().extent().length()).abs() < 1e-9);
     }
 }

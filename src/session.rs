@@ -7,6 +7,7 @@
 use std::ops::Range;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
 use crate::error::Result;
 use crate::film::Accumulator;
@@ -18,6 +19,11 @@ use crate::pack::SceneBuffers;
 pub trait Renderer {
     /// One line naming what renders: the adapter, or the CPU and its threads.
     fn describe(&self) -> String;
+
+    /// Gets ready to render frames like `globals`: the GPU compiles the pipeline such
+    /// frames need (once per kind of frame); the CPU has nothing to do. Returns the time
+    /// spent compiling, so that callers can report it apart from the frame.
+    fn prepare(&mut self, globals: &GpuGlobals) -> Result<Duration>;
 
     /// Traces samples `samples` of every pixel of the frame `globals` describes (camera,
     /// size, samples per pixel, depth, AOV) and adds them to `accum`, which must hold
@@ -48,6 +54,10 @@ impl CpuRenderer {
 impl Renderer for CpuRenderer {
     fn describe(&self) -> String {
         format!("CPU, {} threads", rayon::current_num_threads())
+    }
+
+    fn prepare(&mut self, _: &GpuGlobals) -> Result<Duration> {
+        Ok(Duration::ZERO)
     }
 
     fn render(
@@ -97,22 +107,21 @@ impl GpuSession {
     }
 
     /// Time spent compiling shaders so far.
-    pub fn compile_time(&self) -> std::time::Duration {
+    pub fn compile_time(&self) -> Duration {
         self.renderer.compile_time()
-    }
-
-    /// Compiles the pipeline a frame needs, so that it can be timed apart from the frame.
-    pub fn prepare(&self, globals: &GpuGlobals) -> Result<()> {
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        self.renderer
-            .prepare(device, queue, &self.scene, globals)
-            .map(drop)
     }
 }
 
 impl Renderer for GpuSession {
     fn describe(&self) -> String {
         self.ctx.describe()
+    }
+
+    fn prepare(&mut self, globals: &GpuGlobals) -> Result<Duration> {
+        let before = self.renderer.compile_time();
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        self.renderer.prepare(device, queue, &self.scene, globals)?;
+        Ok(self.renderer.compile_time() - before)
     }
 
     fn render(

@@ -12,9 +12,7 @@ use super::mesh::{self, MeshTransform};
 use super::triangulate::triangulate;
 use super::{BoxPrim, Cone, FileKind, Light, Material, MaterialId, Plane, Scene, Sphere, Triangle};
 use crate::error::{Error, Result};
-
-/// Largest accepted image side in pixels.
-pub const MAX_RESOLUTION: u32 = 16384;
+use crate::frame::MAX_IMAGE_SIDE;
 
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
@@ -202,11 +200,11 @@ impl Parser<'_> {
                     let (w, wt) = self.lx.count("resolution width")?;
                     let (h, ht) = self.lx.count("resolution height")?;
                     for (v, t) in [(w, wt), (h, ht)] {
-                        if v == 0 || v > MAX_RESOLUTION {
+                        if v == 0 || v > MAX_IMAGE_SIDE {
                             return Err(self.lx.error_at(
                                 &t,
                                 format!(
-                                    "expected a resolution between 1 and {MAX_RESOLUTION}, found {v}"
+                                    "expected a resolution between 1 and {MAX_IMAGE_SIDE}, found {v}"
                                 ),
                             ));
                         }

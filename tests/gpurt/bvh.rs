@@ -11,8 +11,9 @@ use gpurt::bvh::{self, MAX_LEAF_PRIMS};
 use gpurt::cpu::intersect;
 use gpurt::cpu::traverse::{closest_hit, transmission};
 use gpurt::cpu::types::{Bindings, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
+use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
-use gpurt::pack::{self, RenderOptions, SceneBuffers};
+use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Bounds, Cone, MaterialId, Scene};
 
 use crate::common::{files_with, shared_scenes};
@@ -246,7 +247,7 @@ fn check_rays(
     seed: u64,
     closest: bool,
 ) -> Counts {
-    let globals = pack::globals(buffers, &RenderOptions::for_camera(&scene.camera));
+    let globals = frame::globals(buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(buffers, &globals);
     let diag = buffers.bounds.extent().length().max(1e-3);
     let mut rng = XorShift(seed ^ 0x9e37_79b9_7f4a_7c15);
@@ -463,7 +464,7 @@ fn planes_only_scene_has_no_nodes_and_still_hits() {
     let scene = scene::nff::parse(src, "planes", Path::new(".")).unwrap();
     let buffers = pack::pack(scene.clone()).unwrap();
     assert!(buffers.nodes.is_empty());
-    let globals = pack::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
+    let globals = frame::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(&buffers, &globals);
     let ray = Ray {
         origin: Vec3::new(0.3, -0.2, 5.0),

@@ -11,8 +11,9 @@ use glam::{DVec3, Vec3};
 use gpurt::cpu::shade::trace;
 use gpurt::cpu::types::{Bindings, Ray, RayCounts};
 use gpurt::film::Film;
+use gpurt::frame::{self, DEFAULT_AMBIENT, RenderOptions};
 use gpurt::gpu_types::*;
-use gpurt::pack::{self, DEFAULT_AMBIENT, RenderOptions};
+use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
 use crate::common::{files_with, shared_scenes};
@@ -26,7 +27,7 @@ fn parse(src: &str) -> Scene {
 
 fn render_with(scene: &Scene, opts: &RenderOptions) -> Film {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
-    let globals = pack::globals(&buffers, opts);
+    let globals = frame::globals(&buffers, opts);
     let never = AtomicBool::new(false);
     let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never)
         .unwrap_or_else(|e| panic!("{}: {e}", scene.name));
@@ -339,7 +340,7 @@ fn glass_slab_displaces_rays_as_snell_says() {
          p 4 -50 -50 -2 0 -50 -2 0 50 -2 -50 50 -2\n",
     );
     let buffers = pack::pack(scene.clone()).unwrap();
-    let globals = pack::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
+    let globals = frame::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
     let b = Bindings::new(&buffers, &globals);
     let theta = 40f64.to_radians();
     let dir = Vec3::new(theta.sin() as f32, 0.0, -theta.cos() as f32);
@@ -509,7 +510,7 @@ fn aovs_are_finite_and_depth_and_normal_match_at_the_centre() {
     );
 }
 
-/// `--backend both` fails on the verdict of `render::agreement`: a film equal to the
+/// `--backend both` fails on the verdict of `agreement::agreement`: a film equal to the
 /// reference agrees, one with a brightened block does not (and the noise floor, measured
 /// then, is zero on this scene, so it cannot excuse the block).
 #[test]
@@ -520,9 +521,9 @@ fn agreement_rejects_a_perturbed_film() {
     );
     let opts = RenderOptions::for_camera(&scene.camera);
     let buffers = pack::pack(scene.clone()).expect("packs");
-    let globals = pack::globals(&buffers, &opts);
+    let globals = frame::globals(&buffers, &opts);
     let reference = render_with(&scene, &opts);
-    let same = gpurt::render::agreement(&buffers, &globals, &reference, &reference.clone())
+    let same = gpurt::agreement::agreement(&buffers, &globals, &reference, &reference.clone())
         .expect("compares");
     assert!(same.verdict.is_ok() && same.noise_floor.is_none());
     let mut moved = reference.clone();
@@ -532,7 +533,8 @@ fn agreement_rejects_a_perturbed_film() {
             moved.set(x, y, p.map(|c| c + 0.2));
         }
     }
-    let moved = gpurt::render::agreement(&buffers, &globals, &reference, &moved).expect("compares");
+    let moved =
+        gpurt::agreement::agreement(&buffers, &globals, &reference, &moved).expect("compares");
     assert!(moved.verdict.is_err(), "{}", moved.stats);
     assert_eq!(moved.noise_floor, Some(0.0));
 }

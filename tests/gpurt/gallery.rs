@@ -8,8 +8,8 @@ use std::sync::atomic::AtomicBool;
 
 use gpurt::compare::{self, Thresholds};
 use gpurt::film;
-use gpurt::pack::{self, RenderOptions};
-use gpurt::render::display_film;
+use gpurt::frame::{self, RenderOptions};
+use gpurt::pack;
 use gpurt::scene;
 
 use crate::common::shared_scenes;
@@ -42,10 +42,10 @@ fn gallery_matches_its_commands() {
             }
         }
         let buffers = pack::pack(scene.clone()).expect("packs");
-        let globals = pack::globals(&buffers, &opts);
+        let globals = frame::globals(&buffers, &opts);
         let never = AtomicBool::new(false);
         let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("renders");
-        let rendered = display_film(&film, opts.aov).to_rgb8();
+        let rendered = film.for_display(opts.aov).to_rgb8();
         let png = root.join(format!("docs/gallery/{name}.png"));
         let stored = match film::load_rgb8(Path::new(&png)) {
             Ok(img) => img,

@@ -10,12 +10,13 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 use std::sync::atomic::AtomicBool;
 
+use gpurt::agreement::noise_floor;
 use gpurt::compare::{self, DiffStats, Thresholds};
 use gpurt::film::{self, Film};
+use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu::{GpuContext, GpuRenderer};
 use gpurt::gpu_types::*;
-use gpurt::pack::{self, RenderOptions, SceneBuffers};
-use gpurt::render::{display_film, noise_floor};
+use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Scene};
 use image::RgbImage;
 
@@ -125,13 +126,13 @@ type Outcome = Result<(String, DiffStats), String>;
 
 fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
-    let globals = pack::globals(&buffers, opts);
+    let globals = frame::globals(&buffers, opts);
     let (cpu, gpu) = render_both(g, scene, &buffers, &globals);
     if cpu.pixels.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{label}: CPU image has non-finite values"));
     }
-    let cpu = display_film(&cpu, opts.aov).to_rgb8();
-    let stats = compare(label, &cpu, &display_film(&gpu, opts.aov).to_rgb8(), || {
+    let cpu = cpu.for_display(opts.aov).to_rgb8();
+    let stats = compare(label, &cpu, &gpu.for_display(opts.aov).to_rgb8(), || {
         noise_floor(&buffers, &globals, &cpu)
     })?;
     Ok((label.to_string(), stats))
@@ -338,7 +339,7 @@ fn comparer_rejects_perturbed_gpu_images() {
     for (name, scene) in scenes {
         let o = opts(&scene);
         let buffers = pack::pack(scene.clone()).expect("scene packs");
-        let globals = pack::globals(&buffers, &o);
+        let globals = frame::globals(&buffers, &o);
         let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
         let (cpu, gpu) = (cpu.to_rgb8(), gpu.to_rgb8());
         let floor = || noise_floor(&buffers, &globals, &cpu);
@@ -397,7 +398,7 @@ fn with_triangles(n: usize) -> Scene {
 
 fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
     let buffers = pack::pack(scene.clone()).expect("packs");
-    let globals = pack::globals(&buffers, &opts(scene));
+    let globals = frame::globals(&buffers, &opts(scene));
     let renderer = GpuRenderer::new(device, None).expect("shader module");
     renderer
         .render(
@@ -454,7 +455,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
 /// lights case), where dropped samples or bounces lose a tenth or more.
 fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
-    let globals = pack::globals(&buffers, opts);
+    let globals = frame::globals(&buffers, opts);
     let never = AtomicBool::new(false);
     let (cpu, counts) =
         gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");
@@ -469,7 +470,7 @@ fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Out
             &never,
         )
         .map_err(|e| format!("{label}: GPU render failed: {e}"))?;
-    let a = gpurt::render::agreement(&buffers, &globals, &cpu, &gpu).expect("compares");
+    let a = gpurt::agreement::agreement(&buffers, &globals, &cpu, &gpu).expect("compares");
     a.verdict
         .map_err(|why| format!("{label}: {why} ({})", a.stats))?;
     let drift = rays.abs_diff(counts.total()) as f64 / counts.total() as f64;
@@ -646,7 +647,7 @@ fn sample_pattern_matches_cpu_on_an_edge() {
             ..RenderOptions::for_camera(&scene.camera)
         };
         let buffers = pack::pack(scene.clone()).expect("packs");
-        let globals = pack::globals(&buffers, &opts);
+        let globals = frame::globals(&buffers, &opts);
         let (cpu, gpu) = render_both(g, &scene, &buffers, &globals);
         let (c, m) = (
             crate::cpu::column_mean(&cpu, 100),

@@ -5,8 +5,9 @@ use std::sync::atomic::AtomicBool;
 
 use gpurt::compare::{self, Thresholds};
 use gpurt::film::Accumulator;
+use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::GpuGlobals;
-use gpurt::pack::{self, RenderOptions, SceneBuffers};
+use gpurt::pack::{self, SceneBuffers};
 use gpurt::session::{CpuRenderer, GpuSession, Renderer};
 use gpurt::{Error, scene};
 
@@ -22,7 +23,7 @@ fn frame() -> (Arc<SceneBuffers>, GpuGlobals) {
         spp: 8,
         ..RenderOptions::for_camera(&scene.camera)
     };
-    let globals = pack::globals(&buffers, &opts);
+    let globals = frame::globals(&buffers, &opts);
     (Arc::new(buffers), globals)
 }
 
@@ -93,7 +94,7 @@ fn a_gpu_session_changes_frames_without_uploading_the_scene_again() {
     let (buffers, first) = frame();
     let mut moved = first;
     moved.cam_pos += moved.cam_right * 0.5;
-    let smaller = pack::globals(
+    let smaller = frame::globals(
         &buffers,
         &RenderOptions {
             width: 40,

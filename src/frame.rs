@@ -1,0 +1,107 @@
+//! A frame of a packed scene: the render options (size, samples, depth, ambient, AOV,
+//! seed), their defaults and limits, and the `GpuGlobals` both renderers read, built from
+//! the scene's camera and the options.
+
+use glam::Vec3;
+
+use crate::gpu_types::*;
+use crate::pack::SceneBuffers;
+use crate::scene::Camera;
+
+/// Samples per pixel when none are asked for.
+pub const DEFAULT_SPP: u32 = 1;
+/// Most samples per pixel a frame may ask for.
+pub const MAX_SPP: u32 = 4096;
+/// Maximum ray depth when none is asked for (the eye ray counts as 1); at most `MAX_DEPTH`.
+pub const DEFAULT_DEPTH: u32 = 5;
+/// Ambient light when neither the scene (`am`) nor the caller sets one (shading.md).
+pub const DEFAULT_AMBIENT: f32 = 0.1;
+/// Largest image side, from a scene's `resolution` or from the caller.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// How to render: everything that is not the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    /// Overrides the scene's `am` and the default.
+    pub ambient: Option<Vec3>,
+    pub aov: u32,
+    pub seed: u32,
+}
+
+impl RenderOptions {
+    /// The camera's own resolution and the defaults: `DEFAULT_SPP`, `DEFAULT_DEPTH`, the
+    /// scene's ambient, colour output.
+    pub fn for_camera(camera: &Camera) -> Self {
+        RenderOptions {
+            width: camera.width,
+            height: camera.height,
+            spp: DEFAULT_SPP,
+            max_depth: DEFAULT_DEPTH,
+            ambient: None,
+            aov: AOV_COLOR,
+            seed: 0,
+        }
+    }
+}
+
+/// Per-render constants: the camera basis of shading.md and the options.
+pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
+    let c = &buffers.camera;
+    let forward = (c.at - c.from).normalize();
+    let right = forward.cross(c.up).normalize();
+    let up = right.cross(forward);
+    // `angle` spans the centres of the top and bottom rows: H - 1 pixel pitches.
+    let rows = (opts.height.max(2) - 1) as f32;
+    let pixel_pitch = 2.0 * (c.angle.to_radians() * 0.5).tan() / rows;
+    GpuGlobals {
+        cam_pos: c.from,
+        hither: c.hither,
+        cam_forward: forward,
+        pixel_pitch,
+        cam_right: right,
+        aperture: c.aperture,
+        cam_up: up,
+        focal: c.focal_distance(),
+        background: buffers.background,
+        epsilon: buffers.epsilon,
+        ambient: opts
+            .ambient
+            .or(buffers.ambient)
+            .unwrap_or(Vec3::splat(DEFAULT_AMBIENT)),
+        max_depth: opts.max_depth,
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        seed: opts.seed,
+        n_nodes: buffers.nodes.len() as u32,
+        n_planes: buffers.planes.len() as u32,
+        n_lights: buffers.lights.len() as u32,
+        aov: opts.aov,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pack::{EPSILON_REL, pack};
+    use crate::scene::nff;
+
+    #[test]
+    fn camera_basis_and_pixel_pitch_follow_the_nff_angle() {
+        let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 8 8
+            l 1 -2 3  f 1 0 0 1 0 1 0 1  s 0 0 0 1  s 2 0 0 0.5";
+        let scene = nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap();
+        let b = pack(scene.clone()).unwrap();
+        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
+        // 40 degrees between the centres of the 8 rows: 7 pitches.
+        let want = 2.0 * 20f32.to_radians().tan() / 7.0;
+        assert!((g.pixel_pitch - want).abs() < 1e-7);
+        assert!(g.cam_forward.dot(g.cam_right).abs() < 1e-6);
+        assert!(g.cam_up.z > 0.9, "up stays up");
+        assert!((b.epsilon - EPSILON_REL * scene.bounds().extent().length()).abs() < 1e-9);
+    }
+}

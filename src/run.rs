@@ -1,0 +1,81 @@
+//! One render from a scene file to a film, as the command line drives it: read and pack
+//! (timed), then the frame on any `Renderer`, made ready, traced and timed the same way
+//! on both backends.
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+use crate::error::Result;
+use crate::film::{Accumulator, Film};
+use crate::gpu_types::GpuGlobals;
+use crate::pack::{self, SceneBuffers};
+use crate::scene;
+use crate::session::Renderer;
+
+/// A scene read and packed, with the time each step took and the reader's warnings (the
+/// `Scene` itself is gone: packing consumes it).
+pub struct Prepared {
+    pub buffers: SceneBuffers,
+    pub warnings: Vec<String>,
+    pub parse_time: Duration,
+    pub build_time: Duration,
+}
+
+pub fn prepare(path: &Path) -> Result<Prepared> {
+    let t0 = Instant::now();
+    let mut scene = scene::load(path)?;
+    let t1 = Instant::now();
+    let warnings = std::mem::take(&mut scene.warnings);
+    let buffers = pack::pack(scene)?;
+    Ok(Prepared {
+        buffers,
+        warnings,
+        parse_time: t1 - t0,
+        build_time: t1.elapsed(),
+    })
+}
+
+/// A frame rendered, and what it cost.
+pub struct Rendered {
+    pub film: Film,
+    pub rays: u64,
+    /// Time spent compiling shaders to get ready (zero on the CPU, or when compiled before).
+    pub compile: Duration,
+    /// Time tracing the frame (on the GPU with the scene's upload and the readback).
+    pub trace: Duration,
+}
+
+impl Rendered {
+    pub fn mrays_per_s(&self) -> f64 {
+        self.rays as f64 / self.trace.as_secs_f64().max(1e-9) / 1e6
+    }
+}
+
+/// Renders every sample of the frame `globals` describes on `renderer`, compiling
+/// first so that the tracing is timed alone.
+pub fn render_frame(
+    renderer: &mut dyn Renderer,
+    globals: &GpuGlobals,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<Rendered> {
+    let compile = renderer.prepare(globals)?;
+    let start = Instant::now();
+    let mut accum = Accumulator::new(globals.width, globals.height);
+    let rays = renderer.render(globals, 0..globals.spp, &mut accum, progress, cancel)?;
+    Ok(Rendered {
+        film: accum.film(),
+        rays,
+        compile,
+        trace: start.elapsed(),
+    })
+}
+
+/// Peak resident memory of this process in bytes (Linux; `None` elsewhere).
+pub fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
