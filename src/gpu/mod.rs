@@ -1,11 +1,17 @@
 //! The GPU renderer: WGSL compute through wgpu on the same `SceneBuffers` the CPU
 //! reference traverses. `context` finds an adapter and a device, `shaders` assembles and
-//! validates the WGSL, `render` uploads, dispatches tile by tile and reads back.
+//! validates the WGSL, `specialization` picks the pipeline a scene needs, `upload` puts a
+//! scene's arrays on the device, `cut` cuts a frame into bounded dispatches, `render`
+//! binds, dispatches band by band and reads back, and `resume` finishes the pixels whose
+//! work did not fit one invocation.
 
 pub mod context;
+mod cut;
 pub mod render;
+mod resume;
 pub mod shaders;
 pub mod specialization;
+mod upload;
 
 pub use context::{GpuContext, open};
 pub use render::{GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_samples};

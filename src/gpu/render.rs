@@ -14,132 +14,28 @@ use std::time::{Duration, Instant};
 
 use wgpu::util::DeviceExt;
 
+use super::cut::{Cut, PIXEL_BYTES};
+use super::resume::{ResumePipelines, resume, resume_group_layout};
 use super::shaders;
 use super::specialization::Specialization;
+use super::upload::{SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
-use crate::gpu_types::{
-    GpuGlobals, GpuPixelState, GpuTile, PHASE_DONE, PIXEL_CUT_SHORT, TEXTURE_WIDTH,
-    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
-};
+use crate::gpu_types::{GpuGlobals, GpuTile, PIXEL_CUT_SHORT, WORKGROUP_SIDE};
 use crate::pack::SceneBuffers;
 use crate::scene::{Scene, nff_default_camera};
-
-/// Bytes per traced pixel: `PixelOut` (rgb + ray count).
-const PIXEL_BYTES: u64 = 16;
-/// Largest output buffer a band of rows writes: far below the 128 MiB storage binding of
-/// lavapipe, large enough that a 4K frame at one sample takes two submissions.
-const BAND_BYTES: u64 = 64 << 20;
-
-/// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
-struct SceneData {
-    nodes: wgpu::TextureView,
-    prims: wgpu::TextureView,
-    tri_normals: wgpu::Buffer,
-    planes: wgpu::Buffer,
-    materials: wgpu::Buffer,
-    lights: wgpu::Buffer,
-}
 
 /// What a frame binds besides the scene: its constants (a uniform rewritten when only
 /// the camera or the other constants change), the tiles, and a band's output and the
 /// buffer it is read back through (remade when the image size or the cut changes).
-struct Bound {
-    bind_group: wgpu::BindGroup,
-    globals: wgpu::Buffer,
+pub(super) struct Bound {
+    pub(super) bind_group: wgpu::BindGroup,
+    pub(super) globals: wgpu::Buffer,
     /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
-    tile_buf: wgpu::Buffer,
-    tile_stride: u32,
-    output: wgpu::Buffer,
-    readback: wgpu::Buffer,
-}
-
-/// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
-/// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's
-/// samples (so that no dispatch runs long enough to trip a driver watchdog, and no
-/// invocation runs into lavapipe's loop limit for want of splitting); each band of
-/// full-width rows is one submission with one readback, whose output fits `BAND_BYTES`
-/// and whose work fits `band_samples`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Cut {
-    width: u32,
-    height: u32,
-    spp: u32,
-    pass_samples: u32,
-    tile_side: u32,
-    band_rows: u32,
-}
-
-impl Cut {
-    fn new(
-        width: u32,
-        height: u32,
-        spp: u32,
-        pass_samples: u32,
-        band_samples: u64,
-        max_bytes: u64,
-    ) -> Cut {
-        let pass_samples = pass_samples.clamp(1, spp);
-        let tile_side = tile_side(pass_samples);
-        let row_bytes = u64::from(width) * PIXEL_BYTES;
-        let row_samples = u64::from(width) * u64::from(spp);
-        let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
-        // At least one row of tiles; whole rows of tiles, so only the last band is short.
-        let band_rows = (rows as u32 / tile_side).max(1) * tile_side;
-        Cut {
-            width,
-            height,
-            spp,
-            pass_samples,
-            tile_side,
-            band_rows: band_rows.min(height.next_multiple_of(tile_side)),
-        }
-    }
-
-    fn passes(&self) -> u32 {
-        self.spp.div_ceil(self.pass_samples)
-    }
-
-    /// Dispatches per band: each tile once per pass.
-    fn dispatches_per_band(&self) -> u32 {
-        self.width.div_ceil(self.tile_side)
-            * self.band_rows.div_ceil(self.tile_side)
-            * self.passes()
-    }
-
-    fn band_bytes(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.band_rows) * PIXEL_BYTES
-    }
-
-    /// The first row of each band and its number of rows.
-    fn bands(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
-        let (h, n) = (self.height, self.band_rows);
-        (0..h).step_by(n as usize).map(move |y| (y, n.min(h - y)))
-    }
-
-    /// The dispatches of the band starting at row `y0` for `samples`: every tile for the
-    /// first pass's samples, then every tile for the next pass's, and so on.
-    fn tiles(&self, y0: u32, rows: u32, samples: &Range<u32>) -> Vec<GpuTile> {
-        let (w, side) = (self.width, self.tile_side);
-        let mut tiles = Vec::new();
-        for sample_start in samples.clone().step_by(self.pass_samples as usize) {
-            for y in (y0..y0 + rows).step_by(side as usize) {
-                for x in (0..w).step_by(side as usize) {
-                    tiles.push(GpuTile {
-                        x,
-                        y,
-                        width: side.min(w - x),
-                        height: side.min(y0 + rows - y),
-                        out_base: (y - y0) * w + x,
-                        out_stride: w,
-                        sample_start,
-                        sample_count: self.pass_samples.min(samples.end - sample_start),
-                    });
-                }
-            }
-        }
-        tiles
-    }
+    pub(super) tile_buf: wgpu::Buffer,
+    pub(super) tile_stride: u32,
+    pub(super) output: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
 }
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
@@ -171,7 +67,7 @@ fn cache_dir() -> Option<PathBuf> {
 
 /// Runs `f` inside validation and out-of-memory error scopes, turning any captured error
 /// into `Error::Gpu` (never a silent black image).
-fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+pub(super) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = f();
@@ -529,14 +425,14 @@ impl GpuRenderer {
 
 /// A scene on the device with the bindings and pipeline for one frame's settings.
 pub struct GpuScene {
-    data: SceneData,
-    bound: Bound,
-    pipeline: wgpu::ComputePipeline,
-    cut: Cut,
+    pub(super) data: SceneData,
+    pub(super) bound: Bound,
+    pub(super) pipeline: wgpu::ComputePipeline,
+    pub(super) cut: Cut,
     /// Device memory held by the scene's textures and buffers, in bytes.
-    scene_bytes: u64,
-    resume: Arc<ResumePipelines>,
-    spec: Specialization,
+    pub(super) scene_bytes: u64,
+    pub(super) resume: Arc<ResumePipelines>,
+    pub(super) spec: Specialization,
 }
 
 impl GpuScene {
@@ -546,152 +442,8 @@ impl GpuScene {
     }
 }
 
-/// The `resume` entry point: its group 1 layout, its pipeline layout (groups 0 and 1),
-/// and its pipelines compiled so far, one per `Specialization`, each on first use (most
-/// renders never need one), shared by every scene a `GpuRenderer` uploads.
-struct ResumePipelines {
-    layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
-    module: wgpu::ShaderModule,
-    compiled: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
-}
-
-impl ResumePipelines {
-    fn get(&self, device: &wgpu::Device, spec: Specialization) -> Result<wgpu::ComputePipeline> {
-        let mut compiled = self.compiled.lock().expect("not poisoned");
-        if let Some(p) = compiled.get(&spec) {
-            return Ok(p.clone());
-        }
-        let constants = spec.constants();
-        let p = scoped(device, "compiling the shader", || {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("gpurt resume"),
-                layout: Some(&self.pipeline_layout),
-                module: &self.module,
-                entry_point: Some("resume"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: None,
-            })
-        })?;
-        compiled.insert(spec, p.clone());
-        Ok(p)
-    }
-}
-
-/// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
-const RESUME_CHUNK: usize = 16384;
-
-/// Traces `samples` of the pixels (x | y << 16) whose work did not fit one invocation,
-/// with the `resume` entry point, one dispatch after another until none is left, and adds
-/// them to `sums`. Returns their rays and how many were still cut short.
-fn resume(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    scene: &GpuScene,
-    pixels: &[u32],
-    samples: &Range<u32>,
-    sums: &mut Film,
-    cancel: &AtomicBool,
-) -> Result<(u64, u64)> {
-    let pipeline = &scene.resume.get(device, scene.spec)?;
-    let (mut rays, mut cut_short) = (0u64, 0u64);
-    for chunk in pixels.chunks(RESUME_CHUNK) {
-        let n = chunk.len() as u32;
-        let state_bytes = u64::from(n) * size_of::<GpuPixelState>() as u64;
-        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        use wgpu::BufferUsages as U;
-        let (state, pending, pending_back, state_back, group) =
-            scoped(device, "resuming pixels", || {
-                let list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("resume pixels"),
-                    contents: bytemuck::cast_slice(chunk),
-                    usage: U::STORAGE,
-                });
-                let state = buffer("resume state", state_bytes, U::STORAGE | U::COPY_SRC);
-                let pending = buffer("resume pending", 4, U::STORAGE | U::COPY_DST | U::COPY_SRC);
-                let pending_back = buffer("resume pending readback", 4, U::MAP_READ | U::COPY_DST);
-                let state_back = buffer(
-                    "resume state readback",
-                    state_bytes,
-                    U::MAP_READ | U::COPY_DST,
-                );
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("gpurt resume"),
-                    layout: &scene.resume.layout,
-                    entries: &[&list, &state, &pending]
-                        .iter()
-                        .enumerate()
-                        .map(|(i, b)| wgpu::BindGroupEntry {
-                            binding: i as u32,
-                            resource: b.as_entire_binding(),
-                        })
-                        .collect::<Vec<_>>(),
-                });
-                (state, pending, pending_back, state_back, group)
-            })?;
-        for round in 0u32.. {
-            if cancel.load(Ordering::Relaxed) {
-                return Err(Error::Interrupted);
-            }
-            let tile = GpuTile {
-                x: samples.start,
-                y: samples.end,
-                width: n,
-                sample_start: round,
-                ..Default::default()
-            };
-            scoped(device, "resuming pixels", || {
-                queue.write_buffer(&scene.bound.tile_buf, 0, bytemuck::bytes_of(&tile));
-                queue.write_buffer(&pending, 0, &[0; 4]);
-                let mut enc = device.create_command_encoder(&Default::default());
-                {
-                    let mut pass = enc.begin_compute_pass(&Default::default());
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(0, &scene.bound.bind_group, &[0]);
-                    pass.set_bind_group(1, &group, &[]);
-                    pass.dispatch_workgroups(n.div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
-                }
-                enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
-                queue.submit([enc.finish()]);
-            })?;
-            let left: u32 = read_mapped(device, &pending_back, 4, |b| {
-                bytemuck::pod_read_unaligned(b)
-            })?;
-            if left == 0 {
-                break;
-            }
-        }
-        scoped(device, "resuming pixels", || {
-            let mut enc = device.create_command_encoder(&Default::default());
-            enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
-            queue.submit([enc.finish()]);
-        })?;
-        read_mapped(device, &state_back, state_bytes, |bytes| {
-            let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
-            for (&xy, st) in chunk.iter().zip(states) {
-                let (x, y) = (xy & 0xffff, xy >> 16);
-                let sum = sums.get(x, y);
-                sums.set(x, y, [0, 1, 2].map(|c| sum[c] + st.sum[c]));
-                rays += u64::from(st.rays);
-                cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
-            }
-        })?;
-    }
-    Ok((rays, cut_short))
-}
-
 /// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps.
-fn read_mapped<T>(
+pub(super) fn read_mapped<T>(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     bytes: u64,
@@ -834,50 +586,6 @@ fn submit_band(
     enc
 }
 
-/// Device memory a scene's arrays take: the node and primitive textures (padded to whole
-/// rows) and the other arrays.
-fn scene_bytes(scene: &SceneBuffers) -> u64 {
-    let texture = |bytes: usize| u64::from(texel_rows(bytes)) * u64::from(TEXTURE_WIDTH) * 16;
-    texture(size_of_val(&scene.nodes[..]))
-        + texture(size_of_val(&scene.prims[..]))
-        + [
-            non_empty(&scene.tri_normals).len(),
-            non_empty(&scene.planes).len(),
-            non_empty(&scene.materials).len(),
-            non_empty(&scene.lights).len(),
-        ]
-        .iter()
-        .map(|&b| b as u64)
-        .sum::<u64>()
-}
-
-/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage.
-fn upload_scene(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    scene: &SceneBuffers,
-) -> Result<SceneData> {
-    let storage = |label: &str, bytes: &[u8]| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytes,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
-    scoped(device, "uploading the scene", || {
-        let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
-        let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
-        SceneData {
-            nodes: nodes.create_view(&Default::default()),
-            prims: prims.create_view(&Default::default()),
-            tri_normals: storage("tri_normals", non_empty(&scene.tri_normals)),
-            planes: storage("planes", non_empty(&scene.planes)),
-            materials: storage("materials", non_empty(&scene.materials)),
-            lights: storage("lights", non_empty(&scene.lights)),
-        }
-    })
-}
-
 /// The bindings of `types.wgsl`: globals and tile (uniform), nodes and primitives
 /// (rgba32uint textures), the other scene arrays (read-only storage), the tile's output
 /// (read-write storage). Explicit, so that a binding the
@@ -924,25 +632,6 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("gpurt"),
         entries: &entries,
-    })
-}
-
-/// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of
-/// unfinished ones (read-write storage).
-fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpurt resume"),
-        entries: &[entry(0, true), entry(1, false), entry(2, false)],
     })
 }
 
@@ -1005,99 +694,6 @@ fn read_band(
         }
         (rays, cut)
     })
-}
-
-/// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.
-fn tile_side(spp: u32) -> u32 {
-    match spp {
-        0..=4 => 256,
-        5..=16 => 128,
-        _ => 64,
-    }
-}
-
-/// Rows of `TEXTURE_WIDTH` texels that hold `bytes` (at least one).
-fn texel_rows(bytes: usize) -> u32 {
-    (bytes.div_ceil(16) as u32).div_ceil(TEXTURE_WIDTH).max(1)
-}
-
-/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows.
-fn texels(device: &wgpu::Device, queue: &wgpu::Queue, label: &str, bytes: &[u8]) -> wgpu::Texture {
-    let rows = texel_rows(bytes.len());
-    let mut data = bytes.to_vec();
-    data.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
-    device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
-                width: TEXTURE_WIDTH,
-                height: rows,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &data,
-    )
-}
-
-/// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element
-/// (the shader never reads it, since the counts in `GpuGlobals` are zero).
-fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
-    const ZERO: [u8; 64] = [0; 64];
-    if v.is_empty() {
-        &ZERO[..size_of::<T>().max(4)]
-    } else {
-        bytemuck::cast_slice(v)
-    }
-}
-
-/// Refuses scenes that need a larger texture, storage binding or buffer than the device
-/// allows, naming the limit and the size needed.
-fn check_sizes(device: &wgpu::Device, scene: &SceneBuffers, out_bytes: u64) -> Result<()> {
-    let limits = device.limits();
-    let max_rows = limits.max_texture_dimension_2d;
-    for (what, bytes) in [
-        ("BVH nodes", size_of_val(&scene.nodes[..])),
-        ("primitives", size_of_val(&scene.prims[..])),
-    ] {
-        let rows = texel_rows(bytes);
-        if rows > max_rows {
-            return Err(Error::Gpu(format!(
-                "the scene's {what} need a texture {rows} rows high, but this adapter's \
-                 max_texture_dimension_2d is {max_rows}; render it with --backend cpu"
-            )));
-        }
-    }
-    let max_binding = limits.max_storage_buffer_binding_size;
-    let max_buffer = limits.max_buffer_size;
-    let arrays = [
-        (
-            "triangle normals",
-            size_of_val(&scene.tri_normals[..]) as u64,
-        ),
-        ("planes", size_of_val(&scene.planes[..]) as u64),
-        ("materials", size_of_val(&scene.materials[..]) as u64),
-        ("lights", size_of_val(&scene.lights[..]) as u64),
-        ("output band", out_bytes),
-    ];
-    for (what, bytes) in arrays {
-        let limit = max_binding.min(max_buffer);
-        if bytes > limit {
-            return Err(Error::Gpu(format!(
-                "the scene's {what} need {bytes} bytes in one storage buffer, but this adapter's \
-                 max_storage_buffer_binding_size is {max_binding} (max_buffer_size {max_buffer}); \
-                 render it with --backend cpu"
-            )));
-        }
-    }
-    Ok(())
 }
 
 /// Convenience for one render: compiles the pipeline (no disk cache) and renders.

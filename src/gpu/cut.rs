@@ -1,0 +1,110 @@
+//! How a frame is cut into GPU work: tiles (one bounded dispatch each, in passes of
+//! samples) and bands of full-width rows (one submission and one readback each).
+
+use std::ops::Range;
+
+use crate::gpu_types::GpuTile;
+
+/// Bytes per traced pixel: `PixelOut` (rgb + ray count).
+pub(super) const PIXEL_BYTES: u64 = 16;
+
+/// Largest output buffer a band of rows writes: far below the 128 MiB storage binding of
+/// lavapipe, large enough that a 4K frame at one sample takes two submissions.
+pub(super) const BAND_BYTES: u64 = 64 << 20;
+
+/// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
+/// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's
+/// samples (so that no dispatch runs long enough to trip a driver watchdog, and no
+/// invocation runs into lavapipe's loop limit for want of splitting); each band of
+/// full-width rows is one submission with one readback, whose output fits `BAND_BYTES`
+/// and whose work fits `band_samples`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Cut {
+    pub(super) width: u32,
+    pub(super) height: u32,
+    pub(super) spp: u32,
+    pub(super) pass_samples: u32,
+    pub(super) tile_side: u32,
+    pub(super) band_rows: u32,
+}
+
+impl Cut {
+    pub(super) fn new(
+        width: u32,
+        height: u32,
+        spp: u32,
+        pass_samples: u32,
+        band_samples: u64,
+        max_bytes: u64,
+    ) -> Cut {
+        let pass_samples = pass_samples.clamp(1, spp);
+        let tile_side = tile_side(pass_samples);
+        let row_bytes = u64::from(width) * PIXEL_BYTES;
+        let row_samples = u64::from(width) * u64::from(spp);
+        let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
+        // At least one row of tiles; whole rows of tiles, so only the last band is short.
+        let band_rows = (rows as u32 / tile_side).max(1) * tile_side;
+        Cut {
+            width,
+            height,
+            spp,
+            pass_samples,
+            tile_side,
+            band_rows: band_rows.min(height.next_multiple_of(tile_side)),
+        }
+    }
+
+    pub(super) fn passes(&self) -> u32 {
+        self.spp.div_ceil(self.pass_samples)
+    }
+
+    /// Dispatches per band: each tile once per pass.
+    pub(super) fn dispatches_per_band(&self) -> u32 {
+        self.width.div_ceil(self.tile_side)
+            * self.band_rows.div_ceil(self.tile_side)
+            * self.passes()
+    }
+
+    pub(super) fn band_bytes(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.band_rows) * PIXEL_BYTES
+    }
+
+    /// The first row of each band and its number of rows.
+    pub(super) fn bands(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
+        let (h, n) = (self.height, self.band_rows);
+        (0..h).step_by(n as usize).map(move |y| (y, n.min(h - y)))
+    }
+
+    /// The dispatches of the band starting at row `y0` for `samples`: every tile for the
+    /// first pass's samples, then every tile for the next pass's, and so on.
+    pub(super) fn tiles(&self, y0: u32, rows: u32, samples: &Range<u32>) -> Vec<GpuTile> {
+        let (w, side) = (self.width, self.tile_side);
+        let mut tiles = Vec::new();
+        for sample_start in samples.clone().step_by(self.pass_samples as usize) {
+            for y in (y0..y0 + rows).step_by(side as usize) {
+                for x in (0..w).step_by(side as usize) {
+                    tiles.push(GpuTile {
+                        x,
+                        y,
+                        width: side.min(w - x),
+                        height: side.min(y0 + rows - y),
+                        out_base: (y - y0) * w + x,
+                        out_stride: w,
+                        sample_start,
+                        sample_count: self.pass_samples.min(samples.end - sample_start),
+                    });
+                }
+            }
+        }
+        tiles
+    }
+}
+
+/// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.
+pub(super) fn tile_side(spp: u32) -> u32 {
+    match spp {
+        0..=4 => 256,
+        5..=16 => 128,
+        _ => 64,
+    }
+}

@@ -1,0 +1,183 @@
+//! Pixels whose work did not fit one invocation (lavapipe's loop limit) are finished by
+//! the `resume` entry point, which keeps each pixel's whole state in storage and goes
+//! on from where it stopped, one bounded dispatch after another.
+
+use std::collections::HashMap;
+use std::ops::Range;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use wgpu::util::DeviceExt;
+
+use super::render::{GpuScene, read_mapped, scoped};
+use super::specialization::Specialization;
+use crate::error::{Error, Result};
+use crate::film::Film;
+use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
+
+/// The `resume` entry point: its group 1 layout, its pipeline layout (groups 0 and 1),
+/// and its pipelines compiled so far, one per `Specialization`, each on first use (most
+/// renders never need one), shared by every scene a `GpuRenderer` uploads.
+pub(super) struct ResumePipelines {
+    pub(super) layout: wgpu::BindGroupLayout,
+    pub(super) pipeline_layout: wgpu::PipelineLayout,
+    pub(super) module: wgpu::ShaderModule,
+    pub(super) compiled: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
+}
+
+impl ResumePipelines {
+    pub(super) fn get(
+        &self,
+        device: &wgpu::Device,
+        spec: Specialization,
+    ) -> Result<wgpu::ComputePipeline> {
+        let mut compiled = self.compiled.lock().expect("not poisoned");
+        if let Some(p) = compiled.get(&spec) {
+            return Ok(p.clone());
+        }
+        let constants = spec.constants();
+        let p = scoped(device, "compiling the shader", || {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("gpurt resume"),
+                layout: Some(&self.pipeline_layout),
+                module: &self.module,
+                entry_point: Some("resume"),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &constants,
+                    zero_initialize_workgroup_memory: false,
+                },
+                cache: None,
+            })
+        })?;
+        compiled.insert(spec, p.clone());
+        Ok(p)
+    }
+}
+
+/// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
+pub(super) const RESUME_CHUNK: usize = 16384;
+
+/// Traces `samples` of the pixels (x | y << 16) whose work did not fit one invocation,
+/// with the `resume` entry point, one dispatch after another until none is left, and adds
+/// them to `sums`. Returns their rays and how many were still cut short.
+pub(super) fn resume(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    pixels: &[u32],
+    samples: &Range<u32>,
+    sums: &mut Film,
+    cancel: &AtomicBool,
+) -> Result<(u64, u64)> {
+    let pipeline = &scene.resume.get(device, scene.spec)?;
+    let (mut rays, mut cut_short) = (0u64, 0u64);
+    for chunk in pixels.chunks(RESUME_CHUNK) {
+        let n = chunk.len() as u32;
+        let state_bytes = u64::from(n) * size_of::<GpuPixelState>() as u64;
+        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        let (state, pending, pending_back, state_back, group) =
+            scoped(device, "resuming pixels", || {
+                let list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("resume pixels"),
+                    contents: bytemuck::cast_slice(chunk),
+                    usage: U::STORAGE,
+                });
+                let state = buffer("resume state", state_bytes, U::STORAGE | U::COPY_SRC);
+                let pending = buffer("resume pending", 4, U::STORAGE | U::COPY_DST | U::COPY_SRC);
+                let pending_back = buffer("resume pending readback", 4, U::MAP_READ | U::COPY_DST);
+                let state_back = buffer(
+                    "resume state readback",
+                    state_bytes,
+                    U::MAP_READ | U::COPY_DST,
+                );
+                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("gpurt resume"),
+                    layout: &scene.resume.layout,
+                    entries: &[&list, &state, &pending]
+                        .iter()
+                        .enumerate()
+                        .map(|(i, b)| wgpu::BindGroupEntry {
+                            binding: i as u32,
+                            resource: b.as_entire_binding(),
+                        })
+                        .collect::<Vec<_>>(),
+                });
+                (state, pending, pending_back, state_back, group)
+            })?;
+        for round in 0u32.. {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Error::Interrupted);
+            }
+            let tile = GpuTile {
+                x: samples.start,
+                y: samples.end,
+                width: n,
+                sample_start: round,
+                ..Default::default()
+            };
+            scoped(device, "resuming pixels", || {
+                queue.write_buffer(&scene.bound.tile_buf, 0, bytemuck::bytes_of(&tile));
+                queue.write_buffer(&pending, 0, &[0; 4]);
+                let mut enc = device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &scene.bound.bind_group, &[0]);
+                    pass.set_bind_group(1, &group, &[]);
+                    pass.dispatch_workgroups(n.div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
+                }
+                enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
+                queue.submit([enc.finish()]);
+            })?;
+            let left: u32 = read_mapped(device, &pending_back, 4, |b| {
+                bytemuck::pod_read_unaligned(b)
+            })?;
+            if left == 0 {
+                break;
+            }
+        }
+        scoped(device, "resuming pixels", || {
+            let mut enc = device.create_command_encoder(&Default::default());
+            enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
+            queue.submit([enc.finish()]);
+        })?;
+        read_mapped(device, &state_back, state_bytes, |bytes| {
+            let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
+            for (&xy, st) in chunk.iter().zip(states) {
+                let (x, y) = (xy & 0xffff, xy >> 16);
+                let sum = sums.get(x, y);
+                sums.set(x, y, [0, 1, 2].map(|c| sum[c] + st.sum[c]));
+                rays += u64::from(st.rays);
+                cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
+            }
+        })?;
+    }
+    Ok((rays, cut_short))
+}
+
+/// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of
+/// unfinished ones (read-write storage).
+pub(super) fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("gpurt resume"),
+        entries: &[entry(0, true), entry(1, false), entry(2, false)],
+    })
+}

@@ -1,0 +1,156 @@
+//! A scene's arrays on the device: uploaded once (nodes and primitives as textures, the
+//! rest as storage buffers), checked first against the device's limits.
+
+use wgpu::util::DeviceExt;
+
+use super::render::scoped;
+use crate::error::{Error, Result};
+use crate::gpu_types::TEXTURE_WIDTH;
+use crate::pack::SceneBuffers;
+
+/// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
+pub(super) struct SceneData {
+    pub(super) nodes: wgpu::TextureView,
+    pub(super) prims: wgpu::TextureView,
+    pub(super) tri_normals: wgpu::Buffer,
+    pub(super) planes: wgpu::Buffer,
+    pub(super) materials: wgpu::Buffer,
+    pub(super) lights: wgpu::Buffer,
+}
+
+/// Device memory a scene's arrays take: the node and primitive textures (padded to whole
+/// rows) and the other arrays.
+pub(super) fn scene_bytes(scene: &SceneBuffers) -> u64 {
+    let texture = |bytes: usize| u64::from(texel_rows(bytes)) * u64::from(TEXTURE_WIDTH) * 16;
+    texture(size_of_val(&scene.nodes[..]))
+        + texture(size_of_val(&scene.prims[..]))
+        + [
+            non_empty(&scene.tri_normals).len(),
+            non_empty(&scene.planes).len(),
+            non_empty(&scene.materials).len(),
+            non_empty(&scene.lights).len(),
+        ]
+        .iter()
+        .map(|&b| b as u64)
+        .sum::<u64>()
+}
+
+/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage.
+pub(super) fn upload_scene(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+) -> Result<SceneData> {
+    let storage = |label: &str, bytes: &[u8]| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        })
+    };
+    scoped(device, "uploading the scene", || {
+        let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
+        let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
+        SceneData {
+            nodes: nodes.create_view(&Default::default()),
+            prims: prims.create_view(&Default::default()),
+            tri_normals: storage("tri_normals", non_empty(&scene.tri_normals)),
+            planes: storage("planes", non_empty(&scene.planes)),
+            materials: storage("materials", non_empty(&scene.materials)),
+            lights: storage("lights", non_empty(&scene.lights)),
+        }
+    })
+}
+
+/// Rows of `TEXTURE_WIDTH` texels that hold `bytes` (at least one).
+pub(super) fn texel_rows(bytes: usize) -> u32 {
+    (bytes.div_ceil(16) as u32).div_ceil(TEXTURE_WIDTH).max(1)
+}
+
+/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows.
+pub(super) fn texels(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    label: &str,
+    bytes: &[u8],
+) -> wgpu::Texture {
+    let rows = texel_rows(bytes.len());
+    let mut data = bytes.to_vec();
+    data.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
+    device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some(label),
+            size: wgpu::Extent3d {
+                width: TEXTURE_WIDTH,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &data,
+    )
+}
+
+/// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element
+/// (the shader never reads it, since the counts in `GpuGlobals` are zero).
+pub(super) fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
+    const ZERO: [u8; 64] = [0; 64];
+    if v.is_empty() {
+        &ZERO[..size_of::<T>().max(4)]
+    } else {
+        bytemuck::cast_slice(v)
+    }
+}
+
+/// Refuses scenes that need a larger texture, storage binding or buffer than the device
+/// allows, naming the limit and the size needed.
+pub(super) fn check_sizes(
+    device: &wgpu::Device,
+    scene: &SceneBuffers,
+    out_bytes: u64,
+) -> Result<()> {
+    let limits = device.limits();
+    let max_rows = limits.max_texture_dimension_2d;
+    for (what, bytes) in [
+        ("BVH nodes", size_of_val(&scene.nodes[..])),
+        ("primitives", size_of_val(&scene.prims[..])),
+    ] {
+        let rows = texel_rows(bytes);
+        if rows > max_rows {
+            return Err(Error::Gpu(format!(
+                "the scene's {what} need a texture {rows} rows high, but this adapter's \
+                 max_texture_dimension_2d is {max_rows}; render it with --backend cpu"
+            )));
+        }
+    }
+    let max_binding = limits.max_storage_buffer_binding_size;
+    let max_buffer = limits.max_buffer_size;
+    let arrays = [
+        (
+            "triangle normals",
+            size_of_val(&scene.tri_normals[..]) as u64,
+        ),
+        ("planes", size_of_val(&scene.planes[..]) as u64),
+        ("materials", size_of_val(&scene.materials[..]) as u64),
+        ("lights", size_of_val(&scene.lights[..]) as u64),
+        ("output band", out_bytes),
+    ];
+    for (what, bytes) in arrays {
+        let limit = max_binding.min(max_buffer);
+        if bytes > limit {
+            return Err(Error::Gpu(format!(
+                "the scene's {what} need {bytes} bytes in one storage buffer, but this adapter's \
+                 max_storage_buffer_binding_size is {max_binding} (max_buffer_size {max_buffer}); \
+                 render it with --backend cpu"
+            )));
+        }
+    }
+    Ok(())
+}
