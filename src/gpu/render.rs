@@ -79,6 +79,34 @@ pub(super) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T
     }
 }
 
+/// Compiles the shader's entry point `entry` for a specialisation.
+pub(super) fn compile(
+    device: &wgpu::Device,
+    layout: &wgpu::PipelineLayout,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    spec: Specialization,
+    cache: Option<&wgpu::PipelineCache>,
+) -> Result<wgpu::ComputePipeline> {
+    let constants = spec.constants();
+    scoped(device, "compiling the shader", || {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(entry),
+            layout: Some(layout),
+            module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                // Every traversal-stack entry is written before it is read, so the
+                // workgroup memory needs no zeroing (wgpu would otherwise add stores
+                // and a barrier to the start of every workgroup).
+                zero_initialize_workgroup_memory: false,
+            },
+            cache,
+        })
+    })
+}
+
 /// An error with its causes: wgpu's `Display` alone says only "Validation Error".
 fn error_chain(e: &dyn std::error::Error) -> String {
     let mut s = e.to_string();
@@ -181,23 +209,14 @@ impl GpuRenderer {
             return Ok(p.clone());
         }
         let start = Instant::now();
-        let constants = spec.constants();
-        let pipeline = scoped(device, "compiling the shader", || {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("gpurt"),
-                layout: Some(&self.pipeline_layout),
-                module: &self.module,
-                entry_point: Some("main"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    // Every traversal-stack entry is written before it is read, so the
-                    // workgroup memory needs no zeroing (wgpu would otherwise add stores
-                    // and a barrier to the start of every workgroup).
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: self.cache.as_ref().map(|(c, _)| c),
-            })
-        })?;
+        let pipeline = compile(
+            device,
+            &self.pipeline_layout,
+            &self.module,
+            "main",
+            spec,
+            self.cache.as_ref().map(|(c, _)| c),
+        )?;
         self.warm_up(device, queue, &pipeline)?;
         if let Some((cache, file)) = &self.cache
             && let Some(data) = cache.get_data()

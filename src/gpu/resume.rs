@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use wgpu::util::DeviceExt;
 
-use super::render::{GpuScene, read_mapped, scoped};
+use super::render::{GpuScene, compile, read_mapped, scoped};
 use super::specialization::Specialization;
 use crate::error::{Error, Result};
 use crate::film::Film;
@@ -35,20 +35,14 @@ impl ResumePipelines {
         if let Some(p) = compiled.get(&spec) {
             return Ok(p.clone());
         }
-        let constants = spec.constants();
-        let p = scoped(device, "compiling the shader", || {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some("gpurt resume"),
-                layout: Some(&self.pipeline_layout),
-                module: &self.module,
-                entry_point: Some("resume"),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &constants,
-                    zero_initialize_workgroup_memory: false,
-                },
-                cache: None,
-            })
-        })?;
+        let p = compile(
+            device,
+            &self.pipeline_layout,
+            &self.module,
+            "resume",
+            spec,
+            None,
+        )?;
         compiled.insert(spec, p.clone());
         Ok(p)
     }
