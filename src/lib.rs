@@ -22,5 +22,6 @@ pub mod pack;
 pub mod run;
 pub mod scene;
 pub mod session;
+pub mod view;
 
 pub use error::{Error, Result};

@@ -17,6 +17,7 @@ use gpurt::frame::{
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::run::{self, Prepared};
 use gpurt::session::{CpuRenderer, GpuSession, Renderer};
+use gpurt::view::wireframe::{self, Wireframe};
 use gpurt::{Error, out, outln};
 use gpurt::{agreement, atomic, film};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -104,17 +105,27 @@ enum Aov {
     Normal,
     Depth,
     Cost,
+    /// The wireframe alone (drawn by the GPU), as `gpurt view` shows it.
+    Wireframe,
 }
 
 impl Aov {
-    fn code(self) -> u32 {
+    /// The shader's AOV; the wireframe traces no rays.
+    fn code(self) -> Option<u32> {
         match self {
-            Aov::Color => gt::AOV_COLOR,
-            Aov::Normal => gt::AOV_NORMAL,
-            Aov::Depth => gt::AOV_DEPTH,
-            Aov::Cost => gt::AOV_COST,
+            Aov::Color => Some(gt::AOV_COLOR),
+            Aov::Normal => Some(gt::AOV_NORMAL),
+            Aov::Depth => Some(gt::AOV_DEPTH),
+            Aov::Cost => Some(gt::AOV_COST),
+            Aov::Wireframe => None,
         }
     }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum Overlay {
+    /// The scene's edges, projected from the ray tracer's camera.
+    Wireframe,
 }
 
 #[derive(clap::Args)]
@@ -158,6 +169,13 @@ struct RenderArgs {
     /// Debug output instead of shaded colour.
     #[arg(long, value_enum, default_value_t = Aov::Color)]
     aov: Aov,
+    /// Draw this over the image (on the GPU; lavapipe will do).
+    #[arg(long, value_enum)]
+    overlay: Option<Overlay>,
+    /// Take the camera from this file's NFF `v` block (as `gpurt view` prints it with C)
+    /// instead of the scene's.
+    #[arg(long, value_name = "FILE")]
+    view: Option<PathBuf>,
     /// Print timings, rays traced, Mrays/s and peak memory.
     #[arg(long)]
     stats: bool,
@@ -381,11 +399,14 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
     let Prepared {
-        buffers,
+        mut buffers,
         warnings,
         parse_time,
         build_time,
     } = run::prepare(scene_path)?;
+    if let Some(view) = &args.view {
+        buffers.camera = gpurt::scene::load(view)?.camera;
+    }
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -396,7 +417,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         spp: args.spp,
         max_depth: args.depth,
         ambient: args.ambient,
-        aov: args.aov.code(),
+        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
         seed: args.seed,
     };
     let globals = frame::globals(&buffers, &opts);
@@ -405,10 +426,13 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
     // image is compared against it.
     let mut renderers: Vec<(&str, Box<dyn Renderer>)> = Vec::new();
-    if args.backend != Backend::Gpu {
+    let wireframe_only = args.aov == Aov::Wireframe;
+    if wireframe_only {
+        // Nothing to trace: the wireframe is drawn below.
+    } else if args.backend != Backend::Gpu {
         renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
     }
-    if args.backend != Backend::Cpu {
+    if args.backend != Backend::Cpu && !wireframe_only {
         match gpurt::gpu::open(args.adapter.as_deref()) {
             Ok(ctx) => renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?))),
             // An adapter asked for by name that is missing is an error, not a fallback.
@@ -462,8 +486,16 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
             return Ok(ExitCode::from(1));
         }
     }
-    let film = films.pop().expect("one renderer ran");
-    film.save_aov(&output, opts.aov)?;
+    if wireframe_only || args.overlay == Some(Overlay::Wireframe) {
+        let ctx = gpurt::gpu::open(args.adapter.as_deref())?;
+        let wire = Wireframe::new(&ctx.device, &buffers, wireframe::IMAGE_FORMAT)?;
+        let under = films.pop().map(|f| f.for_display(opts.aov).to_rgb8());
+        let image = wire.draw_image(&ctx.device, &ctx.queue, &globals, under.as_ref())?;
+        film::save_rgb8(&image, &output)?;
+    } else {
+        let film = films.pop().expect("one renderer ran");
+        film.save_aov(&output, opts.aov)?;
+    }
     if args.stats {
         eprintln!(
             "image       {}x{}, {} spp, depth {}",

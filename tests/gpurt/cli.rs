@@ -445,3 +445,75 @@ fn two_scenes_are_refused_with_a_clear_message() {
     );
     assert!(!d.join("a.png").exists() && !d.join("b.png").exists());
 }
+
+/// `--view FILE` takes the camera from a file's `v` block: the image is the one of the
+/// scene with that block in place of its own, to the bit (CPU backend).
+#[test]
+fn a_view_file_replaces_the_scene_camera() {
+    let d = workdir("view-file");
+    let view = "v\nfrom 1.5 -3 2\nat 0.2 0 0\nup 0 0 1\nangle 35\nhither 0.01\nresolution 40 30\n";
+    std::fs::write(d.join("scene.nff"), SCENE).unwrap();
+    std::fs::write(d.join("view.nff"), view).unwrap();
+    let moved = SCENE.replace(
+        "v\nfrom 0 -4 1\nat 0 0 0\nup 0 0 1\nangle 40\nresolution 32 32\n",
+        view,
+    );
+    assert_ne!(moved, SCENE);
+    std::fs::write(d.join("moved.nff"), moved).unwrap();
+    for (scene, out, extra) in [
+        ("scene.nff", "a.png", vec!["--view", "view.nff"]),
+        ("moved.nff", "b.png", vec![]),
+        ("scene.nff", "c.png", vec![]),
+    ] {
+        let mut args = vec![scene, "--backend", "cpu", "-o", out];
+        args.extend(extra);
+        let o = gpurt(&args, &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb8();
+    assert_eq!(read("a.png").dimensions(), (40, 30));
+    assert_eq!(read("a.png"), read("b.png"));
+    let o = gpurt(&["scene.nff", "--view", "missing.nff", "-o", "x.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!d.join("x.png").exists());
+}
+
+/// `--overlay wireframe` draws the wireframe (`--aov wireframe` alone) over the image:
+/// every pixel is either the plain render's or the line colour, the lines are where the
+/// wireframe alone has them, and there are some.
+#[test]
+fn the_wireframe_overlay_is_the_render_plus_the_lines() {
+    if crate::common::gpu_context().is_none() {
+        return;
+    }
+    let d = workdir("overlay");
+    std::fs::write(d.join("scene.nff"), SCENE).unwrap();
+    for (out, extra) in [
+        ("plain.png", vec![]),
+        ("over.png", vec!["--overlay", "wireframe"]),
+        ("wire.png", vec!["--aov", "wireframe"]),
+    ] {
+        let mut args = vec!["scene.nff", "--backend", "cpu", "--width", "61", "-o", out];
+        args.extend(extra);
+        let o = gpurt(&args, &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb8();
+    let (plain, over, wire) = (read("plain.png"), read("over.png"), read("wire.png"));
+    let line = gpurt::view::wireframe::LINE_COLOR.map(gpurt::film::quantize);
+    let mut lines = 0;
+    for ((p, o), w) in plain.pixels().zip(over.pixels()).zip(wire.pixels()) {
+        if w.0 == [0, 0, 0] {
+            assert_eq!(o, p, "off the lines the overlay is the render");
+        } else {
+            assert_eq!(w.0, line[..3]);
+            assert_eq!(o.0, line[..3]);
+            lines += 1;
+        }
+    }
+    let n = plain.pixels().len();
+    assert!(
+        lines > n / 50 && lines < n / 2,
+        "{lines} of {n} pixels are lines"
+    );
+}

@@ -9,3 +9,4 @@ mod gpu;
 mod layout;
 mod parse;
 mod session;
+mod view;
