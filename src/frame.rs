@@ -51,12 +51,8 @@ impl RenderOptions {
 /// Per-render constants: the camera basis of shading.md and the options.
 pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
     let c = &buffers.camera;
-    let forward = (c.at - c.from).normalize();
-    let right = forward.cross(c.up).normalize();
-    let up = right.cross(forward);
-    // `angle` spans the centres of the top and bottom rows: H - 1 pixel pitches.
-    let rows = (opts.height.max(2) - 1) as f32;
-    let pixel_pitch = 2.0 * (c.angle.to_radians() * 0.5).tan() / rows;
+    let (forward, right, up) = camera_basis(c);
+    let pixel_pitch = pixel_pitch(c.angle, opts.height);
     GpuGlobals {
         cam_pos: c.from,
         hither: c.hither,
@@ -82,6 +78,21 @@ pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
         n_lights: buffers.lights.len() as u32,
         aov: opts.aov,
     }
+}
+
+/// The camera's forward, right and up unit vectors (shading.md): right is perpendicular
+/// to `up` and the view, and the camera's up is perpendicular to both.
+pub fn camera_basis(c: &Camera) -> (Vec3, Vec3, Vec3) {
+    let forward = (c.at - c.from).normalize();
+    let right = forward.cross(c.up).normalize();
+    (forward, right, right.cross(forward))
+}
+
+/// Pixel pitch at unit distance for a vertical `angle` (degrees) over `height` rows:
+/// `angle` spans the centres of the top and bottom rows, H - 1 pitches.
+pub fn pixel_pitch(angle: f32, height: u32) -> f32 {
+    let rows = (height.max(2) - 1) as f32;
+    2.0 * (angle.to_radians() * 0.5).tan() / rows
 }
 
 #[cfg(test)]

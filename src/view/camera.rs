@@ -8,6 +8,7 @@
 
 use glam::{Quat, Vec3};
 
+use crate::frame;
 use crate::scene::Camera;
 
 /// How close (in degrees) the view direction may come to the world up axis or its
@@ -99,7 +100,8 @@ impl OrbitCamera {
                 dy,
             } => {
                 // One pixel at the focus distance, so the focus follows the pointer.
-                let px = self.distance() * self.pixel_pitch();
+                let px =
+                    self.distance() * frame::pixel_pitch(self.camera.angle, self.camera.height);
                 let (_, right, up) = self.basis();
                 self.translate(-dx * px * right + dy * px * up);
             }
@@ -178,20 +180,12 @@ impl OrbitCamera {
     }
 
     fn forward(&self) -> Vec3 {
-        (self.camera.at - self.camera.from).normalize_or(Vec3::NEG_Z)
+        self.basis().0
     }
 
-    /// Forward, right and up of the view, as `frame::globals` builds them.
+    /// Forward, right and up of the view: the ray tracer's.
     fn basis(&self) -> (Vec3, Vec3, Vec3) {
-        let forward = self.forward();
-        let right = forward.cross(self.camera.up).normalize_or(Vec3::X);
-        (forward, right, right.cross(forward))
-    }
-
-    /// Pixel pitch at unit distance, as `frame::globals` computes it.
-    fn pixel_pitch(&self) -> f32 {
-        let rows = (self.camera.height.max(2) - 1) as f32;
-        2.0 * (self.camera.angle.to_radians() * 0.5).tan() / rows
+        frame::camera_basis(&self.camera)
     }
 
     /// Moves the eye and the focus by the same vector.
