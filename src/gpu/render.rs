@@ -67,7 +67,7 @@ fn cache_dir() -> Option<PathBuf> {
 
 /// Runs `f` inside validation and out-of-memory error scopes, turning any captured error
 /// into `Error::Gpu` (never a silent black image).
-pub(super) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = f();
@@ -462,7 +462,7 @@ impl GpuScene {
 }
 
 /// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps.
-pub(super) fn read_mapped<T>(
+pub(crate) fn read_mapped<T>(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     bytes: u64,

@@ -16,6 +16,7 @@ use image::RgbImage;
 use wgpu::util::DeviceExt;
 
 use crate::error::{Error, Result};
+use crate::gpu::render::{read_mapped, scoped};
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
@@ -219,89 +220,94 @@ impl Wireframe {
         format: wgpu::TextureFormat,
     ) -> Result<Self> {
         let points = segments(scene);
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("wireframe"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("../../shaders/wireframe.wgsl").into()),
-        });
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("wireframe"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
+        // Pipeline or buffer errors become `Error::Gpu`, not wgpu's panicking handler.
+        scoped(device, "building the wireframe", || {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("wireframe"),
+                source: wgpu::ShaderSource::Wgsl(
+                    include_str!("../../shaders/wireframe.wgsl").into(),
+                ),
+            });
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("wireframe"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                }],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("wireframe"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
+            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("wireframe"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: size_of::<Vec3>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
+                    })],
                 },
-                count: None,
-            }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("wireframe"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("wireframe"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: size_of::<Vec3>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                })],
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[Some(format.into())],
-            }),
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: None,
-            multisample: Default::default(),
-            multiview_mask: None,
-            cache: None,
-        });
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("wireframe frame"),
-            size: size_of::<FrameUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("wireframe"),
-            layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniform.as_entire_binding(),
-            }],
-        });
-        // wgpu cannot make an empty buffer: an empty scene draws one degenerate segment.
-        let flat: Vec<[f32; 3]> = if points.is_empty() {
-            vec![[0.0; 3]; 2]
-        } else {
-            points.iter().map(|p| p.to_array()).collect()
-        };
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("wireframe vertices"),
-            contents: bytemuck::cast_slice(&flat),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        Ok(Wireframe {
-            pipeline,
-            bind_group,
-            uniform,
-            vertices,
-            vertex_count: points.len() as u32,
-            bounds: scene.bounds,
-            focus: scene.camera.at,
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_main"),
+                    compilation_options: Default::default(),
+                    targets: &[Some(format.into())],
+                }),
+                primitive: wgpu::PrimitiveState {
+                    topology: wgpu::PrimitiveTopology::LineList,
+                    ..Default::default()
+                },
+                depth_stencil: None,
+                multisample: Default::default(),
+                multiview_mask: None,
+                cache: None,
+            });
+            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("wireframe frame"),
+                size: size_of::<FrameUniform>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("wireframe"),
+                layout: &layout,
+                entries: &[wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                }],
+            });
+            // wgpu cannot make an empty buffer: an empty scene draws one degenerate segment.
+            let flat: Vec<[f32; 3]> = if points.is_empty() {
+                vec![[0.0; 3]; 2]
+            } else {
+                points.iter().map(|p| p.to_array()).collect()
+            };
+            let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("wireframe vertices"),
+                contents: bytemuck::cast_slice(&flat),
+                usage: wgpu::BufferUsages::VERTEX,
+            });
+            Wireframe {
+                pipeline,
+                bind_group,
+                uniform,
+                vertices,
+                vertex_count: points.len() as u32,
+                bounds: scene.bounds,
+                focus: scene.camera.at,
+            }
         })
     }
 
@@ -420,28 +426,16 @@ impl Wireframe {
             texture.size(),
         );
         queue.submit([enc.finish()]);
-        let slice = readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(format!("drawing the wireframe: {e}")))?;
-        rx.recv()
-            .map_err(|_| Error::Gpu("wireframe readback never completed".into()))?
-            .map_err(|e| Error::Gpu(format!("reading the wireframe back: {e}")))?;
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("reading the wireframe back: {e}")))?;
-        let mut img = RgbImage::new(w, h);
-        for (y, line) in view.chunks(row as usize).enumerate() {
-            for x in 0..w as usize {
-                let p = &line[4 * x..4 * x + 3];
-                img.put_pixel(x as u32, y as u32, image::Rgb([p[0], p[1], p[2]]));
+        read_mapped(device, &readback, u64::from(row) * u64::from(h), |view| {
+            let mut img = RgbImage::new(w, h);
+            for (y, line) in view.chunks(row as usize).enumerate() {
+                for x in 0..w as usize {
+                    let p = &line[4 * x..4 * x + 3];
+                    img.put_pixel(x as u32, y as u32, image::Rgb([p[0], p[1], p[2]]));
+                }
             }
-        }
-        Ok(img)
+            img
+        })
     }
 }
 
