@@ -16,48 +16,12 @@ use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Bounds, Cone, MaterialId, Scene};
 
-use crate::common::{files_with, shared_scenes};
+use crate::common::{XorShift, files_with, shared_scenes};
 
 /// Scenes larger than this are left to the render tests: brute force is quadratic-ish.
 const SMALL_SCENE_BYTES: u64 = 400 * 1024;
 /// Random rays per scene and per kind of origin (three kinds, see `random_rays`).
 const RAYS_PER_KIND: usize = 1000;
-
-/// xorshift64*: deterministic, seedable, good enough to spray rays.
-struct XorShift(u64);
-
-impl XorShift {
-    fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    /// Uniform in [0, 1).
-    fn unit(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.unit()
-    }
-    fn point_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(
-            self.range(lo.x, hi.x),
-            self.range(lo.y, hi.y),
-            self.range(lo.z, hi.z),
-        )
-    }
-    /// Uniform on the unit sphere (rejection from the cube).
-    fn direction(&mut self) -> Vec3 {
-        loop {
-            let v = self.point_in(Vec3::NEG_ONE, Vec3::ONE);
-            let l2 = v.length_squared();
-            if l2 > 1e-4 && l2 <= 1.0 {
-                return v / l2.sqrt();
-            }
-        }
-    }
-}
 
 /// Every shared scene small enough for brute force (plain text, under 400 KB).
 fn small_scenes() -> Vec<PathBuf> {

@@ -1,6 +1,8 @@
 //! Helpers shared by the test modules.
 
 use std::path::{Path, PathBuf};
+
+use glam::Vec3;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Whether missing prerequisites (shared scenes, a GPU adapter) must fail tests rather
@@ -88,4 +90,40 @@ pub fn temp_dir(tag: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("temporary directory can be created");
     dir
+}
+
+/// xorshift64*: deterministic, seedable, good enough to spray rays.
+pub struct XorShift(pub u64);
+
+impl XorShift {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.unit()
+    }
+    pub fn point_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+        Vec3::new(
+            self.range(lo.x, hi.x),
+            self.range(lo.y, hi.y),
+            self.range(lo.z, hi.z),
+        )
+    }
+    /// Uniform on the unit sphere (rejection from the cube).
+    pub fn direction(&mut self) -> Vec3 {
+        loop {
+            let v = self.point_in(Vec3::NEG_ONE, Vec3::ONE);
+            let l2 = v.length_squared();
+            if l2 > 1e-4 && l2 <= 1.0 {
+                return v / l2.sqrt();
+            }
+        }
+    }
 }

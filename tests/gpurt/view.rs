@@ -12,15 +12,7 @@ use gpurt::scene;
 use gpurt::view::wireframe::{self, Wireframe};
 use image::RgbImage;
 
-use crate::common::{gpu_context, own_scenes};
-
-/// A small deterministic generator (xorshift), uniform in [0, 1).
-fn uniform(state: &mut u64) -> f32 {
-    *state ^= *state << 13;
-    *state ^= *state >> 7;
-    *state ^= *state << 17;
-    (*state >> 40) as f32 / (1u64 << 24) as f32
-}
+use crate::common::{XorShift, gpu_context, own_scenes};
 
 /// mesh.nff (three placed STL icosahedra and polygons) at an odd, non-square size.
 fn mesh_frame() -> (SceneBuffers, GpuGlobals) {
@@ -50,15 +42,12 @@ fn projected_points_lie_on_the_primary_ray_of_their_pixel() {
     let (buffers, g) = mesh_frame();
     let (near, far) = wireframe::depth_range(&buffers.bounds, buffers.camera.at, &g);
     let vp = wireframe::view_projection(&g, near, far);
-    let mut state = 0x9e3779b97f4a7c15;
+    let mut rng = XorShift(0x9e3779b97f4a7c15);
     let mut checked = 0;
     while checked < 2000 {
         // A point in view: along the ray of a random spot of the image, at a random depth.
-        let spot = Vec2::new(
-            uniform(&mut state) * g.width as f32,
-            uniform(&mut state) * g.height as f32,
-        );
-        let depth = 10.0 * near + (far - near) * uniform(&mut state).powi(3);
+        let spot = Vec2::new(rng.unit() * g.width as f32, rng.unit() * g.height as f32);
+        let depth = 10.0 * near + (far - near) * rng.unit().powi(3);
         let ray = camera_ray(&g, spot.x, spot.y, &mut 0);
         let p = ray.origin + ray.dir * depth;
         let px = wireframe::project(&vp, &g, p).expect("in front of the eye");
