@@ -41,6 +41,9 @@ pub enum Error {
     /// buffers or an accumulator do not fit).
     #[error("{0}")]
     Render(String),
+    /// The viewer found no display to open its window on.
+    #[error("cannot open a window: {0}")]
+    NoDisplay(String),
     #[error("interrupted")]
     Interrupted,
 }

@@ -50,7 +50,11 @@ impl RenderOptions {
 
 /// Per-render constants: the camera basis of shading.md and the options.
 pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
-    let c = &buffers.camera;
+    globals_from(buffers, &buffers.camera, opts)
+}
+
+/// `globals` seen from another camera than the scene's (the viewer's).
+pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) -> GpuGlobals {
     let (forward, right, up) = camera_basis(c);
     let pixel_pitch = pixel_pitch(c.angle, opts.height);
     GpuGlobals {

@@ -61,6 +61,10 @@ enum Command {
         #[arg(long, value_parser = parse_limit)]
         max_bad: Option<f64>,
     },
+    /// Open a window on a scene: ray traced progressively, with a wireframe preview that
+    /// shares the ray tracer's camera. Without a display, says so and exits 2.
+    #[command(after_help = gpurt::view::controls::key_help())]
+    View(ViewArgs),
     /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
     /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
     Bench {
@@ -86,6 +90,60 @@ enum Command {
         #[arg(long)]
         adapter: Option<String>,
     },
+}
+
+#[derive(clap::Args)]
+struct ViewArgs {
+    /// Scene to view (as for rendering).
+    scene: PathBuf,
+    /// Window width (default: the scene's resolution).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    width: Option<u32>,
+    /// Window height.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    height: Option<u32>,
+    /// Stop accumulating after this many samples per pixel (default: the most a frame may
+    /// have, MAX_SPP).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    spp: Option<u32>,
+    /// Maximum ray depth, the eye ray counting as 1.
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    depth: u32,
+    #[arg(long, value_parser = parse_colour, help = format!(
+        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
+    ))]
+    ambient: Option<Vec3>,
+    /// Seed of the sample hash.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
+    #[arg(long, value_enum, default_value_t = ViewBackend::Gpu)]
+    backend: ViewBackend,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    adapter: Option<String>,
+    /// Start from this file's NFF `v` block instead of the scene's camera.
+    #[arg(long, value_name = "FILE")]
+    view: Option<PathBuf>,
+    /// Replay the input events in this file (drag, pan, wheel, key, wait; see
+    /// docs/viewer.md).
+    #[arg(long, value_name = "EVENTS")]
+    script: Option<PathBuf>,
+    /// After the script (and, with --spp, once the view has its samples), write what the
+    /// window shows to this file and exit.
+    #[arg(long, value_name = "OUT.png", requires = "script")]
+    screenshot: Option<PathBuf>,
+    /// On exit, print the time to the first picture, frame times and tracing rates.
+    #[arg(long)]
+    stats: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ViewBackend {
+    /// WGSL compute through wgpu.
+    Gpu,
+    /// The CPU reference renderer.
+    Cpu,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -229,6 +287,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 }
 
 fn main() -> ExitCode {
+    let launch = Instant::now();
     quiet_device_select();
     let cli = Cli::parse();
     let result = match cli.command {
@@ -259,6 +318,7 @@ fn main() -> ExitCode {
             adapter,
         })
         .map(|()| ExitCode::SUCCESS),
+        Some(Command::View(args)) => view(args, launch),
         None => render_command(cli.render),
     };
     match result {
@@ -272,6 +332,52 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
+    use gpurt::view::window::{self, Backend as Tracing, ViewOptions};
+    if let Some(shot) = &args.screenshot {
+        film::Format::from_path(shot)?;
+        atomic::check_writable(shot)?;
+    }
+    let script = args
+        .script
+        .as_deref()
+        .map(gpurt::view::script::load)
+        .transpose()?;
+    let Prepared {
+        mut buffers,
+        warnings,
+        ..
+    } = run::prepare(&args.scene)?;
+    if let Some(view) = &args.view {
+        buffers.camera = gpurt::scene::load(view)?.camera;
+    }
+    for w in &warnings {
+        eprintln!("gpurt: warning: {w}");
+    }
+    window::run(
+        buffers,
+        ViewOptions {
+            name: args.scene.display().to_string(),
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            depth: args.depth,
+            ambient: args.ambient,
+            seed: args.seed,
+            backend: match args.backend {
+                ViewBackend::Gpu => Tracing::Gpu,
+                ViewBackend::Cpu => Tracing::Cpu,
+            },
+            adapter: args.adapter,
+            script,
+            screenshot: args.screenshot,
+            stats: args.stats,
+            launch,
+        },
+    )?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {

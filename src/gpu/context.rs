@@ -3,7 +3,8 @@
 
 use crate::error::{Error, Result};
 
-/// A device and queue with the adapter they came from.
+/// A device and queue with the adapter they came from. Cloning shares the device.
+#[derive(Clone)]
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
@@ -42,12 +43,22 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 /// (case-insensitive; from `--adapter` or `GPURT_ADAPTER`). `WGPU_BACKEND` limits the
 /// backends searched, as in every wgpu program.
 pub fn open(filter: Option<&str>) -> Result<GpuContext> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    open_on(&instance, filter, None)
+}
+
+/// `open` on a given instance, among the adapters that can present to `surface` when
+/// one is given (the viewer's window).
+pub fn open_on(
+    instance: &wgpu::Instance,
+    filter: Option<&str>,
+    surface: Option<&wgpu::Surface>,
+) -> Result<GpuContext> {
     let filter = filter
         .map(str::to_owned)
         .or_else(|| std::env::var("GPURT_ADAPTER").ok())
         .filter(|f| !f.is_empty());
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     // The instance already honours WGPU_BACKEND; list what it enabled.
     let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
     // Compute shaders need storage buffers; GL adapters without them cannot run ours.
@@ -56,16 +67,23 @@ pub fn open(filter: Option<&str>) -> Result<GpuContext> {
             .flags
             .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
     });
+    if let Some(surface) = surface {
+        adapters.retain(|a| a.is_surface_supported(surface));
+    }
     if let Some(f) = &filter {
         let f = f.to_lowercase();
         adapters.retain(|a| a.get_info().name.to_lowercase().contains(&f));
     }
     adapters.sort_by_key(|a| rank(&a.get_info()));
     let Some(adapter) = adapters.into_iter().next() else {
-        return Err(Error::NoAdapter(match filter {
+        let mut why = match filter {
             Some(f) => format!(" whose name contains '{f}'"),
             None => String::new(),
-        }));
+        };
+        if surface.is_some() {
+            why.push_str(" that can present to the window");
+        }
+        return Err(Error::NoAdapter(why));
     };
     let info = adapter.get_info();
     // Ask for everything the adapter offers: big scenes need its largest buffer limits.
