@@ -1,26 +1,8 @@
 //! The `gpurt` command as a user runs it: exit codes, messages, files written or not.
 
-use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn gpurt(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(args)
-        .current_dir(dir)
-        .env("GPURT_CACHE_DIR", "")
-        .output()
-        .expect("gpurt runs")
-}
-
-/// A fresh directory under target/ for one test.
-fn workdir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("target/cli-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use crate::common::{gpurt, workdir};
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -1,6 +1,7 @@
 //! Helpers shared by the test modules.
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 use glam::Vec3;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -126,4 +127,25 @@ impl XorShift {
             }
         }
     }
+}
+
+/// Runs the `gpurt` binary in `dir` (with the pipeline cache off, so that every run
+/// compiles as a first run does).
+pub fn gpurt(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(args)
+        .current_dir(dir)
+        .env("GPURT_CACHE_DIR", "")
+        .output()
+        .expect("gpurt runs")
+}
+
+/// A fresh directory under target/ for one test.
+pub fn workdir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("target/cli-tests")
+        .join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
 }

@@ -10,3 +10,4 @@ mod layout;
 mod parse;
 mod session;
 mod view;
+mod window;
