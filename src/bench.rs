@@ -125,7 +125,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     );
     outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for path in &config.scenes {
-        let prepared = run::prepare(path)?;
+        let prepared = run::prepare(path, None)?;
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())

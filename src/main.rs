@@ -346,13 +346,8 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         .map(gpurt::view::script::load)
         .transpose()?;
     let Prepared {
-        mut buffers,
-        warnings,
-        ..
-    } = run::prepare(&args.scene)?;
-    if let Some(view) = &args.view {
-        buffers.camera = gpurt::scene::load(view)?.camera;
-    }
+        buffers, warnings, ..
+    } = run::prepare(&args.scene, args.view.as_deref())?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -505,14 +500,11 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
     let Prepared {
-        mut buffers,
+        buffers,
         warnings,
         parse_time,
         build_time,
-    } = run::prepare(scene_path)?;
-    if let Some(view) = &args.view {
-        buffers.camera = gpurt::scene::load(view)?.camera;
-    }
+    } = run::prepare(scene_path, args.view.as_deref())?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -538,9 +530,14 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     } else if args.backend != Backend::Gpu {
         renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
     }
+    // The GPU renderer's device, which also draws the wireframe when one is asked for.
+    let mut device = None;
     if args.backend != Backend::Cpu && !wireframe_only {
         match gpurt::gpu::open(args.adapter.as_deref()) {
-            Ok(ctx) => renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?))),
+            Ok(ctx) => {
+                device = Some(ctx.clone());
+                renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?)));
+            }
             // An adapter asked for by name that is missing is an error, not a fallback.
             Err(Error::NoAdapter(why)) if args.backend == Backend::Gpu && !adapter_named(&args) => {
                 eprintln!("gpurt: no GPU adapter{why}; rendering on the CPU");
@@ -593,7 +590,10 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         }
     }
     if wireframe_only || args.overlay == Some(Overlay::Wireframe) {
-        let ctx = gpurt::gpu::open(args.adapter.as_deref())?;
+        let ctx = match device {
+            Some(ctx) => ctx,
+            None => gpurt::gpu::open(args.adapter.as_deref())?,
+        };
         let wire = Wireframe::new(&ctx.device, &buffers, wireframe::IMAGE_FORMAT)?;
         let under = films.pop().map(|f| f.for_display(opts.aov).to_rgb8());
         let image = wire.draw_image(&ctx.device, &ctx.queue, &globals, under.as_ref())?;

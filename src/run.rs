@@ -22,9 +22,14 @@ pub struct Prepared {
     pub build_time: Duration,
 }
 
-pub fn prepare(path: &Path) -> Result<Prepared> {
+/// Reads and packs the scene at `path`, with the camera of the NFF `v` block in `view`
+/// when one is given (a view found in `gpurt view`, printed with its C key).
+pub fn prepare(path: &Path, view: Option<&Path>) -> Result<Prepared> {
     let t0 = Instant::now();
     let mut scene = scene::load(path)?;
+    if let Some(view) = view {
+        scene.camera = scene::load(view)?.camera;
+    }
     let t1 = Instant::now();
     let warnings = std::mem::take(&mut scene.warnings);
     let buffers = pack::pack(scene)?;

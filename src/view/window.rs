@@ -103,6 +103,8 @@ struct Live {
     tracer: Tracer,
     /// The adapter (or CPU) that traces.
     tracing_on: String,
+    /// The title shown, set again only when it changes.
+    title: String,
 }
 
 /// The pointer, for drags.
@@ -256,7 +258,14 @@ impl App {
         surface.configure(&ctx.device, &config);
         let wireframe = Wireframe::new(&ctx.device, &self.buffers, view_format)?;
         let renderer: Box<dyn Renderer + Send> = match self.opts.backend {
-            Backend::Gpu => Box::new(GpuSession::new(ctx.clone(), self.buffers.clone())?),
+            // A device of its own: one device runs its submissions in order, so a window
+            // sharing the tracer's would wait for each band of rays before drawing a frame
+            // (a second or more at 800x600 on lavapipe), and a moving camera's wireframe
+            // would stall with it.
+            Backend::Gpu => Box::new(GpuSession::new(
+                gpu::open(self.opts.adapter.as_deref())?,
+                self.buffers.clone(),
+            )?),
             Backend::Cpu => Box::new(CpuRenderer::new(self.buffers.clone())),
         };
         let tracing_on = renderer.describe();
@@ -276,6 +285,7 @@ impl App {
             wireframe,
             tracer,
             tracing_on,
+            title: String::new(),
         });
         self.resize(size);
         Ok(())
@@ -476,7 +486,10 @@ impl App {
         queue.present(frame);
         self.stats
             .frame(start.elapsed(), image.is_some(), self.latest.as_ref());
-        live.window.set_title(&title);
+        if live.title != title {
+            live.window.set_title(&title);
+            live.title = title;
+        }
         self.waiting = self.waiting.saturating_sub(1);
         Ok(())
     }
