@@ -8,8 +8,8 @@
 # Each run is `gpurt view --stats` driven by a script:
 #   still      ray traced, no input: converges to --spp samples, then exits
 #   overlay    the same with the wireframe over the image
-#   moving     ray traced while the camera orbits a step every frame (120 frames): the
-#              wireframe stands in until a view has samples
+#   moving     ray traced while the camera orbits a step every frame for 120 frames,
+#              then quits: the wireframe stands in until a view has samples
 #   wireframe  the wireframe alone, 300 frames
 # Needs xvfb-run (apt-get install xvfb xauth) and a release build.
 set -euo pipefail
@@ -25,7 +25,7 @@ WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 : > "$WORK/still.txt"
 printf 'key m\nkey m\n' > "$WORK/overlay.txt"
-for _ in $(seq 120); do printf 'drag 3 0\nwait 1\n'; done > "$WORK/moving.txt"
+{ for _ in $(seq 120); do printf 'drag 3 0\nwait 1\n'; done; echo 'key escape'; } > "$WORK/moving.txt"
 printf 'key m\nwait 300\n' > "$WORK/wireframe.txt"
 
 stat() { grep "^$1" "$2" | head -1 | sed "s/^$1 *//" || true; }
@@ -33,8 +33,9 @@ echo "| scene | mode | first frame | first image | frames/s | draw (median) | sa
 echo "|---|---|---|---|---|---|---|---|"
 for scene in "$@"; do
     name=$(basename "$scene" .nff)
-    # One run first to fill Mesa's shader cache, as any second launch finds it.
-    xvfb-run -a "$BIN" view "$scene" "${SIZE[@]}" --spp 1 --script "$WORK/still.txt" \
+    # One run first to fill Mesa's shader cache, as any second launch finds it (the
+    # pipeline depends on the samples per pixel: one, or more).
+    xvfb-run -a "$BIN" view "$scene" "${SIZE[@]}" --spp "$SPP" --script "$WORK/still.txt" \
         --screenshot "$WORK/warm.png" >/dev/null 2>&1
     for mode in still overlay moving wireframe; do
         spp=(--spp "$SPP")

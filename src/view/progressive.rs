@@ -93,6 +93,7 @@ pub struct Pass {
 enum Message {
     Trace(Job),
     Pause,
+    Stop,
 }
 
 /// The worker thread and the way to reach it.
@@ -144,7 +145,9 @@ impl Tracer {
 
 impl Drop for Tracer {
     fn drop(&mut self) {
-        self.cancel.store(true, Ordering::Relaxed);
+        // A message, not just a closed channel: the worker drains every message before
+        // it would see the channel close, and would trace a last pass on the way.
+        self.send(Message::Stop);
         drop(self.jobs.take());
         if let Some(worker) = self.worker.take() {
             let _ = worker.join();
@@ -207,6 +210,7 @@ fn work(
                 });
             }
             Some(Message::Pause) => current = None,
+            Some(Message::Stop) => return,
             None => {}
         }
         let Some(cur) = current.as_mut() else {

@@ -82,7 +82,7 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
     std::fs::write(
         dir.join("orbit.txt"),
         "# orbit, dolly in, pan, then print the camera\n\
-         drag 70 -25\nwheel 1.5\npan 8 -4\nkey c\nwait 3\n",
+         drag 70 -25\nwheel 1.5\npan 8 -4\nkey c\nkey p\nwait 3\n",
     )
     .unwrap();
     let scene = mesh_scene();
@@ -122,6 +122,9 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
     let shot = load(&dir.join("shot.png"));
     let offline = load(&dir.join("offline.png"));
     agree(&offline, &shot).unwrap_or_else(|why| panic!("window vs offline render: {why}"));
+    // P wrote the ray-traced view once it had its samples.
+    let saved = load(&dir.join("mesh-view-1.png"));
+    agree(&offline, &saved).unwrap_or_else(|why| panic!("P's image vs offline render: {why}"));
 
     // The comparison sees a wrong view and an empty window: the scene's own camera
     // (where the orbit started) and a black image both fail it.
@@ -139,6 +142,38 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
         "the orbit moved nothing"
     );
     assert!(agree(&offline, &RgbImage::new(320, 240)).is_err());
+}
+
+#[test]
+fn an_empty_script_at_one_sample_shows_the_offline_render_of_the_scene() {
+    let dir = workdir("window-empty");
+    std::fs::write(dir.join("empty.txt"), "").unwrap();
+    let scene = own_scenes().join("spheres.nff").display().to_string();
+    let shot = [
+        "--spp",
+        "1",
+        "--script",
+        "empty.txt",
+        "--screenshot",
+        "shot.png",
+    ];
+    let Some(_) = view_in_xvfb(&[&[scene.as_str()][..], &shot].concat(), &dir) else {
+        return;
+    };
+    let offline = gpurt(&[&scene, "-o", "offline.png"], &dir);
+    assert!(
+        offline.status.success(),
+        "{}",
+        String::from_utf8_lossy(&offline.stderr)
+    );
+    let offline = load(&dir.join("offline.png"));
+    let shot = load(&dir.join("shot.png"));
+    assert_eq!(
+        shot.dimensions(),
+        offline.dimensions(),
+        "the scene's resolution"
+    );
+    agree(&offline, &shot).unwrap_or_else(|why| panic!("window vs offline render: {why}"));
 }
 
 /// The viewer's screenshot of `scene` after `script`, 400x300 at 4 samples per pixel.
