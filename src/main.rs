@@ -84,8 +84,8 @@ enum Command {
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
         frames: u32,
         /// Which backends to time.
-        #[arg(long, value_enum, default_value_t = Backend::Both)]
-        backend: Backend,
+        #[arg(long, value_enum, default_value_t = BenchBackend::Both)]
+        backend: BenchBackend,
         /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
         #[arg(long)]
         adapter: Option<String>,
@@ -117,7 +117,7 @@ struct ViewArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
-    #[arg(long, value_enum, default_value_t = ViewBackend::Gpu)]
+    #[arg(long, value_enum, default_value_t = ViewBackend::Auto)]
     backend: ViewBackend,
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
     #[arg(long)]
@@ -139,8 +139,17 @@ struct ViewArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum BenchBackend {
+    Gpu,
+    Cpu,
+    Both,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum ViewBackend {
-    /// WGSL compute through wgpu.
+    /// The GPU when there is a hardware adapter, else the CPU.
+    Auto,
+    /// WGSL compute through wgpu, on any adapter.
     Gpu,
     /// The CPU reference renderer.
     Cpu,
@@ -148,7 +157,11 @@ enum ViewBackend {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum Backend {
-    /// WGSL compute through wgpu; falls back to the CPU when no adapter exists.
+    /// The GPU when there is a hardware adapter, else the CPU (faster than a software
+    /// rasteriser such as lavapipe on the same cores); `-v` says which and why.
+    Auto,
+    /// WGSL compute through wgpu, on any adapter, software ones included; falls back to
+    /// the CPU when no adapter exists.
     Gpu,
     /// The CPU reference renderer.
     Cpu,
@@ -216,7 +229,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the rays.
-    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
     backend: Backend,
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
     #[arg(long)]
@@ -313,8 +326,8 @@ fn main() -> ExitCode {
             spps: spp,
             depth,
             frames,
-            cpu: backend != Backend::Gpu,
-            gpu: backend != Backend::Cpu,
+            cpu: backend != BenchBackend::Gpu,
+            gpu: backend != BenchBackend::Cpu,
             adapter,
         })
         .map(|()| ExitCode::SUCCESS),
@@ -362,6 +375,7 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             ambient: args.ambient,
             seed: args.seed,
             backend: match args.backend {
+                ViewBackend::Auto => Tracing::Auto,
                 ViewBackend::Gpu => Tracing::Gpu,
                 ViewBackend::Cpu => Tracing::Cpu,
             },
@@ -373,6 +387,54 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         },
     )?;
     Ok(ExitCode::SUCCESS)
+}
+
+/// What the adapter search found for a backend: the device to render on, if any, and a
+/// line about the choice, printed always when it is a warning, else with `-v` or `--stats`.
+struct Found {
+    gpu: Option<gpurt::gpu::GpuContext>,
+    note: Option<(String, bool)>,
+}
+
+fn find_gpu(backend: Backend, filter: Option<&str>, named: bool) -> gpurt::Result<Found> {
+    let (gpu, note) = match backend {
+        Backend::Cpu => (None, None),
+        Backend::Both => (Some(gpurt::gpu::open(filter)?), None),
+        Backend::Gpu => match gpurt::gpu::open(filter) {
+            Ok(ctx) => (Some(ctx), None),
+            // An adapter asked for by name that is missing is an error, not a fallback.
+            Err(Error::NoAdapter(why)) if !named => (
+                None,
+                Some((
+                    format!("gpurt: no GPU adapter{why}; rendering on the CPU"),
+                    true,
+                )),
+            ),
+            Err(e) => return Err(e),
+        },
+        Backend::Auto => match gpurt::gpu::choose(filter)? {
+            gpurt::gpu::Choice::Gpu(ctx) => {
+                let ctx = *ctx;
+                let why = if named {
+                    "the adapter named"
+                } else {
+                    "a hardware adapter"
+                };
+                (
+                    Some(ctx),
+                    Some((format!("backend     gpu, on {why}"), false)),
+                )
+            }
+            gpurt::gpu::Choice::Cpu(why) => (
+                None,
+                Some((
+                    format!("backend     cpu, as {why} (--backend gpu uses it anyway)"),
+                    false,
+                )),
+            ),
+        },
+    };
+    Ok(Found { gpu, note })
 }
 
 fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
@@ -499,6 +561,13 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         // is ever left behind.
         let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
     }
+    // Looking for an adapter (and opening its device) takes 50 ms or more: it runs while
+    // the scene is read and its BVH built.
+    let wireframe_only = args.aov == Aov::Wireframe;
+    let probe = (!wireframe_only && args.backend != Backend::Cpu).then(|| {
+        let (backend, filter, named) = (args.backend, args.adapter.clone(), adapter_named(&args));
+        std::thread::spawn(move || find_gpu(backend, filter.as_deref(), named))
+    });
     let Prepared {
         buffers,
         warnings,
@@ -524,26 +593,33 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
     // image is compared against it.
     let mut renderers: Vec<(&str, Box<dyn Renderer>)> = Vec::new();
-    let wireframe_only = args.aov == Aov::Wireframe;
-    if wireframe_only {
-        // Nothing to trace: the wireframe is drawn below.
-    } else if args.backend != Backend::Gpu {
-        renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
-    }
     // The GPU renderer's device, which also draws the wireframe when one is asked for.
     let mut device = None;
-    if args.backend != Backend::Cpu && !wireframe_only {
-        match gpurt::gpu::open(args.adapter.as_deref()) {
-            Ok(ctx) => {
+    let cpu =
+        || -> (&str, Box<dyn Renderer>) { ("cpu", Box::new(CpuRenderer::new(buffers.clone()))) };
+    if args.backend == Backend::Both {
+        renderers.push(cpu());
+    }
+    if !wireframe_only {
+        let found = match probe {
+            Some(probe) => probe.join().expect("the adapter search does not panic")?,
+            None => Found {
+                gpu: None,
+                note: None,
+            },
+        };
+        if let Some((note, warn)) = &found.note
+            && (*warn || args.verbose || args.stats)
+        {
+            eprintln!("{note}");
+        }
+        match found.gpu {
+            Some(ctx) => {
                 device = Some(ctx.clone());
                 renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?)));
             }
-            // An adapter asked for by name that is missing is an error, not a fallback.
-            Err(Error::NoAdapter(why)) if args.backend == Backend::Gpu && !adapter_named(&args) => {
-                eprintln!("gpurt: no GPU adapter{why}; rendering on the CPU");
-                renderers.push(("cpu", Box::new(CpuRenderer::new(buffers.clone()))));
-            }
-            Err(e) => return Err(e),
+            None if args.backend != Backend::Both => renderers.push(cpu()),
+            None => {}
         }
     }
     let mut report = Vec::new();

@@ -13,5 +13,5 @@ pub mod shaders;
 pub mod specialization;
 mod upload;
 
-pub use context::{GpuContext, open, open_on};
+pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
 pub use render::{GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_samples};

@@ -34,6 +34,8 @@ use crate::{film, outln};
 /// Which renderer traces the viewer's image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
+    /// The GPU on a hardware adapter, else the CPU (`gpu::choose`).
+    Auto,
     Gpu,
     Cpu,
 }
@@ -257,16 +259,22 @@ impl App {
         };
         surface.configure(&ctx.device, &config);
         let wireframe = Wireframe::new(&ctx.device, &self.buffers, view_format)?;
-        let renderer: Box<dyn Renderer + Send> = match self.opts.backend {
-            // A device of its own: one device runs its submissions in order, so a window
-            // sharing the tracer's would wait for each band of rays before drawing a frame
-            // (a second or more at 800x600 on lavapipe), and a moving camera's wireframe
-            // would stall with it.
-            Backend::Gpu => Box::new(GpuSession::new(
-                gpu::open(self.opts.adapter.as_deref())?,
-                self.buffers.clone(),
-            )?),
-            Backend::Cpu => Box::new(CpuRenderer::new(self.buffers.clone())),
+        // The tracer gets a device of its own: one device runs its submissions in order,
+        // so a window sharing the tracer's would wait for each band of rays before drawing
+        // a frame (a second or more at 800x600 on lavapipe), and a moving camera's
+        // wireframe would stall with it.
+        let filter = self.opts.adapter.as_deref();
+        let tracer_device = match self.opts.backend {
+            Backend::Gpu => Some(gpu::open(filter)?),
+            Backend::Cpu => None,
+            Backend::Auto => match gpu::choose(filter)? {
+                gpu::Choice::Gpu(ctx) => Some(*ctx),
+                gpu::Choice::Cpu(_) => None,
+            },
+        };
+        let renderer: Box<dyn Renderer + Send> = match tracer_device {
+            Some(ctx) => Box::new(GpuSession::new(ctx, self.buffers.clone())?),
+            None => Box::new(CpuRenderer::new(self.buffers.clone())),
         };
         let tracing_on = renderer.describe();
         let proxy = self.proxy.clone();

@@ -499,3 +499,48 @@ fn the_wireframe_overlay_is_the_render_plus_the_lines() {
         "{lines} of {n} pixels are lines"
     );
 }
+
+#[test]
+fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_and_says_why() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    let software = gpurt::gpu::is_software(&ctx.info);
+    if ctx.info.name.to_lowercase().contains("llvmpipe") {
+        assert!(software, "{} is Mesa's software rasteriser", ctx.describe());
+    }
+    drop(ctx);
+    let d = workdir("auto-backend");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-v", "-o", "auto.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let ran: Vec<&str> = err
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|w| *w == "cpu" || *w == "gpu")
+        .collect();
+    if software {
+        assert!(
+            err.contains("backend     cpu, as the GPU adapters here are software rasterisers"),
+            "{err}"
+        );
+        assert_eq!(ran, ["cpu"], "{err}");
+        // The very image `--backend cpu` writes.
+        let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "cpu.png"], &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let a = gpurt::film::load_rgb8(&d.join("auto.png")).unwrap();
+        assert_eq!(a, gpurt::film::load_rgb8(&d.join("cpu.png")).unwrap());
+    } else {
+        assert!(err.contains("backend     gpu"), "{err}");
+        assert_eq!(ran, ["gpu"], "{err}");
+    }
+    // `--backend gpu` takes any adapter, software or not.
+    let o = gpurt(&["ball.nff", "--backend", "gpu", "-v", "-o", "gpu.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).lines().any(|l| l.starts_with("gpu ")),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -86,7 +86,17 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
     )
     .unwrap();
     let scene = mesh_scene();
-    let size = ["--width", "320", "--height", "240", "--spp", "4"];
+    // The GPU tracer (lavapipe in CI); the modes test below takes the default backend.
+    let size = [
+        "--width",
+        "320",
+        "--height",
+        "240",
+        "--spp",
+        "4",
+        "--backend",
+        "gpu",
+    ];
     let Some(out) = view_in_xvfb(
         &[
             &[scene.as_str()][..],
@@ -109,6 +119,8 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
             "view.nff",
             "--spp",
             "4",
+            "--backend",
+            "gpu",
             "-o",
             "offline.png",
         ],
