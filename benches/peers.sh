@@ -1,14 +1,17 @@
 #!/usr/bin/env bash
-# gpurt against POV-Ray on five SPD scenes at 512x512, one sample per pixel, both cores.
+# gpurt against POV-Ray and Tachyon on five SPD scenes at 512x512, one sample per pixel,
+# both cores.
 #
 # Times each whole process (start-up, parsing, BVH, render, PNG writing) with
 # /usr/bin/time, keeps the fastest of REPEAT runs (default 3; the machine may be shared),
-# and prints a markdown table. gpurt renders with the CPU backend; when `gpurt --help`
-# offers `--backend gpu`, a GPU run is timed too (failures are ignored: no adapter).
+# and prints a markdown table. gpurt runs three ways: the default command (--backend
+# auto), the CPU backend, and the GPU backend (failures are ignored: no adapter).
 # POV-Ray reads the SPD generators' own POV-Ray versions of the scenes, with the command
 # line of ../shared/peers/povray/README.md (-A: no antialiasing, +WT2: two threads).
+# Tachyon reads the NFF files themselves (-numthreads 2, -raydepth 5 as gpurt's default
+# depth); it does no refraction, and draws gears-4 all white.
 #
-# Usage: benches/peers.sh            (from anywhere; needs povray and ../shared)
+# Usage: benches/peers.sh            (from anywhere; needs povray, tachyon and ../shared)
 #        REPEAT=5 benches/peers.sh
 set -euo pipefail
 
@@ -25,12 +28,11 @@ if [[ ! -x $TIME ]]; then
     apt-get install -y time >/dev/null
 fi
 command -v povray >/dev/null || { echo "povray is not installed" >&2; exit 2; }
+command -v tachyon >/dev/null || { echo "tachyon is not installed (apt-get install tachyon)" >&2; exit 2; }
 [[ -d $SCENES_DIR && -d $POV_DIR ]] || { echo "missing $SCENES_DIR or $POV_DIR" >&2; exit 2; }
 
 (cd "$ROOT" && cargo build --release --quiet)
 GPURT="$ROOT/target/release/gpurt"
-HAVE_GPU=0
-if "$GPURT" --help | grep -Eq -- '^\s+- gpu:'; then HAVE_GPU=1; fi
 
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
@@ -63,38 +65,43 @@ for s in "${SCENES[@]}"; do
         --width $SIZE --height $SIZE --backend cpu --stats) || { echo "gpurt failed on $s" >&2; exit 1; }
     read -r g_wall g_kb g_log <<<"$out"
     g_mrays=$(grep -o '[0-9.]* Mrays/s' "$g_log" | awk '{print $1}')
-    g_render=$(awk '$1 == "cpu" {print $2}' "$g_log")
+
+    out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" \
+        --width $SIZE --height $SIZE) || { echo "gpurt failed on $s" >&2; exit 1; }
+    read -r a_wall a_kb _ <<<"$out"
+    default_backend=$("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" --width $SIZE \
+        --height $SIZE -v 2>&1 | awk '$1 == "backend" {print $2}')
 
     gpu_cell="-"
-    if ((HAVE_GPU)); then
-        if out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" \
-            --width $SIZE --height $SIZE --backend gpu --stats -v); then
-            read -r u_wall _ u_log <<<"$out"
-            u_mrays=$(grep -o '[0-9.]* Mrays/s' "$u_log" | awk '{print $1}')
-            adapter=$(grep -m1 '^adapter' "$u_log" | sed 's/^adapter *//') || true
-            gpu_cell="$u_wall s ($u_mrays Mrays/s)"
-        else
-            gpu_cell="failed"
-        fi
+    if out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" \
+        --width $SIZE --height $SIZE --backend gpu --stats -v); then
+        read -r u_wall _ u_log <<<"$out"
+        u_mrays=$(grep -o '[0-9.]* Mrays/s' "$u_log" | awk '{print $1}')
+        adapter=$(awk '$1 == "gpu" {$1 = ""; print substr($0, 2); exit}' "$u_log") || true
+        gpu_cell="$u_wall ($u_mrays Mrays/s)"
+    else
+        gpu_cell="failed"
     fi
+
+    out=$(timed tachyon "$SCENES_DIR/$s.nff" -res $SIZE $SIZE -numthreads 2 -raydepth 5 \
+        -format PNG -o "$WORK/$s-tachyon.png") || { echo "tachyon failed on $s" >&2; exit 1; }
+    read -r t_wall t_kb _ <<<"$out"
 
     gunzip -c "$POV_DIR/$s.pov.gz" >"$WORK/$s.pov"
     # POV-Ray resolves relative names against the current directory.
     out=$(cd "$WORK" && timed povray "+I$s.pov" "+O$s-pov.png" \
         +W$SIZE +H$SIZE -A +WT2 -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
     read -r p_wall p_kb p_log <<<"$out"
-    p_trace=$(grep 'Trace Time' "$p_log" | grep -o '([0-9.]* seconds)' | tr -d '(' | awk '{print $1}')
 
-    ratio=$(awk -v p="$p_wall" -v g="$g_wall" 'BEGIN{printf "%.2f", p / g}')
-    rows+=("| $s | $g_wall | $g_mrays | $(mb "$g_kb") | $p_wall | $(mb "$p_kb") | $ratio | $g_render / $p_trace | $gpu_cell |")
+    ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
+    rows+=("| $s | $a_wall ($default_backend) | $(mb "$a_kb") | $g_wall | $g_mrays | $(mb "$g_kb") | $gpu_cell | $p_wall | $(mb "$p_kb") | $t_wall | $(mb "$t_kb") | $(ratio "$a_wall" "$p_wall") | $(ratio "$a_wall" "$t_wall") |")
 done
 
 echo
-echo "| scene | gpurt wall s | gpurt Mrays/s | gpurt peak MB | povray wall s | povray peak MB | povray / gpurt | render only s, gpurt / povray | gpurt --backend gpu |"
-echo "|---|---:|---:|---:|---:|---:|---:|---:|---|"
+echo "| scene | gpurt (default) wall s | peak MB | --backend cpu wall s | Mrays/s | peak MB | --backend gpu wall s | POV-Ray wall s | peak MB | Tachyon wall s | peak MB | default / POV-Ray | default / Tachyon |"
+echo "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"
 echo
 echo "${SIZE}x${SIZE}, 1 spp, $(nproc) threads; best of $REPEAT runs. Wall time and peak memory are"
-echo "of the whole process; ratio = povray wall / gpurt wall. Render only: gpurt's 'cpu' time"
-echo "(--stats) against POV-Ray's 'Trace Time' (its log), both without parsing and start-up."
-if [[ -n $adapter ]]; then echo "GPU runs on: $adapter."; fi
+echo "of the whole process; the ratios are of wall times (below 1: gpurt is faster)."
+if [[ -n $adapter ]]; then echo "--backend gpu runs on: $adapter."; fi

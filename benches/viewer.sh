@@ -4,6 +4,7 @@
 # the time to draw one, and samples per second at 800x600.
 #
 #   benches/viewer.sh [SCENE...]     (default: balls-4, mount-7 and teapot-6 of ../shared)
+#   BACKEND=gpu benches/viewer.sh    (the tracer: auto, the default, gpu or cpu)
 #
 # Each run is `gpurt view --stats` driven by a script:
 #   still      ray traced, no input: converges to --spp samples, then exits
@@ -16,7 +17,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 BIN=${GPURT:-target/release/gpurt}
 SPP=${SPP:-16}
-SIZE=(--width 800 --height 600)
+SIZE=(--width 800 --height 600 --backend "${BACKEND:-auto}")
 SHARED=../shared/scenes/spd
 if [ $# -eq 0 ]; then
     set -- "$SHARED/balls-4.nff" "$SHARED/mount-7.nff" "$SHARED/teapot-6.nff"
