@@ -70,7 +70,7 @@ for s in "${SCENES[@]}"; do
         --width $SIZE --height $SIZE) || { echo "gpurt failed on $s" >&2; exit 1; }
     read -r a_wall a_kb _ <<<"$out"
     default_backend=$("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" --width $SIZE \
-        --height $SIZE -v 2>&1 | awk '$1 == "backend" {print $2}')
+        --height $SIZE -v 2>&1 | awk '$1 == "backend" {print $2}' | tr -d ':,')
 
     gpu_cell="-"
     if out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" \

@@ -420,15 +420,12 @@ fn find_gpu(backend: Backend, filter: Option<&str>, named: bool) -> gpurt::Resul
                 } else {
                     "a hardware adapter"
                 };
-                (
-                    Some(ctx),
-                    Some((format!("backend     gpu, on {why}"), false)),
-                )
+                (Some(ctx), Some((format!("backend     gpu: {why}"), false)))
             }
             gpurt::gpu::Choice::Cpu(why) => (
                 None,
                 Some((
-                    format!("backend     cpu, as {why} (--backend gpu uses it anyway)"),
+                    format!("backend     cpu: {why} (--backend gpu forces the GPU path)"),
                     false,
                 )),
             ),

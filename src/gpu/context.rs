@@ -70,9 +70,13 @@ pub enum Choice {
 /// virtual GPU), or the one named by `filter` (or `GPURT_ADAPTER`), whatever it is;
 /// otherwise the CPU, because a software rasteriser (llvmpipe/lavapipe, SwiftShader, WARP)
 /// runs our shader several times slower than the CPU renderer on the same cores (3.2 to
-/// 5.2 times on the SPD scenes at 512x512). The software adapter's device is never opened.
+/// 5.2 times on the SPD scenes at 512x512). The software adapter's device is never opened,
+/// and on Linux without a GPU device node no driver is even loaded.
 pub fn choose(filter: Option<&str>) -> Result<Choice> {
     let named = adapter_filter(filter).is_some();
+    if !named && let Some(why) = no_gpu_device() {
+        return Ok(Choice::Cpu(why));
+    }
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     match best_adapter(&instance, filter, None) {
@@ -87,6 +91,30 @@ pub fn choose(filter: Option<&str>) -> Result<Choice> {
         Err(Error::NoAdapter(why)) if !named => Ok(Choice::Cpu(format!("no GPU adapter{why}"))),
         Err(e) => Err(e),
     }
+}
+
+/// Why no hardware adapter can exist here, if the device nodes say so. A GPU driver on
+/// Linux works through a device node: a DRM render node (Mesa, NVIDIA's open modules,
+/// virtio-gpu), NVIDIA's own nodes, or WSL2's `/dev/dxg`. Without any, only software
+/// adapters remain, and looking for them would load their drivers for nothing (40 ms and
+/// 50 MB of LLVM for lavapipe and Mesa's hardware drivers, a third of a small render).
+/// `None` elsewhere than Linux, and where a node exists: then the adapters are asked.
+fn no_gpu_device() -> Option<String> {
+    if !cfg!(target_os = "linux") {
+        return None;
+    }
+    let listed = |dir: &str, prefix: &str| {
+        std::fs::read_dir(dir).is_ok_and(|entries| {
+            entries
+                .flatten()
+                .any(|e| e.file_name().to_string_lossy().starts_with(prefix))
+        })
+    };
+    let any = listed("/dev/dri", "renderD")
+        || listed("/dev/dri", "card")
+        || listed("/dev", "nvidia")
+        || std::path::Path::new("/dev/dxg").exists();
+    (!any).then(|| "there is no GPU device here (no /dev/dri, /dev/nvidia* or /dev/dxg)".into())
 }
 
 /// Whether an adapter rasterises in software on the CPU: Mesa's llvmpipe (lavapipe on
