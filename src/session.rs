@@ -117,10 +117,11 @@ impl Renderer for GpuSession {
         self.ctx.describe()
     }
 
+    /// Uploads the scene (the first time) or moves it to this frame, compiling the frame's
+    /// pipeline on it: the warm-up traces a pixel of the real scene.
     fn prepare(&mut self, globals: &GpuGlobals) -> Result<Duration> {
         let before = self.renderer.compile_time();
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        self.renderer.prepare(device, queue, &self.scene, globals)?;
+        self.set_frame(globals)?;
         Ok(self.renderer.compile_time() - before)
     }
 
@@ -132,6 +133,16 @@ impl Renderer for GpuSession {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Result<u64> {
+        self.set_frame(globals)?;
+        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let (_, uploaded) = self.uploaded.as_ref().expect("uploaded by set_frame");
+        gpu::trace_samples(device, queue, uploaded, samples, accum, progress, cancel)
+    }
+}
+
+impl GpuSession {
+    /// Gets the uploaded scene ready for the frame `globals`, uploading it the first time.
+    fn set_frame(&mut self, globals: &GpuGlobals) -> Result<()> {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         match &mut self.uploaded {
             Some((current, _)) if current == globals => {}
@@ -146,7 +157,6 @@ impl Renderer for GpuSession {
                 self.uploaded = Some((*globals, uploaded));
             }
         }
-        let (_, uploaded) = self.uploaded.as_ref().expect("uploaded above");
-        gpu::trace_samples(device, queue, uploaded, samples, accum, progress, cancel)
+        Ok(())
     }
 }
