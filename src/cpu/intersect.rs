@@ -29,6 +29,7 @@ pub fn intersect_sphere(center: Vec3, radius: f32, ray: &Ray) -> Vec2 {
 }
 
 /// Möller-Trumbore, two-sided: `(t, u, v)` with `t = NO_HIT` on a miss.
+#[inline]
 pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
     let (e1, e2) = (p.p1, p.p2);
     let pvec = ray.dir.cross(e2);
@@ -122,15 +123,30 @@ pub fn slabs(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3) -> Vec2 {
 pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
 
 /// Whether the ray's interval `[tmin, tmax]` overlaps the box (BVH node test).
+///
+/// The hottest function of the CPU renderer. Its minima and maxima are plain
+/// comparisons, not `f32::min`/`max`, whose NaN rules cost extra instructions on x86:
+/// no NaN can arise here (`safe_inverse` keeps the inverse direction finite, and node
+/// bounds are finite), so the result is the shader's to the bit.
+#[inline]
 pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> bool {
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let max = |a: f32, b: f32| if a > b { a } else { b };
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let near = t0.min(t1).max_element().max(tmin);
-    let far = t0.max(t1).min_element().min(tmax);
+    let near = max(
+        max(min(t0.x, t1.x), min(t0.y, t1.y)),
+        max(min(t0.z, t1.z), tmin),
+    );
+    let far = min(
+        min(max(t0.x, t1.x), max(t0.y, t1.y)),
+        min(max(t0.z, t1.z), tmax),
+    );
     near <= far * SLAB_WIDEN
 }
 
 /// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.
+#[inline]
 pub fn intersect_prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
     match p.kind() {
         PRIM_SPHERE => intersect_sphere(p.p0, p.f0, ray).extend(0.0).extend(0.0),
