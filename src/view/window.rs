@@ -361,9 +361,15 @@ impl App {
         }
     }
 
-    /// Writes the image `P` asked for once the view has all its samples.
+    /// Writes the image `P` asked for: with `--spp N` once the view has its N samples,
+    /// else at once, with the samples it has (without a cap a view converges for hours).
     fn save_if_ready(&mut self) {
-        if !self.save_pending || !self.converged() {
+        let ready = if self.opts.spp.is_some() {
+            self.converged()
+        } else {
+            self.latest.is_some()
+        };
+        if !self.save_pending || !ready {
             return;
         }
         self.save_pending = false;
