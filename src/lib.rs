@@ -7,6 +7,7 @@
 
 pub mod agreement;
 pub mod atomic;
+pub mod batch;
 pub mod bench;
 pub mod bvh;
 pub mod compare;

@@ -139,6 +139,25 @@ struct ViewArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ImageFormat {
+    Png,
+    Ppm,
+    Bmp,
+    Exr,
+}
+
+impl ImageFormat {
+    fn format(self) -> film::Format {
+        match self {
+            ImageFormat::Png => film::Format::Png,
+            ImageFormat::Ppm => film::Format::Ppm,
+            ImageFormat::Bmp => film::Format::Bmp,
+            ImageFormat::Exr => film::Format::Exr,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum BenchBackend {
     Gpu,
     Cpu,
@@ -202,9 +221,16 @@ enum Overlay {
 #[derive(clap::Args)]
 struct RenderArgs {
     /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl or .obj, optionally .gz.
-    /// One at a time (several are refused with a message, rather than taken as a subcommand).
+    /// One at a time, or any number with --out-dir.
     #[arg(value_name = "SCENE")]
     scenes: Vec<PathBuf>,
+    /// Render every scene given into this directory, each image named after its scene,
+    /// on one device; a scene that fails is reported and skipped (exit 2 at the end).
+    #[arg(long, value_name = "DIR", conflicts_with = "output")]
+    out_dir: Option<PathBuf>,
+    /// Image format of the images --out-dir writes.
+    #[arg(long, value_enum, default_value_t = ImageFormat::Png, requires = "out_dir")]
+    format: ImageFormat,
     /// Output image; the format follows the extension (png, ppm, bmp, exr).
     /// Default: the scene's name with .png, in the current directory.
     #[arg(short, long)]
@@ -389,6 +415,85 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `gpurt SCENE... --out-dir DIR`: every scene into DIR, one device, failures skipped.
+fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
+    use gpurt::batch::{self, BatchOptions};
+    if args.scenes.is_empty() {
+        eprintln!("gpurt: no scene given; try `gpurt --help`");
+        return Ok(ExitCode::from(2));
+    }
+    if args.backend == Backend::Both || args.overlay.is_some() || args.aov == Aov::Wireframe {
+        eprintln!(
+            "gpurt: a batch renders on one backend, without wireframes: drop --backend both, \
+             --overlay and --aov wireframe, or render the scenes one at a time"
+        );
+        return Ok(ExitCode::from(2));
+    }
+    let outputs = batch::outputs(&args.scenes, dir, args.format.format())?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for out in &outputs {
+        atomic::check_writable(out)?;
+    }
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
+    let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
+    if let Some((note, warn)) = &found.note
+        && (*warn || args.verbose || args.stats)
+    {
+        eprintln!("{note}");
+    }
+    let bar = ProgressBar::new(args.scenes.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
+            .expect("valid template"),
+    );
+    let start = Instant::now();
+    let outcome = batch::run(
+        &args.scenes,
+        &outputs,
+        &BatchOptions {
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            max_depth: args.depth,
+            ambient: args.ambient,
+            aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
+            seed: args.seed,
+            view: args.view.clone(),
+        },
+        found.gpu,
+        &|scene| {
+            bar.set_message(scene.display().to_string());
+            bar.inc(1);
+        },
+        &cancel,
+    );
+    bar.finish_and_clear();
+    let outcome = outcome?;
+    for (scene, e) in &outcome.failed {
+        eprintln!("gpurt: {}: skipped: {e}", scene.display());
+    }
+    if args.verbose || args.stats || !outcome.failed.is_empty() {
+        let secs = start.elapsed().as_secs_f64();
+        eprintln!(
+            "batch       {} of {} scenes rendered into {} in {secs:.2} s ({:.1} scenes/s, {:.2} Mrays/s)",
+            outcome.rendered,
+            args.scenes.len(),
+            dir.display(),
+            outcome.rendered as f64 / secs.max(1e-9),
+            outcome.rays as f64 / secs.max(1e-9) / 1e6
+        );
+    }
+    Ok(if outcome.failed.is_empty() {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
 /// What the adapter search found for a backend: the device to render on, if any, and a
 /// line about the choice, printed always when it is a warning, else with `-v` or `--stats`.
 struct Found {
@@ -477,16 +582,7 @@ fn diff(
 
 /// `scene.nff.gz` -> `scene.png` (in the current directory).
 fn default_output(scene: &Path) -> PathBuf {
-    let name = scene
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let name = name.strip_suffix(".gz").unwrap_or(&name);
-    let stem = Path::new(name)
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    PathBuf::from(format!("{stem}.png"))
+    PathBuf::from(format!("{}.png", gpurt::batch::output_stem(scene)))
 }
 
 /// A progress bar that appears only once a render has run for a second, and only on a
@@ -524,6 +620,9 @@ impl Progress {
 }
 
 fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
+    if let Some(dir) = &args.out_dir {
+        return render_batch(&args, dir);
+    }
     let scene_path = match &args.scenes[..] {
         [one] => one.as_path(),
         [] => {
@@ -532,7 +631,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         }
         many => {
             eprintln!(
-                "gpurt: one scene is rendered at a time, but {} were given ({}); run gpurt once per scene",
+                "gpurt: one scene is rendered at a time, but {} were given ({}); give --out-dir DIR to render them all",
                 many.len(),
                 many.iter()
                     .map(|p| p.display().to_string())

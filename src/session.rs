@@ -101,7 +101,15 @@ impl GpuSession {
         })
     }
 
-    /// How many times the scene's arrays have been uploaded: once for any number of frames.
+    /// Moves the session to another scene (a batch): the next frame uploads it; the
+    /// compiled pipelines stay, so scenes of one kind compile once.
+    pub fn set_scene(&mut self, scene: Arc<SceneBuffers>) {
+        self.uploaded = None;
+        self.scene = scene;
+    }
+
+    /// How many times a scene's arrays have been uploaded: once per scene, for any number
+    /// of frames.
     pub fn scene_uploads(&self) -> u32 {
         self.uploads
     }

@@ -546,3 +546,56 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
         stderr(&o)
     );
 }
+
+#[test]
+fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() {
+    let d = workdir("batch");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    std::fs::write(d.join("broken.nff"), "v\nfrom 0 0\n").unwrap();
+    std::fs::copy(
+        crate::common::own_scenes().join("icosahedron.stl"),
+        d.join("ico.stl"),
+    )
+    .unwrap();
+    let size = ["--width", "40", "--height", "30", "--backend", "cpu"];
+    let o = gpurt(
+        &[
+            &["ball.nff", "broken.nff", "ico.stl", "--out-dir", "out"][..],
+            &size,
+        ]
+        .concat(),
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("gpurt: broken.nff: skipped: broken.nff:3:1: "),
+        "{err}"
+    );
+    assert!(err.contains("2 of 3 scenes rendered"), "{err}");
+    assert!(!d.join("out/broken.png").exists());
+    // Each image is the one a render of its scene alone writes, to the byte.
+    for scene in ["ball", "ico"] {
+        let input = if scene == "ball" {
+            "ball.nff"
+        } else {
+            "ico.stl"
+        };
+        let alone = format!("{scene}-alone.png");
+        let o = gpurt(&[&[input, "-o", alone.as_str()][..], &size].concat(), &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let batch = std::fs::read(d.join(format!("out/{scene}.png"))).unwrap();
+        assert_eq!(batch, std::fs::read(d.join(&alone)).unwrap(), "{scene}");
+    }
+    // Two scenes with one name are refused before anything renders.
+    std::fs::create_dir_all(d.join("other")).unwrap();
+    std::fs::write(d.join("other/ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "other/ball.nff", "--out-dir", "clash"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("would both be written to clash/ball.png"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("clash").exists());
+}

@@ -162,3 +162,53 @@ fn a_renderer_refuses_what_it_cannot_do() {
         "a refused render leaves the accumulator as it was"
     );
 }
+
+/// A batch's session: a second scene of the same kind uploads its own arrays but
+/// compiles nothing, and renders what a fresh session renders.
+#[test]
+fn a_gpu_session_moved_to_another_scene_keeps_its_pipelines() {
+    let Some(ctx) = gpu_context() else {
+        return;
+    };
+    let (first, g) = frame();
+    // The same kind of scene (same primitive kinds, lights and materials' features),
+    // seen from elsewhere.
+    let mut moved = scene::load(&own_scenes().join("glass.nff")).expect("loads");
+    moved.camera.from.x += 0.7;
+    let second = Arc::new(pack::pack(moved).expect("packs"));
+    let g2 = frame::globals(
+        &second,
+        &RenderOptions {
+            width: g.width,
+            height: g.height,
+            spp: g.spp,
+            ..RenderOptions::for_camera(&second.camera)
+        },
+    );
+    let never = AtomicBool::new(false);
+    let mut session = GpuSession::new(ctx.clone(), first).expect("session");
+    session.prepare(&g).expect("compiles");
+    let mut a = Accumulator::new(g.width, g.height);
+    session
+        .render(&g, 0..g.spp, &mut a, &|_| {}, &never)
+        .expect("renders");
+    let compiled = session.compile_time();
+    session.set_scene(second.clone());
+    assert!(
+        session.prepare(&g2).expect("ready").is_zero(),
+        "nothing compiled"
+    );
+    let mut b = Accumulator::new(g.width, g.height);
+    session
+        .render(&g2, 0..g.spp, &mut b, &|_| {}, &never)
+        .expect("renders");
+    assert_eq!(session.compile_time(), compiled);
+    assert_eq!(session.scene_uploads(), 2);
+    let mut fresh = GpuSession::new(ctx, second).expect("session");
+    let mut c = Accumulator::new(g.width, g.height);
+    fresh
+        .render(&g2, 0..g.spp, &mut c, &|_| {}, &never)
+        .expect("renders");
+    assert_eq!(b.film(), c.film());
+    assert_ne!(a.film(), b.film());
+}
