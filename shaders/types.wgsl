@@ -200,7 +200,10 @@ override MULTISAMPLE: bool = true;
 // globals.aov, as a constant.
 override AOV: u32 = 0u;
 
-@group(0) @binding(0) var<uniform> globals: Globals;
+// Storage, not uniform: lavapipe specialises a shader on the uniform values its branches
+// read (Mesa's uniform inlining), so a uniform `globals` compiled the shader again (0.8 s)
+// for every scene and image size.
+@group(0) @binding(0) var<storage, read> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
 // BVH nodes and primitives, the data every traversal step reads, come through rgba32uint
 // textures holding the very bytes of `array<Node>` and `array<Prim>` (2 and 3 texels

@@ -24,7 +24,7 @@ use crate::film::{Accumulator, Film};
 use crate::gpu_types::{GpuGlobals, GpuTile, PIXEL_CUT_SHORT, WORKGROUP_SIDE};
 use crate::pack::SceneBuffers;
 
-/// What a frame binds besides the scene: its constants (a uniform rewritten when only
+/// What a frame binds besides the scene: its constants (a buffer rewritten when only
 /// the camera or the other constants change), the tiles, and a band's output and the
 /// buffer it is read back through (remade when the image size or the cut changes).
 pub(super) struct Bound {
@@ -249,7 +249,7 @@ impl GpuRenderer {
         Ok(pipeline)
     }
 
-    /// Creates a frame's uniforms, its band output and readback buffers, and the bind
+    /// Creates a frame's constants and tile slots, its band output and readback buffers, and the bind
     /// group that joins them to the scene's arrays.
     fn bind(
         &self,
@@ -263,7 +263,7 @@ impl GpuRenderer {
             let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some("globals"),
                 contents: bytemuck::bytes_of(globals),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             });
             let tile_stride = (size_of::<GpuTile>() as u32)
                 .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
@@ -327,12 +327,10 @@ impl GpuRenderer {
     }
 
     /// Traces the centre pixel of the frame `globals` once, one sample, on the scene's
-    /// arrays `data`, so that drivers that compile at the first dispatch compile now and
-    /// the compile time is the whole cost of getting a pipeline ready. It must be a real
-    /// pixel of the real scene: lavapipe compiles more the first time an invocation takes
-    /// the paths a hit, its shading and its secondary rays take. An empty tile, and then
-    /// one pixel of an empty scene, left 0.8 s of a cold start's 1.6 s (balls-4, mount-7)
-    /// to the first frame; this warm-up leaves none.
+    /// arrays `data`, so that drivers that compile at the first dispatch (lavapipe)
+    /// compile now and the compile time is the whole cost of getting a pipeline ready.
+    /// A real pixel with the frame's own constants compiles exactly what the frame's
+    /// dispatches will run, whatever the driver specialises on.
     fn warm_up(
         &self,
         device: &wgpu::Device,
@@ -425,7 +423,7 @@ impl GpuRenderer {
 
     /// Moves an uploaded scene to another frame of it (camera, size, samples, depth,
     /// AOV): the scene's arrays stay where they are. A frame of the same size and
-    /// samples per pixel rewrites only the constants' uniform; another size remakes the
+    /// samples per pixel rewrites only the constants' buffer; another size remakes the
     /// band's output buffers and the bind group; other settings may pick another
     /// pipeline (compiled once).
     pub fn set_frame(
@@ -638,7 +636,7 @@ fn submit_band(
     enc
 }
 
-/// The bindings of `types.wgsl`: globals and tile (uniform), nodes and primitives
+/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes and primitives
 /// (rgba32uint textures), the other scene arrays (read-only storage), the tile's output
 /// (read-write storage). Explicit, so that a binding the
 /// shader happens not to use is still accepted.
@@ -664,7 +662,7 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         count: None,
     };
     let mut entries = vec![
-        entry(0, wgpu::BufferBindingType::Uniform),
+        entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
         wgpu::BindGroupLayoutEntry {
             ty: wgpu::BindingType::Buffer {
                 ty: wgpu::BufferBindingType::Uniform,
