@@ -72,6 +72,8 @@ pub struct Outcome {
     pub rays: u64,
     /// The scenes that failed, with why, in input order.
     pub failed: Vec<(PathBuf, Error)>,
+    /// The readers' warnings about the scenes rendered (each names its file and line).
+    pub warnings: Vec<String>,
 }
 
 /// Renders `scenes` to `outputs` (see `outputs`), on `gpu`'s device or on the CPU.
@@ -91,9 +93,10 @@ pub fn run(
     let mut session: Option<GpuSession> = None;
     for (scene, out) in scenes.iter().zip(outputs) {
         match render_one(scene, out, opts, gpu.as_ref(), &mut session, cancel) {
-            Ok(rays) => {
+            Ok((rays, warnings)) => {
                 outcome.rendered += 1;
                 outcome.rays += rays;
+                outcome.warnings.extend(warnings);
             }
             Err(Error::Interrupted) => return Err(Error::Interrupted),
             Err(e) => outcome.failed.push((scene.clone(), e)),
@@ -110,8 +113,9 @@ fn render_one(
     gpu: Option<&GpuContext>,
     session: &mut Option<GpuSession>,
     cancel: &AtomicBool,
-) -> Result<u64> {
-    let buffers = Arc::new(run::prepare(scene, opts.view.as_deref())?.buffers);
+) -> Result<(u64, Vec<String>)> {
+    let prepared = run::prepare(scene, opts.view.as_deref())?;
+    let buffers = Arc::new(prepared.buffers);
     let defaults = RenderOptions::for_camera(&buffers.camera);
     let frame = frame::globals(
         &buffers,
@@ -139,7 +143,7 @@ fn render_one(
     };
     let rendered = run::render_frame(renderer, &frame, &|_| {}, cancel)?;
     rendered.film.save_aov(out, opts.aov)?;
-    Ok(rendered.rays)
+    Ok((rendered.rays, prepared.warnings))
 }
 
 #[cfg(test)]

@@ -473,6 +473,9 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     );
     bar.finish_and_clear();
     let outcome = outcome?;
+    for w in &outcome.warnings {
+        eprintln!("gpurt: warning: {w}");
+    }
     for (scene, e) in &outcome.failed {
         eprintln!("gpurt: {}: skipped: {e}", scene.display());
     }
