@@ -228,6 +228,11 @@ struct RenderArgs {
     /// on one device; a scene that fails is reported and skipped (exit 2 at the end).
     #[arg(long, value_name = "DIR", conflicts_with = "output")]
     out_dir: Option<PathBuf>,
+    /// Render only this share of the scenes: every N-th from the I-th (0-based). `/N`
+    /// takes I from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX (a Slurm job array, a
+    /// Kubernetes Indexed Job).
+    #[arg(long, value_name = "I/N", value_parser = gpurt::batch::Shard::parse, requires = "out_dir")]
+    shard: Option<gpurt::batch::Shard>,
     /// Image format of the images --out-dir writes.
     #[arg(long, value_enum, default_value_t = ImageFormat::Png, requires = "out_dir")]
     format: ImageFormat,
@@ -429,7 +434,15 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         );
         return Ok(ExitCode::from(2));
     }
+    // Names are checked over the whole list, so that no two shards write one file.
     let outputs = batch::outputs(&args.scenes, dir, args.format.format())?;
+    let (scenes, outputs): (Vec<PathBuf>, Vec<PathBuf>) = match args.shard {
+        Some(shard) => {
+            let pairs: Vec<(PathBuf, PathBuf)> = args.scenes.iter().cloned().zip(outputs).collect();
+            shard.take(&pairs).into_iter().cloned().unzip()
+        }
+        None => (args.scenes.clone(), outputs),
+    };
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     for out in &outputs {
         atomic::check_writable(out)?;
@@ -445,14 +458,14 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     {
         eprintln!("{note}");
     }
-    let bar = ProgressBar::new(args.scenes.len() as u64);
+    let bar = ProgressBar::new(scenes.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
             .expect("valid template"),
     );
     let start = Instant::now();
     let outcome = batch::run(
-        &args.scenes,
+        &scenes,
         &outputs,
         &BatchOptions {
             width: args.width,
@@ -484,7 +497,7 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         eprintln!(
             "batch       {} of {} scenes rendered into {} in {secs:.2} s ({:.1} scenes/s, {:.2} Mrays/s)",
             outcome.rendered,
-            args.scenes.len(),
+            scenes.len(),
             dir.display(),
             outcome.rendered as f64 / secs.max(1e-9),
             outcome.rays as f64 / secs.max(1e-9) / 1e6

@@ -599,3 +599,53 @@ fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() 
     );
     assert!(!d.join("clash").exists());
 }
+
+#[test]
+fn batch_shards_run_as_separate_processes_write_the_whole_batch_between_them() {
+    let d = workdir("batch-shards");
+    let names = ["a", "b", "c", "d", "e"];
+    for (k, n) in names.iter().enumerate() {
+        // Five scenes that differ (the ball moves), so a mix-up shows.
+        let scene = SCENE.replace("s 0 0 0 1", &format!("s {} 0 0 1", k as f32 * 0.2));
+        std::fs::write(d.join(format!("{n}.nff")), scene).unwrap();
+    }
+    let scenes: Vec<String> = names.iter().map(|n| format!("{n}.nff")).collect();
+    let args = |dir: &str, shard: Option<&str>| {
+        let mut a: Vec<String> = scenes.clone();
+        a.extend(["--out-dir", dir, "--backend", "cpu"].map(String::from));
+        if let Some(s) = shard {
+            a.extend(["--shard".to_string(), s.to_string()]);
+        }
+        a
+    };
+    let run = |a: &[String], task: Option<&str>| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_gpurt"));
+        c.args(a).current_dir(&d);
+        if let Some(t) = task {
+            c.env("SLURM_ARRAY_TASK_ID", t);
+        }
+        let o = c.output().expect("gpurt runs");
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run(&args("whole", None), None);
+    // Task 0 from the job array's variable, task 1 given outright.
+    run(&args("sharded", Some("/2")), Some("0"));
+    let first: Vec<String> = crate::common::files_with(&d.join("sharded"), &[".png"])
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(first, ["a.png", "c.png", "e.png"]);
+    run(&args("sharded", Some("1/2")), None);
+    for n in names {
+        let whole = std::fs::read(d.join(format!("whole/{n}.png"))).unwrap();
+        let shard = std::fs::read(d.join(format!("sharded/{n}.png"))).unwrap();
+        assert_eq!(whole, shard, "{n}");
+    }
+    let o = gpurt(&[&scenes[0], "--out-dir", "x", "--shard", "2/2"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("the shard index must be 0 to 1"),
+        "{}",
+        stderr(&o)
+    );
+}
