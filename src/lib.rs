@@ -23,6 +23,7 @@ pub mod pack;
 pub mod run;
 pub mod scene;
 pub mod session;
+pub mod shard;
 pub mod view;
 
 pub use error::{Error, Result};

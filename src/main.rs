@@ -61,6 +61,14 @@ enum Command {
         #[arg(long, value_parser = parse_limit)]
         max_bad: Option<f64>,
     },
+    /// Assemble an image from the shards `gpurt SCENE --shard I/N -o DIR` wrote into DIR,
+    /// after checking that all N are there and belong to one render.
+    Merge {
+        dir: PathBuf,
+        /// The image to write; the format follows the extension.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Open a window on a scene: ray traced progressively, with a wireframe preview that
     /// shares the ray tracer's camera. Without a display, says so and exits 2.
     #[command(after_help = gpurt::view::controls::key_help())]
@@ -136,6 +144,12 @@ struct ViewArgs {
     /// On exit, print the time to the first picture, frame times and tracing rates.
     #[arg(long)]
     stats: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ShardBy {
+    Tiles,
+    Samples,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -228,11 +242,16 @@ struct RenderArgs {
     /// on one device; a scene that fails is reported and skipped (exit 2 at the end).
     #[arg(long, value_name = "DIR", conflicts_with = "output")]
     out_dir: Option<PathBuf>,
-    /// Render only this share of the scenes: every N-th from the I-th (0-based). `/N`
-    /// takes I from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX (a Slurm job array, a
-    /// Kubernetes Indexed Job).
-    #[arg(long, value_name = "I/N", value_parser = gpurt::batch::Shard::parse, requires = "out_dir")]
+    /// Do this process's share: with --out-dir every N-th scene from the I-th (0-based);
+    /// for one scene the I-th of N bands of rows, written with its manifest into the
+    /// directory -o names, for `gpurt merge`. `/N` takes I from SLURM_ARRAY_TASK_ID or
+    /// JOB_COMPLETION_INDEX (a Slurm job array, a Kubernetes Indexed Job).
+    #[arg(long, value_name = "I/N", value_parser = gpurt::batch::Shard::parse)]
     shard: Option<gpurt::batch::Shard>,
+    /// How one image is split between shards: bands of tile rows (samples is not built
+    /// yet).
+    #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
+    shard_by: ShardBy,
     /// Image format of the images --out-dir writes.
     #[arg(long, value_enum, default_value_t = ImageFormat::Png, requires = "out_dir")]
     format: ImageFormat,
@@ -363,6 +382,7 @@ fn main() -> ExitCode {
         })
         .map(|()| ExitCode::SUCCESS),
         Some(Command::View(args)) => view(args, launch),
+        Some(Command::Merge { dir, output }) => merge(&dir, &output),
         None => render_command(cli.render),
     };
     match result {
@@ -417,6 +437,91 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             launch,
         },
     )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `gpurt SCENE --shard I/N -o DIR`: this process's band of rows of one image, with its
+/// manifest, into DIR.
+fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<ExitCode> {
+    use gpurt::shard::{self, Manifest};
+    let [scene] = &args.scenes[..] else {
+        eprintln!("gpurt: --shard splits one scene's image, or a batch with --out-dir");
+        return Ok(ExitCode::from(2));
+    };
+    let Some(dir) = &args.output else {
+        eprintln!("gpurt: --shard needs -o DIR, the directory the shards of the image go to");
+        return Ok(ExitCode::from(2));
+    };
+    if args.shard_by == ShardBy::Samples {
+        eprintln!("gpurt: --shard-by samples is not built yet; --shard-by tiles splits the image");
+        return Ok(ExitCode::from(2));
+    }
+    if args.backend == Backend::Both || args.overlay.is_some() || args.aov == Aov::Wireframe {
+        eprintln!("gpurt: a shard renders on one backend, without wireframes");
+        return Ok(ExitCode::from(2));
+    }
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
+    }
+    let buffers = Arc::new(run::prepare(scene, args.view.as_deref())?.buffers);
+    let defaults = RenderOptions::for_camera(&buffers.camera);
+    let opts = RenderOptions {
+        width: args.width.unwrap_or(defaults.width),
+        height: args.height.unwrap_or(defaults.height),
+        spp: args.spp,
+        max_depth: args.depth,
+        ambient: args.ambient,
+        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
+        seed: args.seed,
+    };
+    let globals = frame::globals(&buffers, &opts);
+    let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
+    let backend = if found.gpu.is_some() { "gpu" } else { "cpu" };
+    let mut renderer: Box<dyn Renderer> = match found.gpu {
+        Some(ctx) => Box::new(GpuSession::new(ctx, buffers.clone())?),
+        None => Box::new(CpuRenderer::new(buffers.clone())),
+    };
+    let settings = format!(
+        "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}, {backend}",
+        opts.width, opts.height, opts.spp, opts.max_depth, globals.ambient, opts.seed, opts.aov
+    );
+    let rows = shard::rows(shard, opts.height);
+    renderer.prepare(&globals)?;
+    let mut accum = film::Accumulator::new(opts.width, opts.height);
+    renderer.render_rows(
+        &globals,
+        rows.clone(),
+        0..opts.spp,
+        &mut accum,
+        &|_| {},
+        &cancel,
+    )?;
+    shard::write(
+        dir,
+        &Manifest {
+            shard,
+            digest: shard::digest(scene, args.view.as_deref(), &settings)?,
+            settings,
+            scene: scene.display().to_string(),
+            width: opts.width,
+            height: opts.height,
+            spp: opts.spp,
+            aov: opts.aov,
+            rows,
+        },
+        &accum,
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `gpurt merge DIR -o OUT`.
+fn merge(dir: &Path, output: &Path) -> gpurt::Result<ExitCode> {
+    film::Format::from_path(output)?;
+    atomic::check_writable(output)?;
+    let (accum, aov) = gpurt::shard::merge(dir)?;
+    accum.film().save_aov(output, aov)?;
     Ok(ExitCode::SUCCESS)
 }
 
@@ -638,6 +743,9 @@ impl Progress {
 fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     if let Some(dir) = &args.out_dir {
         return render_batch(&args, dir);
+    }
+    if let Some(shard) = args.shard {
+        return render_shard(&args, shard);
     }
     let scene_path = match &args.scenes[..] {
         [one] => one.as_path(),

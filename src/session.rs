@@ -37,6 +37,21 @@ pub trait Renderer {
         accum: &mut Accumulator,
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
+    ) -> Result<u64> {
+        let rows = 0..globals.height;
+        self.render_rows(globals, rows, samples, accum, progress, cancel)
+    }
+
+    /// `render` for the image rows `rows` only (one shard of a sharded image): the other
+    /// rows of `accum` stay as they are. Each pixel gets the value the whole frame gives it.
+    fn render_rows(
+        &mut self,
+        globals: &GpuGlobals,
+        rows: Range<u32>,
+        samples: Range<u32>,
+        accum: &mut Accumulator,
+        progress: &(dyn Fn(u64) + Sync),
+        cancel: &AtomicBool,
     ) -> Result<u64>;
 }
 
@@ -60,9 +75,10 @@ impl Renderer for CpuRenderer {
         Ok(Duration::ZERO)
     }
 
-    fn render(
+    fn render_rows(
         &mut self,
         globals: &GpuGlobals,
+        rows: Range<u32>,
         samples: Range<u32>,
         accum: &mut Accumulator,
         progress: &(dyn Fn(u64) + Sync),
@@ -71,7 +87,7 @@ impl Renderer for CpuRenderer {
         // The same guard as the GPU's: a frame the fixed-size stacks cannot trace is an
         // error, not a panic.
         self.scene.check(globals)?;
-        crate::cpu::render_samples(&self.scene, globals, samples, accum, progress, cancel)
+        crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)
             .map(|c| c.total())
     }
 }
@@ -133,9 +149,10 @@ impl Renderer for GpuSession {
         Ok(self.renderer.compile_time() - before)
     }
 
-    fn render(
+    fn render_rows(
         &mut self,
         globals: &GpuGlobals,
+        rows: Range<u32>,
         samples: Range<u32>,
         accum: &mut Accumulator,
         progress: &(dyn Fn(u64) + Sync),
@@ -144,7 +161,9 @@ impl Renderer for GpuSession {
         self.set_frame(globals)?;
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let (_, uploaded) = self.uploaded.as_ref().expect("uploaded by set_frame");
-        gpu::trace_samples(device, queue, uploaded, samples, accum, progress, cancel)
+        gpu::trace_rows(
+            device, queue, uploaded, rows, samples, accum, progress, cancel,
+        )
     }
 }
 

@@ -59,21 +59,43 @@ pub fn render_samples(
     progress: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<RayCounts> {
+    let rows = 0..globals.height;
+    render_rows(buffers, globals, rows, samples, accum, progress, cancel)
+}
+
+/// `render_samples` for the image rows `rows` only (a shard of the image): the other
+/// rows of `accum` stay as they are. A pixel's value never depends on which others are
+/// traced with it.
+pub fn render_rows(
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RayCounts> {
     let (w, h) = (globals.width, globals.height);
     accum.check(w, h, globals.spp, &samples)?;
+    let rows = rows.start.min(h)..rows.end.min(h);
     let b = Bindings::new(buffers, globals);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+    // Tiles of TILE x TILE pixels, clipped to `rows`: (x0, y0, y1).
+    let tiles: Vec<(u32, u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
+        .filter_map(|(x0, y0)| {
+            let (lo, hi) = (y0.max(rows.start), (y0 + TILE).min(h).min(rows.end));
+            (lo < hi).then_some((x0, lo, hi))
+        })
         .collect();
     let done: Vec<Option<(Vec<[f32; 3]>, RayCounts)>> = tiles
         .par_iter()
-        .map(|&(x0, y0)| {
+        .map(|&(x0, y0, y1)| {
             if cancel.load(Ordering::Relaxed) {
                 return None;
             }
             let mut counts = RayCounts::default();
             let mut px = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..(y0 + TILE).min(h) {
+            for y in y0..y1 {
                 for x in x0..(x0 + TILE).min(w) {
                     let sum = Vec3::from(accum.sums.get(x, y));
                     let sum = main::sample_sum(&b, x, y, samples.clone(), sum, &mut counts);
@@ -85,9 +107,13 @@ pub fn render_samples(
         })
         .collect();
     let mut total = RayCounts::default();
-    // The tiles cover every pixel, so the new sums need no copy of the old ones.
-    let mut sums = Film::new(w, h);
-    for (&(x0, y0), tile) in tiles.iter().zip(done) {
+    // Tiles covering every pixel need no copy of the old sums.
+    let mut sums = if rows == (0..h) {
+        Film::new(w, h)
+    } else {
+        accum.sums.clone()
+    };
+    for (&(x0, y0, _), tile) in tiles.iter().zip(done) {
         let (px, counts) = tile.ok_or(Error::Interrupted)?;
         total.add(&counts);
         let tw = (x0 + TILE).min(w) - x0;

@@ -14,4 +14,6 @@ pub mod specialization;
 mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
-pub use render::{GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_samples};
+pub use render::{
+    GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_rows, trace_samples,
+};

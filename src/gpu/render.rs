@@ -552,12 +552,34 @@ pub fn trace_samples(
     progress: &dyn Fn(u64),
     cancel: &AtomicBool,
 ) -> Result<u64> {
+    let rows = 0..scene.cut.height;
+    trace_rows(device, queue, scene, rows, samples, accum, progress, cancel)
+}
+
+/// `trace_samples` for the image rows `rows` only (a shard of the image): the other
+/// rows of `accum` stay as they are.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_rows(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
     let cut = scene.cut;
     accum.check(cut.width, cut.height, cut.spp, &samples)?;
     let (mut rays, mut cut_short) = (0u64, 0u64);
     // Pixels whose work did not fit one invocation, finished by `resume`.
     let mut unfinished = Vec::new();
-    for (y0, rows) in cut.bands() {
+    // The bands, clipped to `rows`.
+    let bands = cut.bands().filter_map(|(y0, n)| {
+        let (lo, hi) = (y0.max(rows.start), (y0 + n).min(rows.end));
+        (lo < hi).then(|| (lo, hi - lo))
+    });
+    for (y0, rows) in bands {
         if cancel.load(Ordering::Relaxed) {
             return Err(Error::Interrupted);
         }

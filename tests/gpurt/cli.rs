@@ -649,3 +649,68 @@ fn batch_shards_run_as_separate_processes_write_the_whole_batch_between_them() {
         stderr(&o)
     );
 }
+
+#[test]
+fn image_shards_run_as_separate_processes_merge_into_the_single_process_image() {
+    let d = workdir("image-shards");
+    let glass = crate::common::own_scenes().join("glass.nff");
+    let glass = glass.to_str().unwrap();
+    let frame = [
+        "--width",
+        "61",
+        "--height",
+        "47",
+        "--spp",
+        "3",
+        "--backend",
+        "cpu",
+    ];
+    let shard = |i: &str, dir: &str, scene: &str| {
+        let o = gpurt(
+            &[&[scene, "--shard", i, "-o", dir][..], &frame].concat(),
+            &d,
+        );
+        assert!(o.status.success(), "shard {i}: {}", stderr(&o));
+    };
+    for i in ["0/3", "1/3", "2/3"] {
+        shard(i, "parts", glass);
+    }
+    let o = gpurt(&["merge", "parts", "-o", "merged.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = gpurt(&[&[glass, "-o", "single.png"][..], &frame].concat(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(d.join("merged.png")).unwrap(),
+        std::fs::read(d.join("single.png")).unwrap(),
+        "byte-identical"
+    );
+
+    // A missing shard is named, and nothing is written.
+    std::fs::create_dir_all(d.join("gap")).unwrap();
+    for ext in ["json", "rgbf32"] {
+        let f = format!("shard-0-of-3.{ext}");
+        std::fs::copy(d.join("parts").join(&f), d.join("gap").join(&f)).unwrap();
+        let f = format!("shard-2-of-3.{ext}");
+        std::fs::copy(d.join("parts").join(&f), d.join("gap").join(&f)).unwrap();
+    }
+    let o = gpurt(&["merge", "gap", "-o", "gap.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("shard 1 of 3 is missing"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("gap.png").exists());
+
+    // A shard of another scene in the set is named as foreign.
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    shard("1/3", "gap", "ball.nff");
+    let o = gpurt(&["merge", "gap", "-o", "gap.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("shard-1-of-3.json belongs to another render"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("gap.png").exists());
+}

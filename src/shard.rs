@@ -1,0 +1,241 @@
+//! One image rendered by several processes (`gpurt SCENE --shard I/N -o DIR/`): shard `I`
+//! traces a band of rows and writes their linear sums and a manifest into DIR; `gpurt
+//! merge DIR -o out.png` checks that every shard is there and belongs to the same scene
+//! and settings, and assembles the image. A pixel's value does not depend on which other
+//! pixels one process traces, so the merged image is the single-process one, to the byte.
+//!
+//! Files of shard `I` of `N`: `shard-I-of-N.rgbf32` (the band's per-pixel sums of the
+//! samples, RGB, little-endian f32, row by row) and `shard-I-of-N.json` (the manifest),
+//! each written atomically, the manifest last: a shard without its manifest does not
+//! exist, and a retried shard never leaves a torn file.
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use serde_json::{Value, json};
+
+use crate::atomic;
+use crate::batch::Shard;
+use crate::error::{Error, Result};
+use crate::film::Accumulator;
+
+const FORMAT: &str = "gpurt-shard/1";
+
+/// The rows shard `shard` traces of an image `height` rows high: the I-th of N bands as
+/// equal as whole rows allow.
+pub fn rows(shard: Shard, height: u32) -> Range<u32> {
+    let at = |i: u32| (u64::from(i) * u64::from(height) / u64::from(shard.count)) as u32;
+    at(shard.index)..at(shard.index + 1)
+}
+
+/// What identifies a render: a 64-bit FNV-1a hash of the scene file, the view file, and
+/// the settings text. Not cryptographic: it tells apart shards of different renders.
+pub fn digest(scene: &Path, view: Option<&Path>, settings: &str) -> Result<String> {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    eat(&std::fs::read(scene).map_err(|e| Error::io(scene, e))?);
+    if let Some(v) = view {
+        eat(&std::fs::read(v).map_err(|e| Error::io(v, e))?);
+    }
+    eat(settings.as_bytes());
+    Ok(format!("{h:016x}"))
+}
+
+/// A shard's description, as its manifest stores it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Manifest {
+    pub shard: Shard,
+    /// `digest` of the scene, view and settings.
+    pub digest: String,
+    /// The settings, readable (size, samples, depth, ambient, seed, output, backend).
+    pub settings: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub aov: u32,
+    pub rows: Range<u32>,
+}
+
+fn base(dir: &Path, shard: Shard) -> PathBuf {
+    dir.join(format!("shard-{}-of-{}", shard.index, shard.count))
+}
+
+/// Writes shard `m.shard`'s rows of `accum` (which holds all `m.spp` samples of them)
+/// into `dir`: the data, then the manifest.
+pub fn write(dir: &Path, m: &Manifest, accum: &Accumulator) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let base = base(dir, m.shard);
+    let w = m.width as usize;
+    let band = &accum.sums.pixels[m.rows.start as usize * w..m.rows.end as usize * w];
+    let bytes: Vec<u8> = band
+        .iter()
+        .flatten()
+        .flat_map(|c| c.to_le_bytes())
+        .collect();
+    atomic::write_atomic(&base.with_extension("rgbf32"), &bytes)?;
+    let manifest = json!({
+        "format": FORMAT,
+        "shard": m.shard.index,
+        "of": m.shard.count,
+        "by": "tiles",
+        "digest": m.digest,
+        "settings": m.settings,
+        "scene": m.scene,
+        "width": m.width,
+        "height": m.height,
+        "samples": [0, m.spp],
+        "aov": m.aov,
+        "rows": [m.rows.start, m.rows.end],
+        "data": base.with_extension("rgbf32").file_name().map(|n| n.to_string_lossy().into_owned()),
+    });
+    let text = serde_json::to_string_pretty(&manifest).expect("JSON of plain values");
+    atomic::write_atomic(&base.with_extension("json"), text.as_bytes())
+}
+
+fn read_manifest(path: &Path) -> Result<Manifest> {
+    let bad = |why: &str| Error::Scene {
+        file: path.display().to_string(),
+        msg: format!("not a gpurt shard manifest: {why}"),
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let v: Value = serde_json::from_str(&text).map_err(|e| bad(&e.to_string()))?;
+    if v["format"] != FORMAT {
+        return Err(bad(&format!("format is not {FORMAT}")));
+    }
+    let num = |k: &str| -> Result<u32> {
+        v[k].as_u64()
+            .and_then(|n| u32::try_from(n).ok())
+            .ok_or_else(|| bad(&format!("no '{k}'")))
+    };
+    let pair = |k: &str| -> Result<Range<u32>> {
+        let a = v[k]
+            .as_array()
+            .filter(|a| a.len() == 2)
+            .ok_or_else(|| bad(k))?;
+        let n = |i: usize| a[i].as_u64().and_then(|n| u32::try_from(n).ok());
+        match (n(0), n(1)) {
+            (Some(lo), Some(hi)) if lo <= hi => Ok(lo..hi),
+            _ => Err(bad(k)),
+        }
+    };
+    let text_of = |k: &str| v[k].as_str().map(str::to_owned).ok_or_else(|| bad(k));
+    let shard = Shard {
+        index: num("shard")?,
+        count: num("of")?,
+    };
+    let samples = pair("samples")?;
+    Ok(Manifest {
+        shard,
+        digest: text_of("digest")?,
+        settings: text_of("settings")?,
+        scene: text_of("scene")?,
+        width: num("width")?,
+        height: num("height")?,
+        spp: samples.end,
+        aov: num("aov")?,
+        rows: pair("rows")?,
+    })
+}
+
+/// Reads every shard in `dir`, checks that they are one render's N shards, and
+/// assembles its accumulator (all samples of every pixel) and AOV.
+pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let mut manifests: Vec<(PathBuf, Manifest)> = Vec::new();
+    for e in entries {
+        let path = e.map_err(|e| Error::io(dir, e))?.path();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        if name.is_some_and(|n| n.starts_with("shard-") && n.ends_with(".json")) {
+            let m = read_manifest(&path)?;
+            manifests.push((path, m));
+        }
+    }
+    manifests.sort_by_key(|(p, _)| p.clone());
+    let Some((first_path, first)) = manifests.first().cloned() else {
+        return Err(Error::Render(format!(
+            "{}: no shards (shard-I-of-N.json) to merge",
+            dir.display()
+        )));
+    };
+    let n = first.shard.count;
+    let mut have = vec![None; n as usize];
+    for (path, m) in &manifests {
+        let same = m.digest == first.digest
+            && m.settings == first.settings
+            && m.shard.count == n
+            && (m.width, m.height, m.spp, m.aov)
+                == (first.width, first.height, first.spp, first.aov);
+        if !same {
+            return Err(Error::Render(format!(
+                "{} belongs to another render than {} (scene, view or settings differ: {} against {}); \
+                 remove it or merge it apart",
+                path.display(),
+                first_path.display(),
+                m.settings,
+                first.settings
+            )));
+        }
+        if m.rows != rows(m.shard, m.height) {
+            return Err(Error::Render(format!(
+                "{}: rows {:?} are not shard {} of {}'s",
+                path.display(),
+                m.rows,
+                m.shard.index,
+                n
+            )));
+        }
+        have[m.shard.index as usize] = Some(m.clone());
+    }
+    if let Some(missing) = have.iter().position(Option::is_none) {
+        return Err(Error::Render(format!(
+            "{}: shard {missing} of {n} is missing (shard-{missing}-of-{n}.json); run it, then merge again",
+            dir.display()
+        )));
+    }
+    let mut accum = Accumulator::new(first.width, first.height);
+    let w = first.width as usize;
+    for m in have.into_iter().flatten() {
+        let data = base(dir, m.shard).with_extension("rgbf32");
+        let bytes = std::fs::read(&data).map_err(|e| Error::io(&data, e))?;
+        let want = m.rows.len() * w * 12;
+        if bytes.len() != want {
+            return Err(Error::Render(format!(
+                "{}: {} bytes, expected {want} for rows {:?}",
+                data.display(),
+                bytes.len(),
+                m.rows
+            )));
+        }
+        let band = &mut accum.sums.pixels[m.rows.start as usize * w..m.rows.end as usize * w];
+        for (px, chunk) in band.iter_mut().zip(bytes.chunks_exact(12)) {
+            for (c, b) in px.iter_mut().zip(chunk.chunks_exact(4)) {
+                *c = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            }
+        }
+    }
+    accum.samples = first.spp;
+    Ok((accum, first.aov))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bands_of_n_shards_cover_every_row_once() {
+        for (h, n) in [(7, 3), (480, 7), (5, 5), (3, 8)] {
+            let mut next = 0;
+            for i in 0..n {
+                let r = rows(Shard { index: i, count: n }, h);
+                assert_eq!(r.start, next);
+                next = r.end;
+            }
+            assert_eq!(next, h);
+        }
+    }
+}
