@@ -248,8 +248,8 @@ struct RenderArgs {
     /// JOB_COMPLETION_INDEX (a Slurm job array, a Kubernetes Indexed Job).
     #[arg(long, value_name = "I/N", value_parser = gpurt::batch::Shard::parse)]
     shard: Option<gpurt::batch::Shard>,
-    /// How one image is split between shards: bands of tile rows (samples is not built
-    /// yet).
+    /// How one image is split between shards: bands of rows, or runs of samples (each
+    /// shard then stores one image per sample, spp/N of them).
     #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
     shard_by: ShardBy,
     /// Image format of the images --out-dir writes.
@@ -452,8 +452,15 @@ fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<
         eprintln!("gpurt: --shard needs -o DIR, the directory the shards of the image go to");
         return Ok(ExitCode::from(2));
     };
-    if args.shard_by == ShardBy::Samples {
-        eprintln!("gpurt: --shard-by samples is not built yet; --shard-by tiles splits the image");
+    let by = match args.shard_by {
+        ShardBy::Tiles => shard::By::Tiles,
+        ShardBy::Samples => shard::By::Samples,
+    };
+    if by == shard::By::Samples && shard.count > args.spp {
+        eprintln!(
+            "gpurt: {} shards of {} samples per pixel would leave some empty; use at most {} (or --shard-by tiles)",
+            shard.count, args.spp, args.spp
+        );
         return Ok(ExitCode::from(2));
     }
     if args.backend == Backend::Both || args.overlay.is_some() || args.aov == Aov::Wireframe {
@@ -487,32 +494,44 @@ fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<
         "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}, {backend}",
         opts.width, opts.height, opts.spp, opts.max_depth, globals.ambient, opts.seed, opts.aov
     );
-    let rows = shard::rows(shard, opts.height);
+    let (rows, samples) = match by {
+        shard::By::Tiles => (shard::rows(shard, opts.height), 0..opts.spp),
+        shard::By::Samples => (0..opts.height, shard::samples(shard, opts.spp)),
+    };
+    let manifest = Manifest {
+        shard,
+        by,
+        digest: shard::digest(scene, args.view.as_deref(), &settings)?,
+        settings,
+        scene: scene.display().to_string(),
+        width: opts.width,
+        height: opts.height,
+        spp: opts.spp,
+        aov: opts.aov,
+        rows: rows.clone(),
+        samples: samples.clone(),
+    };
     renderer.prepare(&globals)?;
-    let mut accum = film::Accumulator::new(opts.width, opts.height);
-    renderer.render_rows(
-        &globals,
-        rows.clone(),
-        0..opts.spp,
-        &mut accum,
-        &|_| {},
-        &cancel,
-    )?;
-    shard::write(
-        dir,
-        &Manifest {
-            shard,
-            digest: shard::digest(scene, args.view.as_deref(), &settings)?,
-            settings,
-            scene: scene.display().to_string(),
-            width: opts.width,
-            height: opts.height,
-            spp: opts.spp,
-            aov: opts.aov,
-            rows,
-        },
-        &accum,
-    )?;
+    match by {
+        shard::By::Tiles => {
+            let mut accum = film::Accumulator::new(opts.width, opts.height);
+            renderer.render_rows(&globals, rows, samples, &mut accum, &|_| {}, &cancel)?;
+            shard::write_tiles(dir, &manifest, &accum)?;
+        }
+        shard::By::Samples => {
+            // Each sample alone, added to zero sums: the merge adds these in sample order.
+            let mut images = Vec::with_capacity(samples.len());
+            for s in samples {
+                let mut accum = film::Accumulator {
+                    sums: film::Film::new(opts.width, opts.height),
+                    samples: s,
+                };
+                renderer.render(&globals, s..s + 1, &mut accum, &|_| {}, &cancel)?;
+                images.push(accum.sums);
+            }
+            shard::write_samples(dir, &manifest, &images)?;
+        }
+    }
     Ok(ExitCode::SUCCESS)
 }
 

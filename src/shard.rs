@@ -17,7 +17,7 @@ use serde_json::{Value, json};
 use crate::atomic;
 use crate::batch::Shard;
 use crate::error::{Error, Result};
-use crate::film::Accumulator;
+use crate::film::{Accumulator, Film};
 
 const FORMAT: &str = "gpurt-shard/1";
 
@@ -26,6 +26,32 @@ const FORMAT: &str = "gpurt-shard/1";
 pub fn rows(shard: Shard, height: u32) -> Range<u32> {
     let at = |i: u32| (u64::from(i) * u64::from(height) / u64::from(shard.count)) as u32;
     at(shard.index)..at(shard.index + 1)
+}
+
+/// The samples shard `shard` traces of `spp` per pixel (`--shard-by samples`): the I-th
+/// of N runs as equal as whole samples allow.
+pub fn samples(shard: Shard, spp: u32) -> Range<u32> {
+    rows(shard, spp)
+}
+
+/// How an image is split between shards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum By {
+    /// Each shard traces every sample of a band of rows and stores the band's sums.
+    Tiles,
+    /// Each shard traces a run of samples of every pixel and stores each sample's image
+    /// apart (`spp / N` images a shard), so that the merge adds them in sample order as
+    /// a single process does, to the bit.
+    Samples,
+}
+
+impl By {
+    fn name(self) -> &'static str {
+        match self {
+            By::Tiles => "tiles",
+            By::Samples => "samples",
+        }
+    }
 }
 
 /// What identifies a render: a 64-bit FNV-1a hash of the scene file, the view file, and
@@ -49,6 +75,7 @@ pub fn digest(scene: &Path, view: Option<&Path>, settings: &str) -> Result<Strin
 #[derive(Clone, Debug, PartialEq)]
 pub struct Manifest {
     pub shard: Shard,
+    pub by: By,
     /// `digest` of the scene, view and settings.
     pub digest: String,
     /// The settings, readable (size, samples, depth, ambient, seed, output, backend).
@@ -58,37 +85,50 @@ pub struct Manifest {
     pub height: u32,
     pub spp: u32,
     pub aov: u32,
+    /// The rows and samples this shard traced.
     pub rows: Range<u32>,
+    pub samples: Range<u32>,
 }
 
 fn base(dir: &Path, shard: Shard) -> PathBuf {
     dir.join(format!("shard-{}-of-{}", shard.index, shard.count))
 }
 
-/// Writes shard `m.shard`'s rows of `accum` (which holds all `m.spp` samples of them)
-/// into `dir`: the data, then the manifest.
-pub fn write(dir: &Path, m: &Manifest, accum: &Accumulator) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let base = base(dir, m.shard);
+/// Writes a `--shard-by tiles` shard: rows `m.rows` of `accum`, which holds all `m.spp`
+/// samples of them, into `dir`: the data, then the manifest.
+pub fn write_tiles(dir: &Path, m: &Manifest, accum: &Accumulator) -> Result<()> {
     let w = m.width as usize;
     let band = &accum.sums.pixels[m.rows.start as usize * w..m.rows.end as usize * w];
-    let bytes: Vec<u8> = band
-        .iter()
-        .flatten()
-        .flat_map(|c| c.to_le_bytes())
-        .collect();
+    write(dir, m, band.iter().flatten())
+}
+
+/// Writes a `--shard-by samples` shard: `per_sample[k]` is the image of sample
+/// `m.samples.start + k` alone.
+pub fn write_samples(dir: &Path, m: &Manifest, per_sample: &[Film]) -> Result<()> {
+    write(
+        dir,
+        m,
+        per_sample.iter().flat_map(|f| f.pixels.iter().flatten()),
+    )
+}
+
+fn write<'a>(dir: &Path, m: &Manifest, floats: impl Iterator<Item = &'a f32>) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let base = base(dir, m.shard);
+    let bytes: Vec<u8> = floats.flat_map(|c| c.to_le_bytes()).collect();
     atomic::write_atomic(&base.with_extension("rgbf32"), &bytes)?;
     let manifest = json!({
         "format": FORMAT,
         "shard": m.shard.index,
         "of": m.shard.count,
-        "by": "tiles",
+        "by": m.by.name(),
         "digest": m.digest,
         "settings": m.settings,
         "scene": m.scene,
         "width": m.width,
         "height": m.height,
-        "samples": [0, m.spp],
+        "spp": m.spp,
+        "samples": [m.samples.start, m.samples.end],
         "aov": m.aov,
         "rows": [m.rows.start, m.rows.end],
         "data": base.with_extension("rgbf32").file_name().map(|n| n.to_string_lossy().into_owned()),
@@ -128,17 +168,23 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
         index: num("shard")?,
         count: num("of")?,
     };
-    let samples = pair("samples")?;
+    let by = match v["by"].as_str() {
+        Some("tiles") => By::Tiles,
+        Some("samples") => By::Samples,
+        _ => return Err(bad("'by' is neither tiles nor samples")),
+    };
     Ok(Manifest {
         shard,
+        by,
         digest: text_of("digest")?,
         settings: text_of("settings")?,
         scene: text_of("scene")?,
         width: num("width")?,
         height: num("height")?,
-        spp: samples.end,
+        spp: num("spp")?,
         aov: num("aov")?,
         rows: pair("rows")?,
+        samples: pair("samples")?,
     })
 }
 
@@ -167,6 +213,7 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
     for (path, m) in &manifests {
         let same = m.digest == first.digest
             && m.settings == first.settings
+            && m.by == first.by
             && m.shard.count == n
             && (m.width, m.height, m.spp, m.aov)
                 == (first.width, first.height, first.spp, first.aov);
@@ -180,11 +227,16 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
                 first.settings
             )));
         }
-        if m.rows != rows(m.shard, m.height) {
+        let (want_rows, want_samples) = match m.by {
+            By::Tiles => (rows(m.shard, m.height), 0..m.spp),
+            By::Samples => (0..m.height, samples(m.shard, m.spp)),
+        };
+        if (&m.rows, &m.samples) != (&want_rows, &want_samples) {
             return Err(Error::Render(format!(
-                "{}: rows {:?} are not shard {} of {}'s",
+                "{}: rows {:?} and samples {:?} are not shard {} of {}'s",
                 path.display(),
                 m.rows,
+                m.samples,
                 m.shard.index,
                 n
             )));
@@ -199,22 +251,51 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
     }
     let mut accum = Accumulator::new(first.width, first.height);
     let w = first.width as usize;
+    // In shard order, which is row order (tiles) or sample order (samples).
     for m in have.into_iter().flatten() {
         let data = base(dir, m.shard).with_extension("rgbf32");
         let bytes = std::fs::read(&data).map_err(|e| Error::io(&data, e))?;
-        let want = m.rows.len() * w * 12;
+        let images = match m.by {
+            By::Tiles => 1,
+            By::Samples => m.samples.len(),
+        };
+        let want = images * m.rows.len() * w * 12;
         if bytes.len() != want {
             return Err(Error::Render(format!(
-                "{}: {} bytes, expected {want} for rows {:?}",
+                "{}: {} bytes, expected {want} for rows {:?} and samples {:?}",
                 data.display(),
                 bytes.len(),
-                m.rows
+                m.rows,
+                m.samples
             )));
         }
-        let band = &mut accum.sums.pixels[m.rows.start as usize * w..m.rows.end as usize * w];
-        for (px, chunk) in band.iter_mut().zip(bytes.chunks_exact(12)) {
-            for (c, b) in px.iter_mut().zip(chunk.chunks_exact(4)) {
-                *c = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+        let values = bytes
+            .chunks_exact(12)
+            .map(|p| [0, 4, 8].map(|o| f32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]])));
+        let band = m.rows.start as usize * w..m.rows.end as usize * w;
+        match m.by {
+            By::Tiles => {
+                for (px, v) in accum.sums.pixels[band].iter_mut().zip(values) {
+                    *px = v;
+                }
+            }
+            // One image per sample: added pixel by pixel in sample order, as one process
+            // adds each sample to its running sum.
+            By::Samples => {
+                let pixels = band.len();
+                let mut values = values;
+                for _ in m.samples.clone() {
+                    for (px, v) in accum
+                        .sums
+                        .pixels
+                        .iter_mut()
+                        .zip(values.by_ref().take(pixels))
+                    {
+                        for c in 0..3 {
+                            px[c] += v[c];
+                        }
+                    }
+                }
             }
         }
     }

@@ -685,6 +685,47 @@ fn image_shards_run_as_separate_processes_merge_into_the_single_process_image() 
         "byte-identical"
     );
 
+    // By samples: 7 samples in runs of 2, 2 and 3, merged in sample order.
+    let seven = [
+        "--width",
+        "61",
+        "--height",
+        "47",
+        "--spp",
+        "7",
+        "--backend",
+        "cpu",
+    ];
+    for i in ["0/3", "1/3", "2/3"] {
+        let args = [
+            &[glass, "--shard", i, "--shard-by", "samples", "-o", "runs"][..],
+            &seven,
+        ];
+        let o = gpurt(&args.concat(), &d);
+        assert!(o.status.success(), "shard {i}: {}", stderr(&o));
+    }
+    let o = gpurt(&["merge", "runs", "-o", "merged7.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = gpurt(&[&[glass, "-o", "single7.png"][..], &seven].concat(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read(d.join("merged7.png")).unwrap(),
+        std::fs::read(d.join("single7.png")).unwrap(),
+        "byte-identical by samples"
+    );
+    // A tiles shard among samples shards belongs to another render.
+    for ext in ["json", "rgbf32"] {
+        let f = format!("shard-1-of-3.{ext}");
+        std::fs::copy(d.join("parts").join(&f), d.join("runs").join(&f)).unwrap();
+    }
+    let o = gpurt(&["merge", "runs", "-o", "mixed.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("belongs to another render"),
+        "{}",
+        stderr(&o)
+    );
+
     // A missing shard is named, and nothing is written.
     std::fs::create_dir_all(d.join("gap")).unwrap();
     for ext in ["json", "rgbf32"] {
