@@ -14,6 +14,14 @@ use super::{BoxPrim, Cone, FileKind, Light, Material, MaterialId, Plane, Scene, 
 use crate::error::{Error, Result};
 use crate::frame::MAX_IMAGE_SIDE;
 
+/// Largest light, ambient and background colour component; larger ones are held to it with
+/// a warning. Material colours, Kd, Ks and T are held to [0, 1]. Within these ranges every
+/// pixel stays finite: shading.md sums a bounded number of bounded terms.
+pub const MAX_LIGHT: f32 = 1e6;
+/// Largest Phong exponent; a negative one (which would make highlights infinite) is held
+/// to 0, a larger one to this.
+pub const MAX_SHINE: f32 = 1e6;
+
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
 pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
@@ -54,10 +62,14 @@ impl Parser<'_> {
             let is_first = std::mem::replace(&mut first, false);
             match tok.text {
                 b"v" => self.view(&tok)?,
-                b"b" => self.scene.background = self.lx.vec3("background colour")?,
+                b"b" => {
+                    let c = self.lx.vec3("background colour")?;
+                    self.scene.background = self.hold3(&tok, "background colour", c, MAX_LIGHT);
+                }
                 b"l" => {
                     let position = self.lx.vec3("light position")?;
                     let color = self.optional_colour("light colour")?;
+                    let color = color.map(|c| self.hold3(&tok, "light colour", c, MAX_LIGHT));
                     self.scene.lights.push(Light::Point { position, color });
                 }
                 b"dl" => {
@@ -68,13 +80,17 @@ impl Parser<'_> {
                             .error_at(&tok, "directional light with a zero direction"));
                     }
                     let color = self.optional_colour("light colour")?;
+                    let color = color.map(|c| self.hold3(&tok, "light colour", c, MAX_LIGHT));
                     self.scene.lights.push(Light::Directional {
                         direction: direction.normalize(),
                         color,
                     });
                 }
                 b"al" => self.area_light(&tok)?,
-                b"am" => self.scene.ambient = Some(self.lx.vec3("ambient colour")?),
+                b"am" => {
+                    let c = self.lx.vec3("ambient colour")?;
+                    self.scene.ambient = Some(self.hold3(&tok, "ambient colour", c, MAX_LIGHT));
+                }
                 b"f" => self.fill(&tok)?,
                 b"c" => self.cone()?,
                 b"s" => {
@@ -127,6 +143,34 @@ impl Parser<'_> {
             ));
         }
         Ok(())
+    }
+
+    /// `v` held to `[0, hi]`, with a warning naming the line when it was outside.
+    fn hold(&mut self, tok: &Token, what: &str, v: f32, hi: f32) -> f32 {
+        if (0.0..=hi).contains(&v) {
+            return v;
+        }
+        let held = v.clamp(0.0, hi);
+        self.warn(
+            tok,
+            &format!("{what} {v} is outside [0, {hi}]; using {held}"),
+        );
+        held
+    }
+
+    /// Each component of `v` held to `[0, hi]`, with one warning when any was outside.
+    fn hold3(&mut self, tok: &Token, what: &str, v: Vec3, hi: f32) -> Vec3 {
+        let held = v.clamp(Vec3::ZERO, Vec3::splat(hi));
+        if held != v {
+            self.warn(
+                tok,
+                &format!(
+                    "{what} {} {} {} is outside [0, {hi}]; using {} {} {}",
+                    v.x, v.y, v.z, held.x, held.y, held.z
+                ),
+            );
+        }
+        held
     }
 
     fn warn(&mut self, tok: &Token, msg: &str) {
@@ -270,10 +314,15 @@ impl Parser<'_> {
 
     fn fill(&mut self, tok: &Token) -> Result<()> {
         let color = self.lx.vec3("material colour")?;
+        let color = self.hold3(tok, "material colour", color, 1.0);
         let kd = self.lx.number("Kd")?;
+        let kd = self.hold(tok, "Kd", kd, 1.0);
         let ks = self.lx.number("Ks")?;
+        let ks = self.hold(tok, "Ks", ks, 1.0);
         let shine = self.lx.number("Shine")?;
+        let shine = self.hold(tok, "Shine", shine, MAX_SHINE);
         let t = self.lx.number("T")?;
+        let t = self.hold(tok, "T", t, 1.0);
         let ior = self.lx.number("index of refraction")?;
         if t > 0.0 && ior <= 0.0 {
             return Err(self.lx.error_at(
@@ -410,6 +459,7 @@ impl Parser<'_> {
         let u = self.lx.vec3("area light edge u")?;
         let v = self.lx.vec3("area light edge v")?;
         let color = self.lx.vec3("area light colour")?;
+        let color = self.hold3(tok, "area light colour", color, MAX_LIGHT);
         let (nu, nut) = self.lx.count("area light samples along u")?;
         let (nv, nvt) = self.lx.count("area light samples along v")?;
         for (n, t) in [(nu, nut), (nv, nvt)] {
