@@ -7,6 +7,7 @@
 pub mod camera;
 pub mod controls;
 pub mod progressive;
+pub mod readback;
 pub mod script;
 pub mod window;
 pub mod wireframe;

@@ -20,11 +20,12 @@ use winit::window::{Window, WindowId};
 use super::camera::{DragMode, Input, OrbitCamera};
 use super::controls::{Action, Mode, key_action};
 use super::progressive::{Job, Pass, Tracer};
+use super::readback::TextureReadback;
 use super::script::Event;
 use super::wireframe::Wireframe;
 use crate::error::{Error, Result};
 use crate::frame::{self, MAX_SPP, RenderOptions};
-use crate::gpu::render::{read_mapped, scoped};
+use crate::gpu::render::scoped;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::{AOV_COLOR, GpuGlobals};
 use crate::pack::SceneBuffers;
@@ -488,7 +489,7 @@ impl App {
             }
             let shot = self
                 .shoot
-                .then(|| Readback::encode(device, &mut enc, &frame.texture));
+                .then(|| TextureReadback::encode(device, &mut enc, &frame.texture));
             queue.submit([enc.finish()]);
             shot
         })?;
@@ -634,69 +635,6 @@ fn surface_bytes(img: &RgbImage, format: wgpu::TextureFormat) -> Vec<u8> {
             if bgra { [b, g, r, 255] } else { [r, g, b, 255] }
         })
         .collect()
-}
-
-/// A copy of the surface texture on its way to the host (for `--screenshot`).
-struct Readback {
-    buffer: wgpu::Buffer,
-    row: u32,
-    width: u32,
-    height: u32,
-}
-
-impl Readback {
-    fn encode(
-        device: &wgpu::Device,
-        enc: &mut wgpu::CommandEncoder,
-        texture: &wgpu::Texture,
-    ) -> Self {
-        let (width, height) = (texture.width(), texture.height());
-        let row = (4 * width).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("window readback"),
-            size: u64::from(row) * u64::from(height),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        enc.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &buffer,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(height),
-                },
-            },
-            texture.size(),
-        );
-        Readback {
-            buffer,
-            row,
-            width,
-            height,
-        }
-    }
-
-    fn read(&self, device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<RgbImage> {
-        let bgra = format == wgpu::TextureFormat::Bgra8Unorm;
-        let bytes = u64::from(self.row) * u64::from(self.height);
-        read_mapped(device, &self.buffer, bytes, |view| {
-            let mut img = RgbImage::new(self.width, self.height);
-            for (y, line) in view.chunks(self.row as usize).enumerate() {
-                for x in 0..self.width as usize {
-                    let p = &line[4 * x..4 * x + 4];
-                    let rgb = if bgra {
-                        [p[2], p[1], p[0]]
-                    } else {
-                        [p[0], p[1], p[2]]
-                    };
-                    img.put_pixel(x as u32, y as u32, image::Rgb(rgb));
-                }
-            }
-            img
-        })
-    }
 }
 
 /// What `--stats` prints on exit: how soon the first pictures came, how long frames take

@@ -15,8 +15,9 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use image::RgbImage;
 use wgpu::util::DeviceExt;
 
+use super::readback::TextureReadback;
 use crate::error::{Error, Result};
-use crate::gpu::render::{read_mapped, scoped};
+use crate::gpu::render::scoped;
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
@@ -399,13 +400,6 @@ impl Wireframe {
             },
             texture.size(),
         );
-        let row = (4 * w).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("wireframe readback"),
-            size: u64::from(row) * u64::from(h),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let mut enc = device.create_command_encoder(&Default::default());
         self.encode(
             queue,
@@ -413,29 +407,9 @@ impl Wireframe {
             &texture.create_view(&Default::default()),
             g,
         );
-        enc.copy_texture_to_buffer(
-            texture.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(h),
-                },
-            },
-            texture.size(),
-        );
+        let readback = TextureReadback::encode(device, &mut enc, &texture);
         queue.submit([enc.finish()]);
-        read_mapped(device, &readback, u64::from(row) * u64::from(h), |view| {
-            let mut img = RgbImage::new(w, h);
-            for (y, line) in view.chunks(row as usize).enumerate() {
-                for x in 0..w as usize {
-                    let p = &line[4 * x..4 * x + 3];
-                    img.put_pixel(x as u32, y as u32, image::Rgb([p[0], p[1], p[2]]));
-                }
-            }
-            img
-        })
+        readback.read(device, IMAGE_FORMAT)
     }
 }
 
