@@ -440,6 +440,44 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// A flag that Ctrl-C (SIGINT), SIGTERM or SIGHUP sets: the render stops and nothing is
+/// written. One that comes during a save lets the save finish (it is atomic), so no
+/// temporary file is ever left behind.
+fn cancel_on_signals() -> Arc<AtomicBool> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
+    cancel
+}
+
+/// The frame the render options ask for, seen from `camera` (its resolution unless
+/// --width/--height).
+fn render_options(args: &RenderArgs, camera: &gpurt::scene::Camera) -> RenderOptions {
+    let defaults = RenderOptions::for_camera(camera);
+    RenderOptions {
+        width: args.width.unwrap_or(defaults.width),
+        height: args.height.unwrap_or(defaults.height),
+        spp: args.spp,
+        max_depth: args.depth,
+        ambient: args.ambient,
+        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
+        seed: args.seed,
+    }
+}
+
+/// Batches and shards render on one backend and draw no wireframe; says so and returns
+/// false when asked otherwise.
+fn one_backend_no_wireframe(args: &RenderArgs, what: &str) -> bool {
+    let ok = args.backend != Backend::Both && args.overlay.is_none() && args.aov != Aov::Wireframe;
+    if !ok {
+        eprintln!(
+            "gpurt: {what} renders on one backend, without wireframes: drop --backend both, \
+             --overlay and --aov wireframe, or render the scene on its own"
+        );
+    }
+    ok
+}
+
 /// `gpurt SCENE --shard I/N -o DIR`: this process's band of rows of one image, with its
 /// manifest, into DIR.
 fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<ExitCode> {
@@ -463,26 +501,12 @@ fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<
         );
         return Ok(ExitCode::from(2));
     }
-    if args.backend == Backend::Both || args.overlay.is_some() || args.aov == Aov::Wireframe {
-        eprintln!("gpurt: a shard renders on one backend, without wireframes");
+    if !one_backend_no_wireframe(args, "a shard") {
         return Ok(ExitCode::from(2));
     }
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
+    let cancel = cancel_on_signals();
     let buffers = Arc::new(run::prepare(scene, args.view.as_deref())?.buffers);
-    let defaults = RenderOptions::for_camera(&buffers.camera);
-    let opts = RenderOptions {
-        width: args.width.unwrap_or(defaults.width),
-        height: args.height.unwrap_or(defaults.height),
-        spp: args.spp,
-        max_depth: args.depth,
-        ambient: args.ambient,
-        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
-        seed: args.seed,
-    };
+    let opts = render_options(args, &buffers.camera);
     let globals = frame::globals(&buffers, &opts);
     let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
     let backend = if found.gpu.is_some() { "gpu" } else { "cpu" };
@@ -551,11 +575,7 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         eprintln!("gpurt: no scene given; try `gpurt --help`");
         return Ok(ExitCode::from(2));
     }
-    if args.backend == Backend::Both || args.overlay.is_some() || args.aov == Aov::Wireframe {
-        eprintln!(
-            "gpurt: a batch renders on one backend, without wireframes: drop --backend both, \
-             --overlay and --aov wireframe, or render the scenes one at a time"
-        );
+    if !one_backend_no_wireframe(args, "a batch") {
         return Ok(ExitCode::from(2));
     }
     // Names are checked over the whole list, so that no two shards write one file.
@@ -571,11 +591,7 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     for out in &outputs {
         atomic::check_writable(out)?;
     }
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
+    let cancel = cancel_on_signals();
     let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
     if let Some((note, warn)) = &found.note
         && (*warn || args.verbose || args.stats)
@@ -792,14 +808,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     film::Format::from_path(&output)?;
     atomic::check_writable(&output)?;
     let start = Instant::now();
-    let cancel = Arc::new(AtomicBool::new(false));
-    {
-        let cancel = cancel.clone();
-        // Ctrl-C (SIGINT), SIGTERM or SIGHUP stops the render; nothing is written. One that
-        // comes during the save lets the save finish (it is atomic), so no temporary file
-        // is ever left behind.
-        let _ = ctrlc::set_handler(move || cancel.store(true, Ordering::Relaxed));
-    }
+    let cancel = cancel_on_signals();
     // Looking for an adapter (and opening its device) takes 50 ms or more: it runs while
     // the scene is read and its BVH built.
     let wireframe_only = args.aov == Aov::Wireframe;
@@ -816,16 +825,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
-    let defaults = RenderOptions::for_camera(&buffers.camera);
-    let opts = RenderOptions {
-        width: args.width.unwrap_or(defaults.width),
-        height: args.height.unwrap_or(defaults.height),
-        spp: args.spp,
-        max_depth: args.depth,
-        ambient: args.ambient,
-        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
-        seed: args.seed,
-    };
+    let opts = render_options(&args, &buffers.camera);
     let globals = frame::globals(&buffers, &opts);
     let buffers = Arc::new(buffers);
 
