@@ -505,7 +505,13 @@ fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<
         return Ok(ExitCode::from(2));
     }
     let cancel = cancel_on_signals();
-    let buffers = Arc::new(run::prepare(scene, args.view.as_deref())?.buffers);
+    let Prepared {
+        buffers, warnings, ..
+    } = run::prepare(scene, args.view.as_deref())?;
+    for w in &warnings {
+        eprintln!("gpurt: warning: {w}");
+    }
+    let buffers = Arc::new(buffers);
     let opts = render_options(args, &buffers.camera);
     let globals = frame::globals(&buffers, &opts);
     let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
