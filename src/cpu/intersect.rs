@@ -134,13 +134,14 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
     let max = |a: f32, b: f32| if a > b { a } else { b };
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
+    // The shader's order: max_element(min(t0, t1)), then tmin; min_element(max(..)), tmax.
     let near = max(
-        max(min(t0.x, t1.x), min(t0.y, t1.y)),
-        max(min(t0.z, t1.z), tmin),
+        max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z)),
+        tmin,
     );
     let far = min(
-        min(max(t0.x, t1.x), max(t0.y, t1.y)),
-        min(max(t0.z, t1.z), tmax),
+        min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)),
+        tmax,
     );
     near <= far * SLAB_WIDEN
 }
