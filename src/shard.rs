@@ -21,17 +21,20 @@ use crate::film::{Accumulator, Film};
 
 const FORMAT: &str = "gpurt-shard/1";
 
-/// The rows shard `shard` traces of an image `height` rows high: the I-th of N bands as
-/// equal as whole rows allow.
-pub fn rows(shard: Shard, height: u32) -> Range<u32> {
-    let at = |i: u32| (u64::from(i) * u64::from(height) / u64::from(shard.count)) as u32;
+/// Shard I's part of `0..total`: the I-th of N runs as equal as whole units allow.
+fn share(shard: Shard, total: u32) -> Range<u32> {
+    let at = |i: u32| (u64::from(i) * u64::from(total) / u64::from(shard.count)) as u32;
     at(shard.index)..at(shard.index + 1)
 }
 
-/// The samples shard `shard` traces of `spp` per pixel (`--shard-by samples`): the I-th
-/// of N runs as equal as whole samples allow.
+/// The rows shard `shard` traces of an image `height` rows high (`--shard-by tiles`).
+pub fn rows(shard: Shard, height: u32) -> Range<u32> {
+    share(shard, height)
+}
+
+/// The samples shard `shard` traces of `spp` per pixel (`--shard-by samples`).
 pub fn samples(shard: Shard, spp: u32) -> Range<u32> {
-    rows(shard, spp)
+    share(shard, spp)
 }
 
 /// How an image is split between shards.

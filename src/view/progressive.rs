@@ -277,14 +277,13 @@ mod tests {
         assert_eq!(s.next(), Some(9..10), "clipped to the frame");
         s.record(9..10, Duration::ZERO);
         assert_eq!((s.next(), s.done()), (None, 10));
-        let mut s = Schedule::new(MAX_SPP_FOR_TEST);
+        let mut s = Schedule::new(crate::frame::MAX_SPP);
         for _ in 0..20 {
             let r = s.next().unwrap();
             s.record(r, Duration::ZERO);
         }
         assert_eq!(s.next().unwrap().len() as u32, MAX_BATCH);
     }
-    const MAX_SPP_FOR_TEST: u32 = 4096;
 
     fn scene() -> Arc<crate::pack::SceneBuffers> {
         let src = b"v from 0 -6 2 at 0 0 0 up 0 0 1 angle 40 resolution 24 16
