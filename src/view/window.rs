@@ -131,6 +131,9 @@ struct App {
     view_start: Instant,
     /// The newest pass of the current view.
     latest: Option<Pass>,
+    /// Its image in the surface's byte order: converted once per pass, not once per
+    /// frame (a script's waits redraw the same pass many times).
+    latest_bytes: Vec<u8>,
     pointer: Pointer,
     script: VecDeque<Event>,
     /// Frames still to show before the script goes on.
@@ -158,6 +161,7 @@ impl App {
             view: 0,
             view_start: Instant::now(),
             latest: None,
+            latest_bytes: Vec::new(),
             pointer: Pointer::default(),
             script,
             waiting: 0,
@@ -458,12 +462,11 @@ impl App {
             }
         };
         let (w, h) = (live.config.width, live.config.height);
-        let image = self
+        let traced = self
             .latest
             .as_ref()
-            .filter(|p| self.mode.traces() && p.image.dimensions() == (w, h))
-            .map(|p| &p.image);
-        let lines = self.mode != Mode::RayTraced || image.is_none();
+            .is_some_and(|p| self.mode.traces() && p.image.dimensions() == (w, h));
+        let lines = self.mode != Mode::RayTraced || !traced;
         let (device, queue) = (&live.ctx.device, &live.ctx.queue);
         let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
             format: Some(live.view_format),
@@ -471,18 +474,19 @@ impl App {
         });
         let shot = scoped(device, "drawing the window", || {
             let mut enc = device.create_command_encoder(&Default::default());
-            match image {
-                Some(img) => queue.write_texture(
+            if traced {
+                queue.write_texture(
                     frame.texture.as_image_copy(),
-                    &surface_bytes(img, live.view_format),
+                    &self.latest_bytes,
                     wgpu::TexelCopyBufferLayout {
                         offset: 0,
                         bytes_per_row: Some(4 * w),
                         rows_per_image: Some(h),
                     },
                     frame.texture.size(),
-                ),
-                None => clear(&mut enc, &target),
+                );
+            } else {
+                clear(&mut enc, &target);
             }
             if lines {
                 live.wireframe.encode(queue, &mut enc, &target, &globals);
@@ -500,7 +504,7 @@ impl App {
         }
         queue.present(frame);
         self.stats
-            .frame(start.elapsed(), image.is_some(), self.latest.as_ref());
+            .frame(start.elapsed(), traced, self.latest.as_ref());
         if live.title != title {
             live.window.set_title(&title);
             live.title = title;
@@ -542,6 +546,9 @@ impl ApplicationHandler<Result<Pass>> for App {
         match pass {
             Ok(pass) if pass.view == self.view => {
                 self.stats.pass(&pass, self.view_start);
+                if let Some(live) = &self.live {
+                    self.latest_bytes = surface_bytes(&pass.image, live.view_format);
+                }
                 self.latest = Some(pass);
                 self.save_if_ready();
                 if let Some(live) = &self.live {
