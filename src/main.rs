@@ -663,6 +663,27 @@ struct Found {
     note: Option<(String, bool)>,
 }
 
+/// The adapter search, running while the scene is read. Dropped without `join` (the
+/// scene failed to read), it still waits for the search to end: a process that exits while
+/// another thread is inside the Vulkan driver's start-up can die in the driver (NVIDIA's
+/// did: a bad `--view` file exited on a signal instead of with status 2).
+struct Probe(Option<std::thread::JoinHandle<gpurt::Result<Found>>>);
+
+impl Probe {
+    fn join(mut self) -> gpurt::Result<Found> {
+        let search = self.0.take().expect("joined once");
+        search.join().expect("the adapter search does not panic")
+    }
+}
+
+impl Drop for Probe {
+    fn drop(&mut self) {
+        if let Some(search) = self.0.take() {
+            let _ = search.join();
+        }
+    }
+}
+
 fn find_gpu(backend: Backend, filter: Option<&str>, named: bool) -> gpurt::Result<Found> {
     let (gpu, note) = match backend {
         Backend::Cpu => (None, None),
@@ -820,7 +841,9 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     let wireframe_only = args.aov == Aov::Wireframe;
     let probe = (!wireframe_only && args.backend != Backend::Cpu).then(|| {
         let (backend, filter, named) = (args.backend, args.adapter.clone(), adapter_named(&args));
-        std::thread::spawn(move || find_gpu(backend, filter.as_deref(), named))
+        Probe(Some(std::thread::spawn(move || {
+            find_gpu(backend, filter.as_deref(), named)
+        })))
     });
     let Prepared {
         buffers,
@@ -847,7 +870,7 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     }
     if !wireframe_only {
         let found = match probe {
-            Some(probe) => probe.join().expect("the adapter search does not panic")?,
+            Some(probe) => probe.join()?,
             None => Found {
                 gpu: None,
                 note: None,
