@@ -570,7 +570,7 @@ fn merge(dir: &Path, output: &Path) -> gpurt::Result<ExitCode> {
     film::Format::from_path(output)?;
     atomic::check_writable(output)?;
     let (accum, aov) = gpurt::shard::merge(dir)?;
-    accum.film().save_aov(output, aov)?;
+    accum.into_film().save_aov(output, aov)?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -70,7 +70,7 @@ pub fn render_frame(
     let mut accum = Accumulator::new(globals.width, globals.height);
     let rays = renderer.render(globals, 0..globals.spp, &mut accum, progress, cancel)?;
     Ok(Rendered {
-        film: accum.film(),
+        film: accum.into_film(),
         rays,
         compile,
         trace: start.elapsed(),

@@ -45,7 +45,7 @@ pub fn render(
         progress,
         cancel,
     )?;
-    Ok((accum.film(), counts))
+    Ok((accum.into_film(), counts))
 }
 
 /// Traces samples `samples` of every pixel and adds them to `accum`, which must hold
