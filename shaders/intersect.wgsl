@@ -120,6 +120,16 @@ fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>,
     return near <= far * SLAB_WIDEN;
 }
 
+// `overlaps`, returning where the ray enters the box (clamped to tmin), NO_HIT when it
+// does not overlap: the pairs traversal enters the nearer child first.
+fn slab_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = max(max_element(min(t0, t1)), tmin);
+    let far = min(min_element(max(t0, t1)), tmax);
+    return select(NO_HIT, near, near <= far * SLAB_WIDEN);
+}
+
 // Takes the primitive's index rather than the primitive, so that only the texels its
 // kind uses are fetched; kinds the scene lacks are compiled out (see the overrides).
 fn intersect_prim(i: u32, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {

@@ -77,6 +77,8 @@ struct Globals {
     n_planes: u32,
     n_lights: u32,
     aov: u32,
+    traversal: u32,
+    _pad: array<u32, 3>,
 }
 
 struct Tile {
@@ -199,6 +201,8 @@ override LENS: bool = true;
 override MULTISAMPLE: bool = true;
 // globals.aov, as a constant.
 override AOV: u32 = 0u;
+// globals.traversal == TRAVERSAL_PAIRS, as a constant.
+override PAIRS: bool = false;
 
 // Storage, not uniform: lavapipe specialises a shader on the uniform values its branches
 // read (Mesa's uniform inlining), so a uniform `globals` compiled the shader again (0.8 s)

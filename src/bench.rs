@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 use crate::error::Result;
 use crate::frame::{self, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
-use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals};
+use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_PAIRS};
 use crate::outln;
 use crate::pack;
 use crate::run;
@@ -117,6 +117,14 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         Some(c) => Some(GpuRenderer::new(&c.device, None)?),
         None => None,
     };
+    if let Some(r) = &renderer {
+        let walk = if r.traversal() == TRAVERSAL_PAIRS {
+            "pairs"
+        } else {
+            "single"
+        };
+        eprintln!("traversal   {walk} (GPURT_TRAVERSAL=single|pairs to choose)");
+    }
     if config.cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }

@@ -81,6 +81,9 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         n_planes: buffers.planes.len() as u32,
         n_lights: buffers.lights.len() as u32,
         aov: opts.aov,
+        // The GPU renderer puts its adapter's choice here (`GpuRenderer::traversal`).
+        traversal: TRAVERSAL_SINGLE,
+        _pad: [0; 3],
     }
 }
 

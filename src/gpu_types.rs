@@ -137,7 +137,14 @@ pub const AOV_DEPTH: u32 = 2;
 /// BVH nodes visited by the eye ray's closest-hit traversal.
 pub const AOV_COST: u32 = 3;
 
-/// Per-render constants (a uniform buffer).
+/// BVH walk: one node fetched and tested per step, the nearer child along the split axis
+/// first. The choice for lavapipe and the CPU.
+pub const TRAVERSAL_SINGLE: u32 = 0;
+/// BVH walk: both children of a node fetched and tested together, the nearer by entry
+/// distance first. The choice for hardware GPUs (see docs/gpu.md).
+pub const TRAVERSAL_PAIRS: u32 = 1;
+
+/// Per-render constants (a read-only storage buffer).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuGlobals {
@@ -164,6 +171,9 @@ pub struct GpuGlobals {
     pub n_planes: u32,
     pub n_lights: u32,
     pub aov: u32,
+    /// How the BVH is walked: `TRAVERSAL_SINGLE` or `TRAVERSAL_PAIRS` (see traverse.wgsl).
+    pub traversal: u32,
+    pub _pad: [u32; 3],
 }
 
 /// The image region one dispatch traces, which of its samples, and where its pixels go in
@@ -247,7 +257,7 @@ const _: () = {
     assert!(size_of::<GpuPlane>() == 32);
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);
-    assert!(size_of::<GpuGlobals>() == 128);
+    assert!(size_of::<GpuGlobals>() == 144);
     assert!(size_of::<GpuTile>() == 32);
     assert!(size_of::<GpuPixelState>() == 160 + 48 * RAY_STACK);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);

@@ -890,6 +890,12 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
             None => {}
         }
     }
+    // The GPU's frame (its BVH walk) where one renders, so that `both` compares the same
+    // frame, node costs included.
+    let globals = match renderers.last() {
+        Some((_, r)) => r.frame(&globals),
+        None => globals,
+    };
     let mut report = Vec::new();
     let mut films = Vec::new();
     for (name, renderer) in &mut renderers {

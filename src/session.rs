@@ -20,6 +20,13 @@ pub trait Renderer {
     /// One line naming what renders: the adapter, or the CPU and its threads.
     fn describe(&self) -> String;
 
+    /// The frame this renderer traces when asked for `globals`: the same, but for the
+    /// BVH walk, which the GPU picks for its adapter (`GpuRenderer::traversal`). A CPU
+    /// render of this frame matches this renderer's node for node.
+    fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
+        *globals
+    }
+
     /// Gets ready to render frames like `globals`: the GPU compiles the pipeline such
     /// frames need (once per kind of frame); the CPU has nothing to do. Returns the time
     /// spent compiling, so that callers can report it apart from the frame.
@@ -139,6 +146,10 @@ impl GpuSession {
 impl Renderer for GpuSession {
     fn describe(&self) -> String {
         self.ctx.describe()
+    }
+
+    fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
+        self.renderer.frame(globals)
     }
 
     /// Uploads the scene (the first time) or moves it to this frame, compiling the frame's

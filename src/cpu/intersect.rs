@@ -146,6 +146,29 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
     near <= far * SLAB_WIDEN
 }
 
+/// `overlaps`, returning where the ray enters the box (clamped to `tmin`), `NO_HIT` when
+/// it does not overlap: the pairs traversal enters the nearer child first.
+#[inline]
+pub fn slab_entry(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> f32 {
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let near = max(
+        max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z)),
+        tmin,
+    );
+    let far = min(
+        min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)),
+        tmax,
+    );
+    if near <= far * SLAB_WIDEN {
+        near
+    } else {
+        NO_HIT
+    }
+}
+
 /// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.
 #[inline]
 pub fn intersect_prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {

@@ -22,7 +22,9 @@ use super::specialization::Specialization;
 use super::upload::{SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
-use crate::gpu_types::{GpuGlobals, GpuTile, PIXEL_CUT_SHORT, WORKGROUP_SIDE};
+use crate::gpu_types::{
+    GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE, WORKGROUP_SIDE,
+};
 use crate::pack::SceneBuffers;
 
 /// What a frame binds besides the scene: its constants (a buffer rewritten when only
@@ -51,6 +53,28 @@ pub struct GpuRenderer {
     compile_time: Mutex<Duration>,
     /// The device is a CPU (lavapipe): bands are kept small.
     software: bool,
+    /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
+    traversal: u32,
+}
+
+/// The traversal for an adapter: `TRAVERSAL_PAIRS` on hardware GPUs, where a ray's time
+/// goes to waiting on node fetches and fetching two at once halves the wait;
+/// `TRAVERSAL_SINGLE` on software adapters, where every lane runs both children's tests
+/// and the single walk is the faster (docs/gpu.md has the figures). `GPURT_TRAVERSAL`
+/// (`single` or `pairs`) overrides it, for measuring both on one adapter.
+fn traversal_for(software: bool) -> Result<u32> {
+    match std::env::var("GPURT_TRAVERSAL").as_deref() {
+        Err(_) | Ok("") => Ok(if software {
+            TRAVERSAL_SINGLE
+        } else {
+            TRAVERSAL_PAIRS
+        }),
+        Ok("single") => Ok(TRAVERSAL_SINGLE),
+        Ok("pairs") => Ok(TRAVERSAL_PAIRS),
+        Ok(v) => Err(Error::Render(format!(
+            "GPURT_TRAVERSAL={v}: expected `single` or `pairs`"
+        ))),
+    }
 }
 
 /// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
@@ -124,6 +148,7 @@ impl GpuRenderer {
     /// `PIPELINE_CACHE` (pass `None` to skip the cache).
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
         let start = Instant::now();
+        let software = device.adapter_info().device_type == wgpu::DeviceType::Cpu;
         let cache_file = adapter_info
             .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
@@ -185,8 +210,29 @@ impl GpuRenderer {
             cache,
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
-            software: device.adapter_info().device_type == wgpu::DeviceType::Cpu,
+            software,
+            traversal: traversal_for(software)?,
         })
+    }
+
+    /// How this renderer walks the BVH, `TRAVERSAL_SINGLE` or `TRAVERSAL_PAIRS`: the one
+    /// that is faster on its adapter (see `traversal_for`). A CPU render meant to match
+    /// this renderer's to the node must use the same (`frame`).
+    pub fn traversal(&self) -> u32 {
+        self.traversal
+    }
+
+    /// This renderer walking the BVH as `traversal` says, whatever its adapter.
+    pub fn with_traversal(self, traversal: u32) -> Self {
+        GpuRenderer { traversal, ..self }
+    }
+
+    /// `globals` with this renderer's traversal: what its frames of `globals` trace.
+    pub fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
+        GpuGlobals {
+            traversal: self.traversal,
+            ..*globals
+        }
     }
 
     /// Total time spent creating the module and compiling pipelines, first dispatches
@@ -205,6 +251,7 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<wgpu::ComputePipeline> {
+        let globals = &self.frame(globals);
         let spec = Specialization::of(scene, globals);
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
@@ -395,6 +442,7 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<GpuScene> {
+        let globals = &self.frame(globals);
         let cut = self.cut(device, globals);
         check_sizes(device, scene, cut.band_bytes())?;
         scene.check(globals)?;
@@ -435,6 +483,7 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<()> {
+        let globals = &self.frame(globals);
         scene.check(globals)?;
         let spec = Specialization::of(scene, globals);
         if spec != uploaded.spec {

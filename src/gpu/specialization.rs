@@ -25,6 +25,7 @@ pub struct Specialization {
     pub lens: bool,
     pub multisample: bool,
     pub aov: u32,
+    pub pairs: bool,
 }
 
 impl Specialization {
@@ -45,6 +46,7 @@ impl Specialization {
             lens: g.aperture > 0.0,
             multisample: g.spp > 1,
             aov: g.aov,
+            pairs: g.traversal == TRAVERSAL_PAIRS,
         }
     }
 
@@ -65,6 +67,7 @@ impl Specialization {
             ("LENS", b(self.lens)),
             ("MULTISAMPLE", b(self.multisample)),
             ("AOV", f64::from(self.aov)),
+            ("PAIRS", b(self.pairs)),
         ]
     }
 }
@@ -97,6 +100,7 @@ mod tests {
             lens: true,
             multisample: true,
             aov: 0,
+            pairs: true,
         };
         let mut host: Vec<String> = spec
             .constants()

@@ -1,5 +1,5 @@
 //! The flattened BVH against brute force, on every small shared scene: closest-hit and
-//! shadow transmission through the tree must agree with a plain loop over every primitive
+//! shadow transmission through the tree, walked either way (single and pairs), must agree with a plain loop over every primitive
 //! and plane, for thousands of random rays; and the node array must keep the layout
 //! contract the shader relies on (each primitive in exactly one leaf, bounds that contain
 //! what they hold, a depth that fits the fixed traversal stack).
@@ -171,16 +171,31 @@ fn all_transmitting(buffers: &SceneBuffers) -> SceneBuffers {
     out
 }
 
-/// Closest hit through the tree against brute force for one ray; true when it hit.
+/// Closest hit through the tree, walked both ways (`walks`: the same bindings but for
+/// the traversal), against brute force for one ray; true when it hit.
 fn check_closest(
-    b: &Bindings,
+    walks: &[Bindings],
     ray: &Ray,
     tmin: f32,
     tmax: f32,
     context: &dyn Fn() -> String,
 ) -> bool {
+    let (bt, bp) = brute_closest(&walks[0], ray, tmin, tmax);
+    for b in walks {
+        check_closest_hit(b, ray, tmin, tmax, (bt, bp), context);
+    }
+    bp != NO_PRIM
+}
+
+fn check_closest_hit(
+    b: &Bindings,
+    ray: &Ray,
+    tmin: f32,
+    tmax: f32,
+    (bt, bp): (f32, u32),
+    context: &dyn Fn() -> String,
+) {
     let hit = closest_hit(b, ray, tmin, tmax);
-    let (bt, bp) = brute_closest(b, ray, tmin, tmax);
     let agree = if hit.prim == NO_PRIM || bp == NO_PRIM {
         hit.prim == bp
     } else {
@@ -190,10 +205,10 @@ fn check_closest(
     };
     assert!(
         agree,
-        "{}: BVH {hit:?}, brute force prim {bp} at {bt}",
-        context()
+        "{}: BVH walk {} {hit:?}, brute force prim {bp} at {bt}",
+        context(),
+        b.globals.traversal
     );
-    bp != NO_PRIM
 }
 
 /// What `check_rays` saw: rays that hit, and shadow segments that lost light.
@@ -212,7 +227,15 @@ fn check_rays(
     closest: bool,
 ) -> Counts {
     let globals = frame::globals(buffers, &RenderOptions::for_camera(&scene.camera));
-    let b = Bindings::new(buffers, &globals);
+    let pairs = GpuGlobals {
+        traversal: TRAVERSAL_PAIRS,
+        ..globals
+    };
+    let walks = [
+        Bindings::new(buffers, &globals),
+        Bindings::new(buffers, &pairs),
+    ];
+    let b = &walks[0];
     let diag = buffers.bounds.extent().length().max(1e-3);
     let mut rng = XorShift(seed ^ 0x9e37_79b9_7f4a_7c15);
     let (mut hits, mut shadowed) = (0, 0);
@@ -227,7 +250,7 @@ fn check_rays(
         };
         let context = || format!("{name}: ray {k} {ray:?} in ({tmin}, {tmax})");
         if closest {
-            hits += usize::from(check_closest(&b, ray, tmin, tmax, &context));
+            hits += usize::from(check_closest(&walks, ray, tmin, tmax, &context));
         }
         // Shadow segments: the ray's own bound, else alternately a random length (point
         // lights) and the unbounded `NO_HIT` (directional lights).
@@ -236,14 +259,17 @@ fn check_rays(
         } else {
             rng.range(0.0, 2.0 * diag)
         };
-        let got = transmission(&b, ray, seg);
-        let want = brute_transmission(&b, ray, seg);
-        assert!(
-            close3(got, want),
-            "{}: transmission to {seg}: BVH {got}, brute force {want}",
-            context()
-        );
-        shadowed += usize::from(got != Vec3::ONE);
+        let want = brute_transmission(b, ray, seg);
+        for w in &walks {
+            let got = transmission(w, ray, seg);
+            assert!(
+                close3(got, want),
+                "{}: transmission to {seg}: BVH walk {} {got}, brute force {want}",
+                context(),
+                w.globals.traversal
+            );
+        }
+        shadowed += usize::from(want != Vec3::ONE);
     }
     Counts { hits, shadowed }
 }

@@ -51,6 +51,8 @@ fn rust_layouts() -> Vec<Layout> {
                 n_planes,
                 n_lights,
                 aov,
+                traversal,
+                _pad,
             ]
         ),
         layout!(
