@@ -6,8 +6,10 @@
 //! at `offset`, a split axis for near-first ordering) and reports the primitive order, so
 //! `pack` can lay primitives out leaf by leaf with no indirection.
 //!
-//! The traversal stack has a fixed size (`TRAVERSAL_STACK`); a tree deeper than that is
-//! rebuilt with a median split, whose depth is at most log2(n) + 1 and so always fits.
+//! Scenes of more than `BUILD_CHUNK` primitives are first cut by object median, and obvhs
+//! builds each group, which bounds the builder's memory. The traversal stack has a fixed
+//! size (`TRAVERSAL_STACK`); a tree deeper than that is rebuilt with a median split, whose
+//! depth is at most log2(n) + 1 and so always fits.
 
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
@@ -41,13 +43,25 @@ pub fn build(aabbs: &[Aabb]) -> FlatBvh {
     if aabbs.is_empty() {
         return FlatBvh::default();
     }
-    let flat = flatten(&build_obvhs(aabbs), aabbs);
+    let flat = if aabbs.len() <= BUILD_CHUNK {
+        flatten(&build_obvhs(aabbs), aabbs)
+    } else {
+        median_split(aabbs, BUILD_CHUNK)
+    };
     if flat.depth < TRAVERSAL_STACK {
         flat
     } else {
-        median_split(aabbs)
+        median_split(aabbs, MAX_LEAF_PRIMS as usize)
     }
 }
+
+/// Most primitives one obvhs build takes. Its builder holds about 230 bytes a primitive
+/// while it runs (two node arrays and the sort keys, then the tree's own nodes), more
+/// than the finished scene (about 70); larger scenes are cut by object median into
+/// groups of at most this many, each built by obvhs in turn, so that peak stays a fixed
+/// 240 MB or so instead of growing with the scene. The SPD scenes up to mount-9 and
+/// balls-6 are built whole.
+pub const BUILD_CHUNK: usize = 1 << 20;
 
 /// Scenes up to this many primitives get obvhs' most thorough build: at about 2 us a
 /// primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
@@ -139,8 +153,10 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
     out
 }
 
-/// A balanced tree by object median on the widest centroid axis: depth <= log2(n) + 1.
-fn median_split(aabbs: &[Aabb]) -> FlatBvh {
+/// A tree by object median on the widest centroid axis down to ranges of at most `chunk`
+/// primitives: leaves where `chunk` is `MAX_LEAF_PRIMS` (a balanced tree, depth <= log2(n)
+/// + 1), else subtrees built by obvhs, each over its own range.
+fn median_split(aabbs: &[Aabb], chunk: usize) -> FlatBvh {
     let bound = |i: u32| {
         let b = &aabbs[i as usize];
         Bounds {
@@ -159,6 +175,10 @@ fn median_split(aabbs: &[Aabb]) -> FlatBvh {
         let here = out.nodes.len();
         if let Some(p) = patch {
             out.nodes[p].offset = here as u32;
+        }
+        if hi - lo > MAX_LEAF_PRIMS as usize && hi - lo <= chunk {
+            append_subtree(&mut out, aabbs, lo..hi, depth);
+            continue;
         }
         out.depth = out.depth.max(depth);
         let mut b = Bounds::EMPTY;
@@ -189,6 +209,30 @@ fn median_split(aabbs: &[Aabb]) -> FlatBvh {
         stack.push((lo, mid, None, depth + 1));
     }
     out
+}
+
+/// Builds the primitives `out.order[range]` with obvhs and appends the flattened subtree
+/// at the end of `out.nodes` (its root at depth `depth`), reordering that range as its
+/// leaves hold them.
+fn append_subtree(out: &mut FlatBvh, aabbs: &[Aabb], range: std::ops::Range<usize>, depth: usize) {
+    let ids = out.order[range.clone()].to_vec();
+    let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabbs[i as usize]).collect();
+    let sub = flatten(&build_obvhs(&sub_aabbs), &sub_aabbs);
+    drop(sub_aabbs);
+    let base = out.nodes.len() as u32;
+    out.nodes.extend(sub.nodes.iter().map(|n| GpuNode {
+        offset: n.offset
+            + if n.count() > 0 {
+                range.start as u32
+            } else {
+                base
+            },
+        ..*n
+    }));
+    for (slot, &j) in out.order[range].iter_mut().zip(&sub.order) {
+        *slot = ids[j as usize];
+    }
+    out.depth = out.depth.max(depth - 1 + sub.depth);
 }
 
 #[cfg(test)]
@@ -249,9 +293,39 @@ mod tests {
             let b = unit_boxes(n);
             let t = build(&b);
             check(&t, &b);
-            let m = median_split(&b);
+            let m = median_split(&b, MAX_LEAF_PRIMS as usize);
             check(&m, &b);
             assert!(m.depth <= (n as f64).log2().ceil() as usize + 1);
+        }
+    }
+
+    /// Longest root-to-leaf path, walked.
+    fn walked_depth(bvh: &FlatBvh) -> usize {
+        let mut deepest = 0;
+        let mut stack = vec![(0usize, 1usize)];
+        while let Some((i, d)) = stack.pop() {
+            deepest = deepest.max(d);
+            let n = &bvh.nodes[i];
+            if n.count() == 0 {
+                assert!(n.offset as usize > i + 1, "children after their parent");
+                stack.push((i + 1, d + 1));
+                stack.push((n.offset as usize, d + 1));
+            }
+        }
+        deepest
+    }
+
+    /// Cut into groups built by obvhs (small groups here, as `BUILD_CHUNK` does for
+    /// millions of primitives): still every primitive once, bounds that contain, and the
+    /// depth it reports.
+    #[test]
+    fn trees_built_in_groups_are_well_formed() {
+        for (n, chunk) in [(5, 4), (1000, 64), (5000, 300), (4097, 4096)] {
+            let b = unit_boxes(n);
+            let t = median_split(&b, chunk);
+            check(&t, &b);
+            assert_eq!(t.depth, walked_depth(&t), "{n} boxes in groups of {chunk}");
+            assert!(t.nodes.len() < 2 * n, "{} nodes", t.nodes.len());
         }
     }
 

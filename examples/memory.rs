@@ -1,0 +1,108 @@
+//! Heap memory at each stage of getting a scene ready, per primitive: reading the file,
+//! parsing it, packing it (BVH build and flattening) and rendering a small CPU frame.
+//! Counts every allocation through a wrapping global allocator, so the figures are the
+//! program's own heap, without the binary, thread stacks or allocator slack that the
+//! process's peak resident memory (`--stats`) also holds.
+//!
+//!     cargo run --release --example memory -- SCENE
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering::Relaxed};
+use std::time::Instant;
+
+struct Counting;
+
+static CURRENT: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+fn grew(bytes: usize) {
+    let now = CURRENT.fetch_add(bytes, Relaxed) + bytes;
+    PEAK.fetch_max(now, Relaxed);
+}
+
+// SAFETY: forwards to the system allocator unchanged; only counts.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        CURRENT.fetch_sub(layout.size(), Relaxed);
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let p = unsafe { System.realloc(ptr, layout, new_size) };
+        if !p.is_null() {
+            if new_size > layout.size() {
+                grew(new_size - layout.size());
+            } else {
+                CURRENT.fetch_sub(layout.size() - new_size, Relaxed);
+            }
+        }
+        p
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+fn main() -> gpurt::Result<()> {
+    let path = std::env::args()
+        .nth(1)
+        .expect("usage: memory SCENE (an .nff, .stl or .obj file, optionally .gz)");
+    let path = Path::new(&path);
+    let mib = |b: usize| b as f64 / (1 << 20) as f64;
+    let mut stages = Vec::new();
+    let mut stage = |name: &str, start: Instant| {
+        stages.push((
+            name.to_string(),
+            start.elapsed(),
+            PEAK.swap(CURRENT.load(Relaxed), Relaxed),
+            CURRENT.load(Relaxed),
+        ));
+    };
+
+    let t = Instant::now();
+    let scene = gpurt::scene::load(path)?;
+    stage("read + parse", t);
+    let prims = scene.bounded_count().max(1);
+    let t = Instant::now();
+    let buffers = gpurt::pack::pack(scene)?;
+    stage("pack (BVH build, flatten)", t);
+    let opts = gpurt::frame::RenderOptions {
+        width: 64,
+        height: 64,
+        spp: 1,
+        ..gpurt::frame::RenderOptions::for_camera(&buffers.camera)
+    };
+    let globals = gpurt::frame::globals(&buffers, &opts);
+    let t = Instant::now();
+    gpurt::cpu::render(&buffers, &globals, &|_| {}, &AtomicBool::new(false))?;
+    stage("render 64x64 on the CPU", t);
+
+    println!("{}: {prims} bounded primitives", path.display());
+    println!("| stage | time s | peak MiB | peak B/prim | after MiB | after B/prim |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, time, peak, after) in &stages {
+        println!(
+            "| {name} | {:.3} | {:.1} | {:.0} | {:.1} | {:.0} |",
+            time.as_secs_f64(),
+            mib(*peak),
+            *peak as f64 / prims as f64,
+            mib(*after),
+            *after as f64 / prims as f64
+        );
+    }
+    Ok(())
+}
