@@ -67,7 +67,13 @@ pub(super) fn texel_rows(bytes: usize) -> u32 {
     (bytes.div_ceil(16) as u32).div_ceil(TEXTURE_WIDTH).max(1)
 }
 
-/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows.
+/// Texture rows written per upload step: 4 MB (see `texels`).
+const UPLOAD_ROWS: u32 = 64;
+
+/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows. Written
+/// from `bytes` in place, all but the last row in bands of `UPLOAD_ROWS`: a copy padded
+/// to whole rows would double the host memory of the largest scenes (400 MB of
+/// primitives for mount-11).
 pub(super) fn texels(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -75,27 +81,68 @@ pub(super) fn texels(
     bytes: &[u8],
 ) -> wgpu::Texture {
     let rows = texel_rows(bytes.len());
-    let mut data = bytes.to_vec();
-    data.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
-    device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some(label),
-            size: wgpu::Extent3d {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width: TEXTURE_WIDTH,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Uint,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let row_bytes = TEXTURE_WIDTH as usize * 16;
+    let whole = (bytes.len() / row_bytes) as u32;
+    let write = |first_row: u32, rows: u32, data: &[u8]| {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: first_row,
+                    z: 0,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            data,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row_bytes as u32),
+                rows_per_image: Some(rows),
+            },
+            wgpu::Extent3d {
                 width: TEXTURE_WIDTH,
                 height: rows,
                 depth_or_array_layers: 1,
             },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &data,
-    )
+        );
+    };
+    // wgpu stages each write in a buffer of its size, freed once the GPU has copied it:
+    // bands of rows, each waited for, bound that second copy (lavapipe's staging memory
+    // is host memory too).
+    let mut first = 0;
+    while first < whole {
+        let n = (whole - first).min(UPLOAD_ROWS);
+        let band = first as usize * row_bytes..(first + n) as usize * row_bytes;
+        write(first, n, &bytes[band]);
+        first += n;
+        if first < whole {
+            queue.submit([]);
+            // A lost device surfaces at the upload's final wait.
+            let _ = device.poll(wgpu::PollType::wait_indefinitely());
+        }
+    }
+    if whole < rows {
+        let mut last = bytes[whole as usize * row_bytes..].to_vec();
+        last.resize(row_bytes, 0);
+        write(whole, 1, &last);
+    }
+    texture
 }
 
 /// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element
