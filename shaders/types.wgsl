@@ -203,6 +203,8 @@ override MULTISAMPLE: bool = true;
 override AOV: u32 = 0u;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
+// log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
+override LAYER_SHIFT: u32 = 25u;
 
 // Storage, not uniform: lavapipe specialises a shader on the uniform values its branches
 // read (Mesa's uniform inlining), so a uniform `globals` compiled the shader again (0.8 s)
@@ -214,8 +216,8 @@ override PAIRS: bool = false;
 // each, TEXTURE_WIDTH texels a row). lavapipe loads a storage buffer one component and
 // one invocation at a time (a 32-byte node took 64 scalar loads), but fetches texels with
 // vector gathers; real GPUs read both through their caches.
-@group(0) @binding(2) var node_texels: texture_2d<u32>;
-@group(0) @binding(3) var prim_texels: texture_2d<u32>;
+@group(0) @binding(2) var node_texels: texture_2d_array<u32>;
+@group(0) @binding(3) var prim_texels: texture_2d_array<u32>;
 @group(0) @binding(4) var<storage, read> tri_normals: array<TriNormals>;
 @group(0) @binding(5) var<storage, read> planes: array<Plane>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
@@ -243,8 +245,11 @@ fn prim_material(p: Prim) -> u32 {
     return p.tag & PRIM_MATERIAL_MASK;
 }
 
-fn texel(texels: texture_2d<u32>, i: u32) -> vec4<u32> {
-    return textureLoad(texels, vec2<u32>(i % TEXTURE_WIDTH, i / TEXTURE_WIDTH), 0);
+// Texel `i` of a texture array: layers of 2^LAYER_SHIFT texels, rows of TEXTURE_WIDTH
+// (both powers of two, so the divisions are shifts).
+fn texel(texels: texture_2d_array<u32>, i: u32) -> vec4<u32> {
+    let j = i & ((1u << LAYER_SHIFT) - 1u);
+    return textureLoad(texels, vec2<u32>(j % TEXTURE_WIDTH, j / TEXTURE_WIDTH), i >> LAYER_SHIFT, 0);
 }
 
 fn load_node(i: u32) -> Node {

@@ -19,11 +19,12 @@ use super::cut::{Cut, PIXEL_BYTES};
 use super::resume::{ResumePipelines, resume, resume_group_layout};
 use super::shaders;
 use super::specialization::Specialization;
-use super::upload::{SceneData, check_sizes, scene_bytes, upload_scene};
+use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
-    GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE, WORKGROUP_SIDE,
+    GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE,
+    WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
 
@@ -55,6 +56,8 @@ pub struct GpuRenderer {
     software: bool,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
+    /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
+    layer_rows: u32,
 }
 
 /// The traversal for an adapter: `TRAVERSAL_PAIRS` on hardware GPUs, where a ray's time
@@ -212,7 +215,27 @@ impl GpuRenderer {
             compile_time: Mutex::new(start.elapsed()),
             software,
             traversal: traversal_for(software)?,
+            layer_rows: upload::layer_rows(device),
         })
+    }
+
+    /// This renderer splitting the node and primitive textures into layers of `rows`
+    /// rows (a power of two, at most the device's), as a scene too large for one layer
+    /// is split: lets the tests check many layers on small scenes.
+    pub fn with_layer_rows(self, rows: u32) -> Self {
+        assert!(rows.is_power_of_two() && rows <= self.layer_rows);
+        GpuRenderer {
+            layer_rows: rows,
+            ..self
+        }
+    }
+
+    /// The pipeline a frame of `scene` needs on this renderer.
+    fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
+        Specialization {
+            layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
+            ..Specialization::of(scene, globals)
+        }
     }
 
     /// How this renderer walks the BVH, `TRAVERSAL_SINGLE` or `TRAVERSAL_PAIRS`: the one
@@ -252,11 +275,11 @@ impl GpuRenderer {
         globals: &GpuGlobals,
     ) -> Result<wgpu::ComputePipeline> {
         let globals = &self.frame(globals);
-        let spec = Specialization::of(scene, globals);
+        let spec = self.spec(scene, globals);
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
         }
-        let data = upload_scene(device, queue, scene)?;
+        let data = upload_scene(device, queue, scene, self.layer_rows)?;
         self.pipeline(device, queue, scene, &data, globals)
     }
 
@@ -270,7 +293,7 @@ impl GpuRenderer {
         data: &SceneData,
         globals: &GpuGlobals,
     ) -> Result<wgpu::ComputePipeline> {
-        let spec = Specialization::of(scene, globals);
+        let spec = self.spec(scene, globals);
         let mut pipelines = self.pipelines.lock().expect("not poisoned");
         if let Some(p) = pipelines.get(&spec) {
             return Ok(p.clone());
@@ -444,10 +467,10 @@ impl GpuRenderer {
     ) -> Result<GpuScene> {
         let globals = &self.frame(globals);
         let cut = self.cut(device, globals);
-        check_sizes(device, scene, cut.band_bytes())?;
+        check_sizes(device, scene, cut.band_bytes(), self.layer_rows)?;
         scene.check(globals)?;
-        let spec = Specialization::of(scene, globals);
-        let data = upload_scene(device, queue, scene)?;
+        let spec = self.spec(scene, globals);
+        let data = upload_scene(device, queue, scene, self.layer_rows)?;
         let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
         let bound = self.bind(
             device,
@@ -464,7 +487,7 @@ impl GpuRenderer {
             bound,
             pipeline,
             cut,
-            scene_bytes: scene_bytes(scene),
+            scene_bytes: scene_bytes(scene, self.layer_rows),
             resume: self.resume.clone(),
             spec,
         })
@@ -485,7 +508,7 @@ impl GpuRenderer {
     ) -> Result<()> {
         let globals = &self.frame(globals);
         scene.check(globals)?;
-        let spec = Specialization::of(scene, globals);
+        let spec = self.spec(scene, globals);
         if spec != uploaded.spec {
             uploaded.pipeline = self.pipeline(device, queue, scene, &uploaded.data, globals)?;
             uploaded.spec = spec;
@@ -494,7 +517,7 @@ impl GpuRenderer {
         if cut == uploaded.cut {
             queue.write_buffer(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
         } else {
-            check_sizes(device, scene, cut.band_bytes())?;
+            check_sizes(device, scene, cut.band_bytes(), self.layer_rows)?;
             uploaded.bound = self.bind(
                 device,
                 &uploaded.data,
@@ -728,7 +751,7 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Texture {
             sample_type: wgpu::TextureSampleType::Uint,
-            view_dimension: wgpu::TextureViewDimension::D2,
+            view_dimension: wgpu::TextureViewDimension::D2Array,
             multisampled: false,
         },
         count: None,

@@ -26,6 +26,9 @@ pub struct Specialization {
     pub multisample: bool,
     pub aov: u32,
     pub pairs: bool,
+    /// log2 of the texels in a layer of the node and primitive textures (set by the
+    /// renderer from its device's limits).
+    pub layer_shift: u32,
 }
 
 impl Specialization {
@@ -47,6 +50,7 @@ impl Specialization {
             multisample: g.spp > 1,
             aov: g.aov,
             pairs: g.traversal == TRAVERSAL_PAIRS,
+            layer_shift: 0,
         }
     }
 
@@ -68,6 +72,7 @@ impl Specialization {
             ("MULTISAMPLE", b(self.multisample)),
             ("AOV", f64::from(self.aov)),
             ("PAIRS", b(self.pairs)),
+            ("LAYER_SHIFT", f64::from(self.layer_shift)),
         ]
     }
 }
@@ -101,6 +106,7 @@ mod tests {
             multisample: true,
             aov: 0,
             pairs: true,
+            layer_shift: 25,
         };
         let mut host: Vec<String> = spec
             .constants()

@@ -20,8 +20,11 @@ pub(super) struct SceneData {
 
 /// Device memory a scene's arrays take: the node and primitive textures (padded to whole
 /// rows) and the other arrays.
-pub(super) fn scene_bytes(scene: &SceneBuffers) -> u64 {
-    let texture = |bytes: usize| u64::from(texel_rows(bytes)) * u64::from(TEXTURE_WIDTH) * 16;
+pub(super) fn scene_bytes(scene: &SceneBuffers, layer_rows: u32) -> u64 {
+    let texture = |bytes: usize| {
+        let (rows, layers) = texture_extent(bytes, layer_rows);
+        u64::from(rows) * u64::from(layers) * u64::from(TEXTURE_WIDTH) * 16
+    };
     texture(size_of_val(&scene.nodes[..]))
         + texture(size_of_val(&scene.prims[..]))
         + [
@@ -40,6 +43,7 @@ pub(super) fn upload_scene(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &SceneBuffers,
+    layer_rows: u32,
 ) -> Result<SceneData> {
     let storage = |label: &str, bytes: &[u8]| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -49,11 +53,16 @@ pub(super) fn upload_scene(
         })
     };
     scoped(device, "uploading the scene", || {
-        let nodes = texels(device, queue, "nodes", bytemuck::cast_slice(&scene.nodes));
-        let prims = texels(device, queue, "prims", bytemuck::cast_slice(&scene.prims));
+        let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows);
+        let nodes = texels("nodes", bytemuck::cast_slice(&scene.nodes));
+        let prims = texels("prims", bytemuck::cast_slice(&scene.prims));
+        let array = wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        };
         SceneData {
-            nodes: nodes.create_view(&Default::default()),
-            prims: prims.create_view(&Default::default()),
+            nodes: nodes.create_view(&array),
+            prims: prims.create_view(&array),
             tri_normals: storage("tri_normals", non_empty(&scene.tri_normals)),
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
@@ -67,26 +76,48 @@ pub(super) fn texel_rows(bytes: usize) -> u32 {
     (bytes.div_ceil(16) as u32).div_ceil(TEXTURE_WIDTH).max(1)
 }
 
+/// The rows of each layer and the layers of a texture array holding `bytes`: one layer
+/// as high as needed while that fits in `layer_rows`, else layers of `layer_rows` rows
+/// (the shader finds texel `i` in layer `i >> LAYER_SHIFT`).
+pub(super) fn texture_extent(bytes: usize, layer_rows: u32) -> (u32, u32) {
+    let rows = texel_rows(bytes);
+    if rows <= layer_rows {
+        (rows, 1)
+    } else {
+        (layer_rows, rows.div_ceil(layer_rows))
+    }
+}
+
+/// Rows of a texture layer on `device`: the highest power of two it allows, so that a
+/// layer holds a power of two of texels and the shader splits an index with shifts.
+pub(super) fn layer_rows(device: &wgpu::Device) -> u32 {
+    // At most 2^16 rows: a layer's texel count, 2^12 times that, stays a u32 shift.
+    let max = device.limits().max_texture_dimension_2d.clamp(1, 1 << 16);
+    1 << max.ilog2()
+}
+
 /// Texture rows written per upload step: 4 MB (see `texels`).
 const UPLOAD_ROWS: u32 = 64;
 
-/// An rgba32uint texture holding `bytes` row by row, zero-padded to whole rows. Written
-/// from `bytes` in place, all but the last row in bands of `UPLOAD_ROWS`: a copy padded
-/// to whole rows would double the host memory of the largest scenes (400 MB of
-/// primitives for mount-11).
+/// An rgba32uint texture array holding `bytes` row by row, layer after layer of
+/// `layer_rows` rows (see `texture_extent`), zero-padded to whole rows. Written from
+/// `bytes` in place, all but the last row in bands of `UPLOAD_ROWS`: a copy padded to
+/// whole rows would double the host memory of the largest scenes (400 MB of primitives
+/// for mount-11).
 pub(super) fn texels(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     label: &str,
     bytes: &[u8],
+    layer_rows: u32,
 ) -> wgpu::Texture {
-    let rows = texel_rows(bytes.len());
+    let (height, layers) = texture_extent(bytes.len(), layer_rows);
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
             width: TEXTURE_WIDTH,
-            height: rows,
-            depth_or_array_layers: 1,
+            height,
+            depth_or_array_layers: layers,
         },
         mip_level_count: 1,
         sample_count: 1,
@@ -96,16 +127,16 @@ pub(super) fn texels(
         view_formats: &[],
     });
     let row_bytes = TEXTURE_WIDTH as usize * 16;
-    let whole = (bytes.len() / row_bytes) as u32;
-    let write = |first_row: u32, rows: u32, data: &[u8]| {
+    // Writes `rows` rows from image row `first` on (rows never cross a layer).
+    let write = |first: u32, rows: u32, data: &[u8]| {
         queue.write_texture(
             wgpu::TexelCopyTextureInfo {
                 texture: &texture,
                 mip_level: 0,
                 origin: wgpu::Origin3d {
                     x: 0,
-                    y: first_row,
-                    z: 0,
+                    y: first % height,
+                    z: first / height,
                 },
                 aspect: wgpu::TextureAspect::All,
             },
@@ -125,9 +156,12 @@ pub(super) fn texels(
     // wgpu stages each write in a buffer of its size, freed once the GPU has copied it:
     // bands of rows, each waited for, bound that second copy (lavapipe's staging memory
     // is host memory too).
+    let whole = (bytes.len() / row_bytes) as u32;
     let mut first = 0;
     while first < whole {
-        let n = (whole - first).min(UPLOAD_ROWS);
+        let n = (whole - first)
+            .min(UPLOAD_ROWS)
+            .min(height - first % height);
         let band = first as usize * row_bytes..(first + n) as usize * row_bytes;
         write(first, n, &bytes[band]);
         first += n;
@@ -137,7 +171,7 @@ pub(super) fn texels(
             let _ = device.poll(wgpu::PollType::wait_indefinitely());
         }
     }
-    if whole < rows {
+    if bytes.len() > whole as usize * row_bytes {
         let mut last = bytes[whole as usize * row_bytes..].to_vec();
         last.resize(row_bytes, 0);
         write(whole, 1, &last);
@@ -162,18 +196,28 @@ pub(super) fn check_sizes(
     device: &wgpu::Device,
     scene: &SceneBuffers,
     out_bytes: u64,
+    layer_rows: u32,
 ) -> Result<()> {
     let limits = device.limits();
-    let max_rows = limits.max_texture_dimension_2d;
+    let max_side = limits.max_texture_dimension_2d;
+    if max_side < TEXTURE_WIDTH {
+        return Err(Error::Gpu(format!(
+            "the scene's BVH nodes and primitives travel in textures {TEXTURE_WIDTH} texels \
+             wide, but this adapter's max_texture_dimension_2d is {max_side}; render it with \
+             --backend cpu"
+        )));
+    }
+    let max_layers = limits.max_texture_array_layers;
     for (what, bytes) in [
         ("BVH nodes", size_of_val(&scene.nodes[..])),
         ("primitives", size_of_val(&scene.prims[..])),
     ] {
-        let rows = texel_rows(bytes);
-        if rows > max_rows {
+        let (_, layers) = texture_extent(bytes, layer_rows);
+        if layers > max_layers {
             return Err(Error::Gpu(format!(
-                "the scene's {what} need a texture {rows} rows high, but this adapter's \
-                 max_texture_dimension_2d is {max_rows}; render it with --backend cpu"
+                "the scene's {what} need {layers} texture layers of {layer_rows} rows, but \
+                 this adapter's max_texture_array_layers is {max_layers}; render it with \
+                 --backend cpu"
             )));
         }
     }

@@ -487,8 +487,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             && msg.contains(&mib.to_string()),
         "{msg}"
     );
-    // Nodes and primitives travel as textures 4096 texels wide: 30000 primitives of three
-    // texels need 22 rows.
+    // Nodes and primitives travel as texture arrays 4096 texels wide.
     let (device, queue) = device_with(
         g,
         wgpu::Limits {
@@ -497,7 +496,70 @@ fn oversized_scene_is_refused_with_the_limit_named() {
         },
     );
     let msg = refusal(&device, &queue, &with_triangles(30_000));
-    assert!(msg.contains("max_texture_dimension_2d is 16"), "{msg}");
+    assert!(
+        msg.contains("4096 texels wide") && msg.contains("max_texture_dimension_2d is 16"),
+        "{msg}"
+    );
+    // 30000 primitives of three texels need 22 rows: 11 layers of 2 rows, where the
+    // device allows 8.
+    let (device, queue) = device_with(
+        g,
+        wgpu::Limits {
+            max_texture_array_layers: 8,
+            ..g.ctx.adapter.limits()
+        },
+    );
+    let buffers = pack::pack(with_triangles(30_000)).expect("packs");
+    let globals = frame::globals(&buffers, &opts(&features_scene("")));
+    let renderer = GpuRenderer::new(&device, None)
+        .expect("shader module")
+        .with_layer_rows(2);
+    let msg = renderer
+        .render(
+            &device,
+            &queue,
+            &buffers,
+            &globals,
+            &|_| {},
+            &AtomicBool::new(false),
+        )
+        .expect_err("a scene over more layers than allowed must be refused")
+        .to_string();
+    assert!(
+        msg.contains("primitives need 11 texture layers of 2 rows")
+            && msg.contains("max_texture_array_layers is 8"),
+        "{msg}"
+    );
+}
+
+/// A scene larger than one texture layer is split over several, as many as it needs:
+/// with layers cut to 2 and 1 rows here (balls-4's 7383 primitives take 6 rows, its
+/// nodes 3), the images and costs still match the CPU's.
+#[test]
+fn scenes_over_several_texture_layers_match_cpu() {
+    let (Some(g), Some(root)) = (gpu(), shared_scenes()) else {
+        return;
+    };
+    let scene = scene::load(&root.join("spd/balls-4.nff")).expect("balls-4 loads");
+    let mut cases = Vec::new();
+    for rows in [2, 1] {
+        let layered = Gpu {
+            ctx: g.ctx.clone(),
+            renderer: GpuRenderer::new(&g.ctx.device, None)
+                .expect("shader compiles")
+                .with_layer_rows(rows),
+        };
+        let base = opts(&scene);
+        for (name, aov) in [("", AOV_COLOR), ("cost", AOV_COST)] {
+            let o = RenderOptions {
+                aov,
+                ..base.clone()
+            };
+            let label = format!("balls-4 in layers of {rows} rows {name}");
+            cases.push(check_scene(&layered, &label, &scene, &o));
+        }
+    }
+    check_all(cases);
 }
 
 /// Renders on both backends and checks agreement (with the noise floor) and ray counts:
