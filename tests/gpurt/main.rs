@@ -9,5 +9,10 @@ mod gpu;
 mod layout;
 mod parse;
 mod session;
+mod spd;
+/// The SPD generator example, for `spd`'s tests (its `main` goes unused here).
+#[path = "../../examples/spd.rs"]
+#[allow(dead_code)]
+mod spd_example;
 mod view;
 mod window;
