@@ -69,8 +69,8 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
                 ..Default::default()
             },
             Bounded::Triangle(t) => {
-                let slot = match t.n {
-                    Some([n0, n1, n2]) => {
+                let slot = match t.n.as_deref() {
+                    Some(&[n0, n1, n2]) => {
                         tri_normals.push(GpuTriNormals {
                             n0,
                             n1,

@@ -62,7 +62,7 @@ impl MeshTransform {
         for t in tris {
             t.v = t.v.map(|p| m * p + self.translate);
             if let Some(n) = &mut t.n {
-                *n = n.map(|v| (nm * v).normalize_or_zero());
+                **n = n.map(|v| (nm * v).normalize_or_zero());
             }
         }
     }
@@ -82,13 +82,13 @@ mod tests {
         };
         let mut t = [Triangle {
             v: [Vec3::X, Vec3::Y, Vec3::Z],
-            n: Some([Vec3::X; 3]),
+            n: Some(Box::new([Vec3::X; 3])),
             material: MaterialId(0),
         }];
         xf.apply(&mut t);
         // X scaled to 2, rotated onto +Y, moved by 10 in x.
         assert!((t[0].v[0] - Vec3::new(10.0, 2.0, 0.0)).length() < 1e-5);
         assert!((t[0].v[1] - Vec3::new(9.0, 0.0, 0.0)).length() < 1e-5);
-        assert!((t[0].n.unwrap()[0] - Vec3::Y).length() < 1e-5);
+        assert!((t[0].n.as_ref().unwrap()[0] - Vec3::Y).length() < 1e-5);
     }
 }

@@ -402,7 +402,7 @@ impl Parser<'_> {
         }
         for &[a, b, c] in &self.tris {
             let (a, b, c) = (a as usize, b as usize, c as usize);
-            let n = patch.then(|| [self.normals[a], self.normals[b], self.normals[c]]);
+            let n = patch.then(|| Box::new([self.normals[a], self.normals[b], self.normals[c]]));
             self.scene.triangles.push(Triangle {
                 v: [self.verts[a], self.verts[b], self.verts[c]],
                 n,

@@ -130,7 +130,7 @@ pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
             let ix = [a, b, c].map(|i| i as usize);
             tris.push(Triangle {
                 v: ix.map(|i| poly[i]),
-                n: smooth.then(|| ix.map(|i| poly_n[i])),
+                n: smooth.then(|| Box::new(ix.map(|i| poly_n[i]))),
                 material: MaterialId(0),
             });
         }

@@ -43,8 +43,8 @@ fn starts_with_solid(b: &[u8]) -> bool {
     b[start..].starts_with(b"solid")
 }
 
-fn facet_normal(n: Vec3) -> Option<[Vec3; 3]> {
-    (n.is_finite() && n.length_squared() > 0.0).then(|| [n.normalize(); 3])
+fn facet_normal(n: Vec3) -> Option<Box<[Vec3; 3]>> {
+    (n.is_finite() && n.length_squared() > 0.0).then(|| Box::new([n.normalize(); 3]))
 }
 
 fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
@@ -169,7 +169,7 @@ pub fn write_binary(tris: &[Triangle], header: &[u8; 80]) -> Vec<u8> {
     out.extend_from_slice(header);
     out.extend_from_slice(&(tris.len() as u32).to_le_bytes());
     for t in tris {
-        let n = t.n.map(|n| n[0]).unwrap_or(Vec3::ZERO);
+        let n = t.n.as_ref().map_or(Vec3::ZERO, |n| n[0]);
         for v in [n, t.v[0], t.v[1], t.v[2]] {
             for c in v.to_array() {
                 out.extend_from_slice(&c.to_le_bytes());

@@ -440,7 +440,7 @@ fn with_triangles(n: usize) -> Scene {
                 glam::Vec3::new(x + 1e-4, 3.0, 0.0),
                 glam::Vec3::new(x, 3.0, 1e-4),
             ],
-            n: Some([glam::Vec3::Y; 3]),
+            n: Some(Box::new([glam::Vec3::Y; 3])),
             material,
         });
     }

@@ -757,7 +757,7 @@ fn extension_lights_and_ambient() {
 fn tri(v: [[f32; 3]; 3], n: Option<[f32; 3]>) -> Triangle {
     Triangle {
         v: v.map(Vec3::from),
-        n: n.map(|n| [Vec3::from(n); 3]),
+        n: n.map(|n| Box::new([Vec3::from(n); 3])),
         material: MaterialId(0),
     }
 }
@@ -781,7 +781,7 @@ fn tetra() -> Vec<Triangle> {
 fn ascii_stl(tris: &[Triangle]) -> String {
     let mut s = String::from("solid test part\n");
     for t in tris {
-        let n = t.n.map_or(Vec3::ZERO, |n| n[0]);
+        let n = t.n.as_ref().map_or(Vec3::ZERO, |n| n[0]);
         // `{}` prints the shortest text that reads back as the same f32.
         s += &format!("  facet normal {} {} {}\n    outer loop\n", n.x, n.y, n.z);
         for v in t.v {
@@ -826,7 +826,7 @@ fn stl_binary_ascii_and_solid_headed_binary_give_the_same_triangles() {
         ),
     ];
     let got = stl::parse(&stl::write_binary(&odd, &[0; 80]), "t.stl").unwrap();
-    assert_eq!(got[0].n, Some([Vec3::Z; 3]));
+    assert_eq!(got[0].n.as_deref(), Some(&[Vec3::Z; 3]));
     assert_eq!(got[1].n, None);
 }
 
@@ -934,8 +934,8 @@ f 8 9 10 11 12 13
     assert_eq!(tris.len(), 1 + 2 + 4);
     let d = 1.0 / 2f32.sqrt();
     assert_eq!(
-        tris[0].n,
-        Some([Vec3::Z, Vec3::Z, Vec3::new(0.0, d, d)]),
+        tris[0].n.as_deref(),
+        Some(&[Vec3::Z, Vec3::Z, Vec3::new(0.0, d, d)]),
         "per-vertex normals kept, normalised"
     );
     assert_eq!(
@@ -943,8 +943,8 @@ f 8 9 10 11 12 13
         [Vec3::ZERO, Vec3::X, Vec3::Y],
         "vertex order kept"
     );
-    let quad: Vec<Triangle> = tris.iter().copied().filter(|t| t.v[0].z == 1.0).collect();
-    let ell: Vec<Triangle> = tris.iter().copied().filter(|t| t.v[0].z == 2.0).collect();
+    let quad: Vec<Triangle> = tris.iter().filter(|&t| t.v[0].z == 1.0).cloned().collect();
+    let ell: Vec<Triangle> = tris.iter().filter(|&t| t.v[0].z == 2.0).cloned().collect();
     assert_eq!((quad.len(), ell.len()), (2, 4));
     assert!((area(&quad) - 2.0).abs() < 1e-6);
     assert!((area(&ell) - 3.0).abs() < 1e-6, "concave face: no fan");
@@ -1045,7 +1045,7 @@ fn mesh_statement_places_meshes_with_the_current_material() {
         t[0].v
     );
     assert!(
-        close(t[0].n.unwrap()[0], Vec3::Z),
+        close(t[0].n.as_ref().unwrap()[0], Vec3::Z),
         "normal turned with the mesh"
     );
     assert_eq!(t[1].v, one[0].v, "gzip mesh, no transform");
