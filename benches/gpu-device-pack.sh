@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Builds what benches/gpu-device.sh runs and puts it, stripped, in .device/ (ignored by
-# git): the release gpurt, the integration-test binary, the debug gpurt the CLI tests
-# call, and a copy of ../shared/scenes. Also fetches the Vulkan loader packages into .gl/
+# git): the release gpurt, the SPD generator (examples/spd.rs), the integration-test
+# binary, the debug gpurt the CLI tests call, and a copy of ../shared/scenes. Also fetches the Vulkan loader packages into .gl/
 # when missing (a machine without a Rust toolchain may lack them too).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-cargo build --release --quiet
+cargo build --release --quiet --bin gpurt --example spd
 cargo build --quiet
 tests=$(cargo test --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json,sys
@@ -17,6 +17,7 @@ for l in sys.stdin:
 rm -rf .device
 mkdir -p .device
 strip -o .device/gpurt target/release/gpurt
+strip -o .device/spd target/release/examples/spd
 strip -o .device/gpurt-debug target/debug/gpurt
 strip -o .device/gpurt-tests "$tests"
 # Compressed: what travels to the device is limited in size.

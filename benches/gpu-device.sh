@@ -5,8 +5,10 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [tests] [bench] [quick]    (default: tests bench)
-# Output goes to $OUT (or ./device-out): tests.log, bench.md, bench.log.
+# Usage: benches/gpu-device.sh [tests] [bench] [quick] [huge]    (default: tests bench)
+# Output goes to $OUT (or ./device-out): tests.log, bench.md, bench.log, huge.log.
+# `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
+# .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
 set -uo pipefail
 
 OUT=${OUT:-$PWD/device-out}
@@ -68,4 +70,21 @@ if [[ $what == *bench* ]]; then
     echo "exit $?"
     tail -5 "$OUT/bench.log"
     cat "$OUT/bench.md"
+fi
+
+if [[ $what == *huge* ]]; then
+    echo "== huge"
+    tmp=$(mktemp -d)
+    for scene in "mount 10" "mount 11" "balls 7"; do
+        read -r model size <<<"$scene"
+        ./.device/spd "$model" "$size" >"$tmp/$model-$size.nff"
+        for backend in gpu cpu; do
+            echo "-- $model-$size $backend"
+            /usr/bin/time -f "wall        %e s" ./.device/gpurt "$tmp/$model-$size.nff" \
+                --backend "$backend" --width 3840 --height 2160 -o "$tmp/out.png" --stats 2>&1 |
+                grep -E '^(scene|parse|build|shader|gpu |cpu |total|peak|wall|gpurt)'
+        done
+        rm -f "$tmp/$model-$size.nff"
+    done 2>&1 | tee "$OUT/huge.log"
+    rm -rf "$tmp"
 fi
