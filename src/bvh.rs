@@ -59,9 +59,9 @@ pub fn build(aabbs: &[Aabb]) -> FlatBvh {
 /// while it runs (two node arrays and the sort keys, then the tree's own nodes), more
 /// than the finished scene (about 70); larger scenes are cut by object median into
 /// groups of at most this many, each built by obvhs in turn, so that peak stays a fixed
-/// 240 MB or so instead of growing with the scene. The SPD scenes up to mount-9 and
-/// balls-6 are built whole.
-pub const BUILD_CHUNK: usize = 1 << 20;
+/// 120 MB or so instead of growing with the scene (mount-11: 139 bytes a primitive at the
+/// peak of the whole load; docs/bvh.md).
+pub const BUILD_CHUNK: usize = 1 << 19;
 
 /// Scenes up to this many primitives get obvhs' most thorough build: at about 2 us a
 /// primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
