@@ -32,7 +32,7 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
         outward = prim_normal(p, point);
         ns = outward;
         if (NORMALS && prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {
-            let n = tri_normals[u32(p.f1)];
+            let n = load_tri_normals(u32(p.f1));
             ns = normalize((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2);
         }
         material = prim_material(p);

@@ -218,7 +218,7 @@ override LAYER_SHIFT: u32 = 25u;
 // vector gathers; real GPUs read both through their caches.
 @group(0) @binding(2) var node_texels: texture_2d_array<u32>;
 @group(0) @binding(3) var prim_texels: texture_2d_array<u32>;
-@group(0) @binding(4) var<storage, read> tri_normals: array<TriNormals>;
+@group(0) @binding(4) var normal_texels: texture_2d_array<u32>;
 @group(0) @binding(5) var<storage, read> planes: array<Plane>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
 @group(0) @binding(7) var<storage, read> lights: array<Light>;
@@ -256,6 +256,20 @@ fn load_node(i: u32) -> Node {
     let a = texel(node_texels, 2u * i);
     let b = texel(node_texels, 2u * i + 1u);
     return Node(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
+
+fn load_tri_normals(i: u32) -> TriNormals {
+    let a = texel(normal_texels, 3u * i);
+    let b = texel(normal_texels, 3u * i + 1u);
+    let c = texel(normal_texels, 3u * i + 2u);
+    return TriNormals(
+        bitcast<vec3<f32>>(a.xyz),
+        0u,
+        bitcast<vec3<f32>>(b.xyz),
+        0u,
+        bitcast<vec3<f32>>(c.xyz),
+        0u,
+    );
 }
 
 fn load_prim(i: u32) -> Prim {

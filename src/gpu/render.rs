@@ -367,7 +367,7 @@ impl GpuRenderer {
                 }),
                 wgpu::BindingResource::TextureView(&data.nodes),
                 wgpu::BindingResource::TextureView(&data.prims),
-                data.tri_normals.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&data.tri_normals),
                 data.planes.as_entire_binding(),
                 data.materials.as_entire_binding(),
                 data.lights.as_entire_binding(),
@@ -731,10 +731,11 @@ fn submit_band(
     enc
 }
 
-/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes and primitives
-/// (rgba32uint textures), the other scene arrays (read-only storage), the tile's output
-/// (read-write storage). Explicit, so that a binding the
-/// shader happens not to use is still accepted.
+/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes,
+/// primitives and triangle normals (rgba32uint texture arrays, split into layers as large
+/// as the device allows), the other scene arrays (read-only storage), the tile's output
+/// (read-write storage). Explicit, so that a binding the shader happens not to use is
+/// still accepted.
 fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
         binding,
@@ -768,8 +769,9 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         texels(2),
         texels(3),
+        texels(4),
     ];
-    entries.extend((4..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
+    entries.extend((5..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
     entries.push(entry(
         8,
         wgpu::BufferBindingType::Storage { read_only: false },

@@ -1,5 +1,6 @@
-//! A scene's arrays on the device: uploaded once (nodes and primitives as textures, the
-//! rest as storage buffers), checked first against the device's limits.
+//! A scene's arrays on the device: uploaded once (nodes, primitives and triangle normals
+//! as texture arrays, which grow by layers past one texture's size; the small rest as
+//! storage buffers), checked first against the device's limits.
 
 use wgpu::util::DeviceExt;
 
@@ -12,7 +13,7 @@ use crate::pack::SceneBuffers;
 pub(super) struct SceneData {
     pub(super) nodes: wgpu::TextureView,
     pub(super) prims: wgpu::TextureView,
-    pub(super) tri_normals: wgpu::Buffer,
+    pub(super) tri_normals: wgpu::TextureView,
     pub(super) planes: wgpu::Buffer,
     pub(super) materials: wgpu::Buffer,
     pub(super) lights: wgpu::Buffer,
@@ -27,8 +28,8 @@ pub(super) fn scene_bytes(scene: &SceneBuffers, layer_rows: u32) -> u64 {
     };
     texture(size_of_val(&scene.nodes[..]))
         + texture(size_of_val(&scene.prims[..]))
+        + texture(size_of_val(&scene.tri_normals[..]))
         + [
-            non_empty(&scene.tri_normals).len(),
             non_empty(&scene.planes).len(),
             non_empty(&scene.materials).len(),
             non_empty(&scene.lights).len(),
@@ -56,6 +57,7 @@ pub(super) fn upload_scene(
         let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows);
         let nodes = texels("nodes", bytemuck::cast_slice(&scene.nodes));
         let prims = texels("prims", bytemuck::cast_slice(&scene.prims));
+        let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals));
         let array = wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
@@ -63,7 +65,7 @@ pub(super) fn upload_scene(
         SceneData {
             nodes: nodes.create_view(&array),
             prims: prims.create_view(&array),
-            tri_normals: storage("tri_normals", non_empty(&scene.tri_normals)),
+            tri_normals: normals.create_view(&array),
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
             lights: storage("lights", non_empty(&scene.lights)),
@@ -211,6 +213,7 @@ pub(super) fn check_sizes(
     for (what, bytes) in [
         ("BVH nodes", size_of_val(&scene.nodes[..])),
         ("primitives", size_of_val(&scene.prims[..])),
+        ("triangle normals", size_of_val(&scene.tri_normals[..])),
     ] {
         let (_, layers) = texture_extent(bytes, layer_rows);
         if layers > max_layers {
@@ -224,10 +227,6 @@ pub(super) fn check_sizes(
     let max_binding = limits.max_storage_buffer_binding_size;
     let max_buffer = limits.max_buffer_size;
     let arrays = [
-        (
-            "triangle normals",
-            size_of_val(&scene.tri_normals[..]) as u64,
-        ),
         ("planes", size_of_val(&scene.planes[..]) as u64),
         ("materials", size_of_val(&scene.materials[..]) as u64),
         ("lights", size_of_val(&scene.lights[..]) as u64),

@@ -471,7 +471,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
     let Some(g) = gpu() else {
         return;
     };
-    // 1 MiB holds the 256x256 output tile; 30000 triangles' normals need 1.4 MiB.
+    // 1 MiB holds the 256x256 output tile; 64 bytes a light, 17000 lights need 1.04 MiB.
     let mib = 1 << 20;
     let (device, queue) = device_with(
         g,
@@ -480,13 +480,34 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             ..g.ctx.adapter.limits()
         },
     );
-    let msg = refusal(&device, &queue, &with_triangles(30_000));
+    let mut lit = features_scene("");
+    lit.lights
+        .extend((0..17_000).map(|i| gpurt::scene::Light::Point {
+            position: glam::Vec3::new(i as f32, 0.0, 10.0),
+            color: None,
+        }));
+    let msg = refusal(&device, &queue, &lit);
     assert!(
-        msg.contains("triangle normals")
+        msg.contains("lights")
             && msg.contains("max_storage_buffer_binding_size")
             && msg.contains(&mib.to_string()),
         "{msg}"
     );
+    // Triangle normals travel in a texture array, like nodes and primitives: 30000
+    // triangles' normals (1.4 MiB) render under that 1 MiB storage limit.
+    let buffers = pack::pack(with_triangles(30_000)).expect("packs");
+    let globals = frame::globals(&buffers, &opts(&features_scene("")));
+    GpuRenderer::new(&device, None)
+        .expect("shader module")
+        .render(
+            &device,
+            &queue,
+            &buffers,
+            &globals,
+            &|_| {},
+            &AtomicBool::new(false),
+        )
+        .expect("normals beyond a storage binding render");
     // Nodes and primitives travel as texture arrays 4096 texels wide.
     let (device, queue) = device_with(
         g,

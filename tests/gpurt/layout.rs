@@ -193,6 +193,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     ("texel", "texture fetch: the CPU indexes the arrays"),
     ("load_node", "texture fetch: the CPU indexes the arrays"),
     ("load_prim", "texture fetch: the CPU indexes the arrays"),
+    (
+        "load_tri_normals",
+        "texture fetch: the CPU indexes the arrays",
+    ),
     ("load_prim_tag", "texture fetch: the CPU indexes the arrays"),
     ("node_count", "bit field the CPU's GpuNode methods read"),
     ("node_axis", "bit field the CPU's GpuNode methods read"),
