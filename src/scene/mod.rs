@@ -326,6 +326,19 @@ impl Scene {
     }
 }
 
+/// `n` scaled to unit length, or `None` when it has no direction (zero or not finite).
+/// It is divided by its largest component first, so that a vector whose squared length
+/// overflows or underflows f32 (components beyond about 1e19 or below 1e-19) is still
+/// normalised: `Vec3::normalize` turns `(3e38, 0, 0)` into zero, and zero shading normals
+/// into NaN pixels.
+pub fn unit(n: Vec3) -> Option<Vec3> {
+    let largest = n.abs().max_element();
+    if !n.is_finite() || largest == 0.0 {
+        return None;
+    }
+    Some((n / largest).normalize())
+}
+
 /// What a file holds, from its extension (after stripping `.gz`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FileKind {
