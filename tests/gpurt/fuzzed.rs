@@ -145,3 +145,86 @@ fn pack_shades_triangles_with_unusable_normals_flat() {
     }
     assert_renders_finite(scene);
 }
+
+/// `render` target (minimised from its crash artifact): seen from inside a sphere of radius
+/// 6.7e7, a mirror ray comes back from 6.7e7 away to a sphere of radius 0.5, and rounding
+/// at that distance (8 units) puts the hit point exactly on the small sphere's centre,
+/// where `normalize(x - centre)` is 0 / 0. The pixel was NaN; a hit whose normal is
+/// undefined now faces the ray.
+#[test]
+fn hit_point_rounded_onto_a_sphere_centre_renders_finite() {
+    let src = "v from 2 3 7 at 0 0 0 up 0 0 1 angle 45\nl 4 3 2\n\
+               f 1 1 0 0 1 0 0 1\ns 0 0 0 .5\ns 0 0 6 66616067\n";
+    assert_renders_finite(parse_nff(src));
+}
+
+/// The same undefined normals at the unit level: a hit on a sphere's centre, on a cone's
+/// axis, and a shading normal that interpolates to zero between opposite vertex normals
+/// all give finite unit normals.
+#[test]
+fn surface_normals_are_finite_where_the_geometry_has_none() {
+    use gpurt::cpu::shade::surface;
+    use gpurt::cpu::types::{Bindings, Hit, Ray};
+    let src = "v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n\
+               s 0 0 0 1\nc 3 0 0 1 3 0 2 0\n\
+               pp 3 -1 1 -1 1 0 0  1 1 -1 -1 0 0  0 1 1 1 0 0\n";
+    let buffers = gpurt::pack::pack(parse_nff(src)).unwrap();
+    let scene = parse_nff(src);
+    let opts = RenderOptions::for_camera(&scene.camera);
+    let globals = frame::globals(&buffers, &opts);
+    let b = Bindings::new(&buffers, &globals);
+    let prim = |kind: u32| buffers.prims.iter().position(|p| p.kind() == kind).unwrap() as u32;
+    // Barycentrics (u, v) halfway between the two corners with opposite normals.
+    let n = buffers.tri_normals[0];
+    let edge = if n.n0 == -n.n1 {
+        (0.5, 0.0)
+    } else if n.n0 == -n.n2 {
+        (0.0, 0.5)
+    } else {
+        assert_eq!(n.n1, -n.n2);
+        (0.5, 0.5)
+    };
+    let cases = [
+        // The ray's hit point is the sphere's centre.
+        (
+            prim(gpurt::gpu_types::PRIM_SPHERE),
+            Vec3::new(0.0, -5.0, 0.0),
+            5.0,
+            (0.0, 0.0),
+        ),
+        // The cone's apex, on its axis.
+        (
+            prim(gpurt::gpu_types::PRIM_CONE),
+            Vec3::new(3.0, -5.0, 2.0),
+            5.0,
+            (0.0, 0.0),
+        ),
+        // Halfway between two of the patch's corners whose normals are +x and -x.
+        (
+            prim(gpurt::gpu_types::PRIM_TRIANGLE),
+            Vec3::new(0.0, -4.0, -1.0),
+            5.0,
+            edge,
+        ),
+    ];
+    for (i, (prim, origin, t, (u, v))) in cases.into_iter().enumerate() {
+        let ray = Ray {
+            origin,
+            dir: Vec3::Y,
+        };
+        let hit = Hit {
+            t,
+            prim,
+            u,
+            v,
+            cost: 0,
+        };
+        let s = surface(&b, &ray, &hit);
+        for n in [s.ng, s.ns] {
+            assert!(
+                n.is_finite() && (n.length() - 1.0).abs() < 1e-5,
+                "case {i}: {n}"
+            );
+        }
+    }
+}
