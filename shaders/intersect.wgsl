@@ -169,14 +169,22 @@ fn sign_of(c: f32) -> f32 {
     return select(-1.0, 1.0, c >= 0.0);
 }
 
+// v normalised, or zero where that is undefined: no length, or one whose square overflows.
+fn unit_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let l2 = dot(v, v);
+    return select(vec3<f32>(0.0), normalize(v), l2 > 0.0 && l2 <= 3.40282347e38);
+}
+
+// Zero where the normal is undefined (a hit point rounded onto a sphere's centre or a
+// cone's axis); `surface` then faces the ray.
 fn prim_normal(p: Prim, x: vec3<f32>) -> vec3<f32> {
     let kind = prim_kind(p);
     var n = vec3<f32>(0.0, 0.0, 1.0);
     if (SPHERES && kind == PRIM_SPHERE) {
-        n = normalize(x - p.p0);
+        n = unit_or_zero(x - p.p0);
     }
     if (TRIANGLES && kind == PRIM_TRIANGLE) {
-        n = normalize(cross(p.p1, p.p2));
+        n = unit_or_zero(cross(p.p1, p.p2));
     }
     if (CONES && kind == PRIM_CONE) {
         let axis = p.p1 - p.p0;
@@ -185,7 +193,7 @@ fn prim_normal(p: Prim, x: vec3<f32>) -> vec3<f32> {
         let k = (p.f1 - p.f0) / height;
         let q = x - p.p0;
         let radial = q - dot(q, a) * a;
-        n = normalize(normalize(radial) - k * a);
+        n = unit_or_zero(unit_or_zero(radial) - k * a);
     }
     if (BOXES && kind == PRIM_BOX) {
         let c = 0.5 * (p.p0 + p.p1);

@@ -30,10 +30,16 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
     } else {
         let p = load_prim(hit.prim);
         outward = prim_normal(p, point);
+        // Where the geometry has no normal, the surface faces the ray.
+        if (all(outward == vec3<f32>(0.0))) {
+            outward = -ray.dir;
+        }
         ns = outward;
         if (NORMALS && prim_kind(p) == PRIM_TRIANGLE && p.f1 >= 0.0) {
             let n = load_tri_normals(u32(p.f1));
-            ns = normalize((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2);
+            // Opposite vertex normals can cancel: the geometric normal stands in.
+            let s = unit_or_zero((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2);
+            ns = select(outward, s, any(s != vec3<f32>(0.0)));
         }
         material = prim_material(p);
     }

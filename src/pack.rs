@@ -6,7 +6,7 @@ use glam::Vec3;
 use crate::bvh::{self, FlatBvh};
 use crate::error::{Error, Result};
 use crate::gpu_types::*;
-use crate::scene::{Bounded, Bounds, Camera, Light, Scene};
+use crate::scene::{self, Bounded, Bounds, Camera, Light, Scene};
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
 /// surface, along the geometric normal; shading.md leaves the constant to us. It must clear
@@ -34,6 +34,11 @@ pub struct SceneBuffers {
     pub camera: Camera,
     pub background: Vec3,
     pub ambient: Option<Vec3>,
+}
+
+/// The three normals scaled to unit length, or `None` when one has no direction.
+fn unit3([a, b, c]: [Vec3; 3]) -> Option<[Vec3; 3]> {
+    Some([scene::unit(a)?, scene::unit(b)?, scene::unit(c)?])
 }
 
 fn kind_tag(kind: u32, material: u32) -> u32 {
@@ -69,8 +74,10 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
                 ..Default::default()
             },
             Bounded::Triangle(t) => {
-                let slot = match t.n.as_deref() {
-                    Some(&[n0, n1, n2]) => {
+                // Unit normals or none: one without a direction would make the interpolated
+                // shading normal 0 / 0 and the pixel NaN, so such a triangle is shaded flat.
+                let slot = match t.n.as_deref().copied().and_then(unit3) {
+                    Some([n0, n1, n2]) => {
                         tri_normals.push(GpuTriNormals {
                             n0,
                             n1,

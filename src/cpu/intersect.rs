@@ -194,11 +194,23 @@ pub fn intersect_plane(pl: &GpuPlane, ray: &Ray) -> f32 {
     (pl.d - pl.normal.dot(ray.origin)) / denom
 }
 
-/// Outward geometric normal of a bounded primitive at the hit point `x`.
+/// `v` normalised, or zero where that is undefined: no length, or one whose square
+/// overflows (`normalize` would give NaN or zero components).
+pub fn unit_or_zero(v: Vec3) -> Vec3 {
+    let l2 = v.dot(v);
+    if l2 > 0.0 && l2 <= f32::MAX {
+        v.normalize()
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// Outward geometric normal of a bounded primitive at the hit point `x`; zero where it
+/// is undefined (rounding can put a hit point on a sphere's centre or a cone's axis).
 pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
     match p.kind() {
-        PRIM_SPHERE => (x - p.p0).normalize(),
-        PRIM_TRIANGLE => p.p1.cross(p.p2).normalize(),
+        PRIM_SPHERE => unit_or_zero(x - p.p0),
+        PRIM_TRIANGLE => unit_or_zero(p.p1.cross(p.p2)),
         PRIM_CONE => {
             let axis = p.p1 - p.p0;
             let height = axis.length();
@@ -206,7 +218,7 @@ pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
             let k = (p.f1 - p.f0) / height;
             let q = x - p.p0;
             let radial = q - q.dot(a) * a;
-            (radial.normalize() - k * a).normalize()
+            unit_or_zero(unit_or_zero(radial) - k * a)
         }
         _ => {
             let c = 0.5 * (p.p0 + p.p1);

@@ -38,11 +38,20 @@ pub fn surface(b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
         (pl.normal, pl.normal, pl.material)
     } else {
         let p = &b.prims[hit.prim as usize];
-        let ng = intersect::prim_normal(p, point);
+        let mut ng = intersect::prim_normal(p, point);
+        // Where the geometry has no normal, the surface faces the ray.
+        if ng == Vec3::ZERO {
+            ng = -ray.dir;
+        }
         let mut ns = ng;
         if p.kind() == PRIM_TRIANGLE && p.f1 >= 0.0 {
             let n = &b.tri_normals[p.f1 as usize];
-            ns = ((1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2).normalize();
+            // Opposite vertex normals can cancel: the geometric normal stands in.
+            let s = (1.0 - hit.u - hit.v) * n.n0 + hit.u * n.n1 + hit.v * n.n2;
+            ns = intersect::unit_or_zero(s);
+            if ns == Vec3::ZERO {
+                ns = ng;
+            }
         }
         (ng, ns, p.material())
     };

@@ -61,9 +61,12 @@ impl MeshTransform {
         let nm = m.inverse().transpose();
         for t in tris {
             t.v = t.v.map(|p| m * p + self.translate);
-            if let Some(n) = &mut t.n {
-                **n = n.map(|v| (nm * v).normalize_or_zero());
-            }
+            // A normal the transform leaves without a direction makes the triangle flat.
+            t.n = t.n.take().and_then(|n| {
+                let unit = |v| super::unit(nm * v);
+                let [a, b, c] = *n;
+                Some(Box::new([unit(a)?, unit(b)?, unit(c)?]))
+            });
         }
     }
 }

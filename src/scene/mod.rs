@@ -328,6 +328,19 @@ impl Scene {
     }
 }
 
+/// `n` scaled to unit length, or `None` when it has no direction (zero or not finite).
+/// It is divided by its largest component first, so that a vector whose squared length
+/// overflows or underflows f32 (components beyond about 1e19 or below 1e-19) is still
+/// normalised: `Vec3::normalize` turns `(3e38, 0, 0)` into zero, and zero shading normals
+/// into NaN pixels.
+pub fn unit(n: Vec3) -> Option<Vec3> {
+    let largest = n.abs().max_element();
+    if !n.is_finite() || largest == 0.0 {
+        return None;
+    }
+    Some((n / largest).normalize())
+}
+
 /// What a file holds, from its extension (after stripping `.gz`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FileKind {
@@ -359,6 +372,13 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// Reads a file whole, decompressing it when it starts with the gzip magic bytes.
 pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decompress(raw, path, MAX_FILE_BYTES)
+}
+
+/// `raw` as `read_file` returns it for a file at `path`: decompressed when it starts with
+/// the gzip magic bytes (every member, as gzip does), unchanged otherwise. A file that
+/// decompresses to more than `limit` bytes is an error (`read_file` uses `MAX_FILE_BYTES`).
+pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
     if !raw.starts_with(&[0x1f, 0x8b]) {
         return Ok(raw);
     }
@@ -369,27 +389,32 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     let isize = raw.len().checked_sub(4).map_or(0, |i| {
         u32::from_le_bytes(raw[i..].try_into().unwrap()) as u64
     });
-    let hint = isize.min(raw.len() as u64 * 1032).min(MAX_FILE_BYTES);
+    let hint = isize.min(raw.len() as u64 * 1032).min(limit);
     let mut out = Vec::with_capacity(hint as usize + 64);
     // Member after member, as gzip does; zero bytes after the last member are padding
     // (tape blocks, `dd`), which `gzip -t` accepts too.
     let mut rest = &raw[..];
     while !rest.iter().all(|&b| b == 0) {
         let mut member = flate2::bufread::GzDecoder::new(rest);
-        let room = (MAX_FILE_BYTES + 1).saturating_sub(out.len() as u64);
+        let room = (limit + 1).saturating_sub(out.len() as u64);
         (&mut member)
             .take(room)
             .read_to_end(&mut out)
             .map_err(|e| Error::io(path, e))?;
-        if out.len() as u64 > MAX_FILE_BYTES {
+        if out.len() as u64 > limit {
             break;
         }
         rest = member.into_inner();
     }
-    if out.len() as u64 > MAX_FILE_BYTES {
+    if out.len() as u64 > limit {
+        let msg = if limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {
+            format!("decompresses to more than {} GiB", limit >> 30)
+        } else {
+            format!("decompresses to more than {limit} bytes")
+        };
         return Err(Error::Scene {
             file: path.display().to_string(),
-            msg: format!("decompresses to more than {} GiB", MAX_FILE_BYTES >> 30),
+            msg,
         });
     }
     Ok(out)

@@ -400,9 +400,23 @@ impl Parser<'_> {
             self.warn(tok, &format!("degenerate {kind} with {n} vertices dropped"));
             return Ok(());
         }
+        // Shading normals are kept as unit vectors; a patch with a normal that has no
+        // direction (zero) would shade to 0 / 0, so it is read as a flat polygon.
+        let mut zero = None;
+        for (i, n) in self.normals.iter_mut().enumerate() {
+            match super::unit(*n) {
+                Some(u) => *n = u,
+                None => zero = zero.or(Some(i + 1)),
+            }
+        }
+        if let Some(i) = zero {
+            let msg = format!("normal of patch vertex {i} is zero; the patch is shaded flat");
+            self.warn(tok, &msg);
+        }
+        let smooth = patch && zero.is_none();
         for &[a, b, c] in &self.tris {
             let (a, b, c) = (a as usize, b as usize, c as usize);
-            let n = patch.then(|| Box::new([self.normals[a], self.normals[b], self.normals[c]]));
+            let n = smooth.then(|| Box::new([self.normals[a], self.normals[b], self.normals[c]]));
             self.scene.triangles.push(Triangle {
                 v: [self.verts[a], self.verts[b], self.verts[c]],
                 n,

@@ -112,7 +112,7 @@ pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
                         ),
                     ));
                 };
-                poly_n.push(n.normalize_or_zero());
+                poly_n.push(super::unit(n).unwrap_or(Vec3::ZERO));
             }
         }
         // Shading normals only when every corner has a usable one; otherwise flat.

@@ -44,7 +44,7 @@ fn starts_with_solid(b: &[u8]) -> bool {
 }
 
 fn facet_normal(n: Vec3) -> Option<Box<[Vec3; 3]>> {
-    (n.is_finite() && n.length_squared() > 0.0).then(|| Box::new([n.normalize(); 3]))
+    super::unit(n).map(|n| Box::new([n; 3]))
 }
 
 fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {

@@ -4,6 +4,7 @@ mod bvh;
 mod cli;
 mod common;
 mod cpu;
+mod fuzzed;
 mod gallery;
 mod gpu;
 mod layout;

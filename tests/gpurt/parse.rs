@@ -1565,3 +1565,36 @@ fn gzip_padding_with_zeros_is_accepted() {
         }
     }
 }
+
+/// `decompress` is the one home of the gzip handling `read_file` does: the same bytes for
+/// a file and for its contents, plain bytes passed through, and output past the limit an
+/// error naming the file (the fuzz target runs it with a small limit).
+#[test]
+fn decompress_is_what_read_file_does_and_honours_its_limit() {
+    let dir = temp_dir("decompress");
+    let src = format!("{VIEW}f 1 1 1 1 0 1 0 1\ns 0 0 0 1\n");
+    let gz = [gzip(src.as_bytes()), gzip(b"# second member\n")].concat();
+    let path = dir.join("scene.nff.gz");
+    write(&path, &gz);
+    let read = scene::read_file(&path).unwrap();
+    assert_eq!(read, [src.as_bytes(), b"# second member\n"].concat());
+    assert_eq!(
+        scene::decompress(gz.clone(), &path, scene::MAX_FILE_BYTES).unwrap(),
+        read
+    );
+    let plain = src.clone().into_bytes();
+    assert_eq!(scene::decompress(plain.clone(), &path, 4).unwrap(), plain);
+    // Exactly the limit is fine; one byte more is not.
+    let n = read.len() as u64;
+    assert_eq!(scene::decompress(gz.clone(), &path, n).unwrap(), read);
+    let e = scene::decompress(gz.clone(), &path, n - 1).unwrap_err();
+    let shown = e.to_string();
+    assert!(
+        shown.contains("scene.nff.gz") && shown.contains(&format!("more than {} bytes", n - 1)),
+        "{shown}"
+    );
+    // A bomb: a megabyte of zeros in about a kilobyte, refused at 64 KiB.
+    let bomb = gzip(&vec![0; 1 << 20]);
+    assert!(bomb.len() < 8192, "{}", bomb.len());
+    assert!(scene::decompress(bomb, &path, 64 << 10).is_err());
+}
