@@ -371,7 +371,31 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
 /// Reads a file whole, decompressing it when it starts with the gzip magic bytes.
 pub fn read_file(path: &Path) -> Result<Vec<u8>> {
-    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    use std::io::Read;
+    let not_a_file = |what: &str| Error::Scene {
+        file: path.display().to_string(),
+        msg: format!("is {what}, not a regular file"),
+    };
+    // Checked before opening: opening a fifo waits for a writer, and a device such as
+    // /dev/zero never ends.
+    let meta = std::fs::metadata(path).map_err(|e| Error::io(path, e))?;
+    if meta.is_dir() {
+        return Err(not_a_file("a directory"));
+    }
+    if !meta.is_file() {
+        return Err(not_a_file("a device, fifo or socket"));
+    }
+    let mut raw = Vec::with_capacity(meta.len().min(MAX_FILE_BYTES) as usize);
+    // Bounded even so: a file that grows while it is read stops at the limit.
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut raw))
+        .map_err(|e| Error::io(path, e))?;
+    if raw.len() as u64 > MAX_FILE_BYTES {
+        return Err(Error::Scene {
+            file: path.display().to_string(),
+            msg: format!("is larger than {} GiB", MAX_FILE_BYTES >> 30),
+        });
+    }
     decompress(raw, path, MAX_FILE_BYTES)
 }
 

@@ -544,15 +544,19 @@ impl Parser<'_> {
                 ),
             ));
         }
-        let bytes = super::read_file(&path).map_err(|e| match e {
-            Error::Io { source, .. } => self.lx.error_at(
+        let bytes = super::read_file(&path).map_err(|e| {
+            let why = match e {
+                Error::Io { source, .. } => source.to_string(),
+                Error::Scene { msg, .. } => msg,
+                other => return other,
+            };
+            self.lx.error_at(
                 &ptok,
                 format!(
-                    "cannot read mesh file '{}': {source}",
+                    "cannot read mesh file '{}': {why}",
                     escape_controls(&path.display().to_string())
                 ),
-            ),
-            other => other,
+            )
         })?;
         let mesh = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
         self.scene.warnings.extend(mesh.warnings);

@@ -7,6 +7,7 @@ mod cpu;
 mod fuzzed;
 mod gallery;
 mod gpu;
+mod hostile;
 mod layout;
 mod parse;
 mod session;

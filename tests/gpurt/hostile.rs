@@ -1,0 +1,107 @@
+//! Hostile inputs: files that are not files. A scene or `mesh` path naming a directory, a
+//! device that never ends (/dev/zero), a fifo (opening one waits for a writer) or a scene
+//! instead of a mesh is refused with a clear error, at the `mesh` line where there is one,
+//! and never hangs or reads without bound.
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::Duration;
+
+use gpurt::scene::{self, nff};
+
+use crate::common::temp_dir;
+
+const VIEW: &str = "v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n";
+
+/// Runs `f` on another thread and fails the test if it takes more than 20 s (a read that
+/// waits on a fifo, or reads a device without end, would never return).
+fn within_time<T: Send + 'static>(what: &str, f: impl FnOnce() -> T + Send + 'static) -> T {
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(f());
+    });
+    rx.recv_timeout(Duration::from_secs(20))
+        .unwrap_or_else(|_| panic!("{what}: still reading after 20 s"))
+}
+
+/// A directory with the hostile entries: `dir.obj/`, `fifo.stl` (where `mkfifo` exists),
+/// `zero.stl` -> /dev/zero, and `scene.nff`, a scene that names itself as a mesh.
+fn hostile_dir() -> (PathBuf, bool) {
+    let dir = temp_dir("hostile");
+    std::fs::create_dir(dir.join("dir.obj")).unwrap();
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(dir.join("fifo.stl"))
+        .status()
+        .is_ok_and(|s| s.success());
+    if !fifo {
+        crate::common::skip("mkfifo is missing: the fifo cases do not run");
+    }
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.stl")).unwrap();
+    std::fs::write(dir.join("scene.nff"), format!("{VIEW}mesh scene.nff\n")).unwrap();
+    (dir, fifo)
+}
+
+fn parse_with_mesh(dir: &Path, mesh: &str) -> String {
+    let src = format!("{VIEW}mesh {mesh}\n");
+    let dir = dir.to_path_buf();
+    within_time(mesh, move || {
+        nff::parse(src.as_bytes(), "t.nff", &dir)
+            .map(|_| ())
+            .expect_err("refused")
+            .to_string()
+    })
+}
+
+#[test]
+fn mesh_lines_naming_what_is_not_a_mesh_file_are_refused_at_their_line() {
+    let (dir, fifo) = hostile_dir();
+    let mut cases = vec![
+        ("dir.obj", "is a directory, not a regular file"),
+        (
+            "zero.stl",
+            "is a device, fifo or socket, not a regular file",
+        ),
+        ("scene.nff", "must end in .stl or .obj"),
+        ("missing.stl", "cannot read mesh file"),
+    ];
+    if fifo {
+        cases.push((
+            "fifo.stl",
+            "is a device, fifo or socket, not a regular file",
+        ));
+    }
+    for (mesh, why) in cases {
+        let msg = parse_with_mesh(&dir, mesh);
+        assert!(
+            msg.starts_with("t.nff:3:6: ") && msg.contains(why),
+            "mesh {mesh}: {msg}"
+        );
+    }
+}
+
+#[test]
+fn scene_paths_naming_what_is_not_a_file_are_refused() {
+    let (dir, fifo) = hostile_dir();
+    let mut cases = vec!["dir.obj", "zero.stl"];
+    if fifo {
+        cases.push("fifo.stl");
+    }
+    for name in cases {
+        let path = dir.join(name);
+        let msg = within_time(name, move || {
+            scene::load(&path)
+                .map(|_| ())
+                .expect_err("refused")
+                .to_string()
+        });
+        assert!(msg.contains("not a regular file"), "{name}: {msg}");
+    }
+    // A scene naming itself as its mesh is refused by the mesh's kind: no chain of scenes.
+    let msg = scene::load(&dir.join("scene.nff"))
+        .map(|_| ())
+        .expect_err("refused");
+    assert!(
+        msg.to_string().contains("must end in .stl or .obj"),
+        "{msg}"
+    );
+}
