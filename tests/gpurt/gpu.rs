@@ -819,3 +819,63 @@ fn flat_bare_mesh_does_not_fight_its_ground() {
     let (_, stats) = check_scene(g, "flat.stl", &scene, &opts(&scene)).expect("agrees");
     assert_eq!(stats.pixels_over, 0, "{stats}");
 }
+
+/// Extreme but legal scenes: each one reads (degenerate shapes dropped or kept with a
+/// warning), renders to finite pixels on the CPU, and the GPU agrees with it.
+#[test]
+fn extreme_values_render_finite_and_match_cpu() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let view = "v from 0 -8 2 at 0 0 0 up 0 0 1 angle 50 hither 1e-6 resolution 64 64\n";
+    let lit = "l 3 -6 6\nf 0.8 0.6 0.4 0.7 0.3 20 0 1\n";
+    let cases = [
+        (
+            "tiny and huge spheres",
+            format!("{view}{lit}s 0 0 0 1e-30\ns 1e30 0 0 1e29\ns 0 3 0 1\ns 0 0 1e-30 1e-31\n"),
+        ),
+        (
+            "camera inside a sphere",
+            "v from 0 0 0 at 1 0 0 up 0 0 1 angle 60 resolution 64 64\nl 0 0 1\n\
+             f 0.8 0.8 0.8 0.8 0.2 10 0 1\ns 0 0 0 10\ns 3 0 0 1\n"
+                .to_string(),
+        ),
+        (
+            "every light inside closed glass",
+            format!(
+                "{view}l 0 0 1\nl 0.2 0 1.1\nf 1 1 1 0.1 0.2 30 0.9 1.5\ns 0 0 1 2\n\
+                 f 0.8 0.8 0.8 0.8 0 1 0 1\np 4 -10 -10 -1 10 -10 -1 10 10 -1 -10 10 -1\n"
+            ),
+        ),
+        (
+            "zero-area triangles",
+            format!(
+                "{view}{lit}p 3 0 0 0 1 1 1 2 2 2\np 3 1 1 1 1 1 1 1 1 1\n\
+                 pp 3 0 0 0 0 0 1 1 0 0 0 0 1 2 0 0 0 0 1\ns 0 2 0 1\n"
+            ),
+        ),
+        (
+            "degenerate cones and boxes",
+            format!(
+                "{view}{lit}c 0 0 0 1 0 0 0 1\nc 0 0 0 0 0 0 1 0\nc 1 0 0 -1 1 0 2 -0.5\n\
+                 aabb 1 -1 1 -1 1 -1\naabb 2 2 0 1 0 1\ns -2 0 0 0.5\n"
+            ),
+        ),
+    ];
+    let mut outcomes = Vec::new();
+    for (name, text) in &cases {
+        let scene = gpurt::scene::nff::parse(text.as_bytes(), "extreme.nff", Path::new("."))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(
+            !scene.spheres.is_empty() || !scene.triangles.is_empty() || !scene.cones.is_empty(),
+            "{name}: nothing left to render"
+        );
+        let o = RenderOptions {
+            width: 64,
+            height: 64,
+            ..RenderOptions::for_camera(&scene.camera)
+        };
+        outcomes.push(check_scene(g, name, &scene, &o));
+    }
+    check_all(outcomes);
+}

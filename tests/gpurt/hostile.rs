@@ -105,3 +105,24 @@ fn scene_paths_naming_what_is_not_a_file_are_refused() {
         "{msg}"
     );
 }
+
+/// Numbers that are not finite are refused where they stand, in every position a number
+/// takes: a sphere's radius, a cone's apex, a box bound, a light, a vertex.
+#[test]
+fn non_finite_numbers_are_refused_at_their_line_and_column() {
+    let cases = [
+        "s 0 0 0 nan\n",
+        "c 0 0 0 1 0 0 inf 1\n",
+        "aabb 0 1 0 1 0 -inf\n",
+        "l 1e999 0 0\n",
+        "p 3 0 0 0 1 0 0 0 NaN 0\n",
+    ];
+    for body in cases {
+        let src = format!("{VIEW}{body}");
+        let msg = nff::parse(src.as_bytes(), "t.nff", Path::new("."))
+            .map(|_| ())
+            .expect_err("refused")
+            .to_string();
+        assert!(msg.starts_with("t.nff:3:"), "{body:?}: {msg}");
+    }
+}
