@@ -11,7 +11,7 @@ pub mod render;
 mod resume;
 pub mod shaders;
 pub mod specialization;
-mod upload;
+pub(crate) mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
 pub use render::{

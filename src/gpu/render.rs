@@ -13,7 +13,6 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
-use wgpu::util::DeviceExt;
 
 use super::cut::{Cut, PIXEL_BYTES};
 use super::resume::{ResumePipelines, resume, resume_group_layout};
@@ -331,11 +330,12 @@ impl GpuRenderer {
         tile_slots: u32,
     ) -> Result<Bound> {
         scoped(device, "binding the frame", || {
-            let globals_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("globals"),
-                contents: bytemuck::bytes_of(globals),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            });
+            let globals_buf = upload::buffer_init(
+                device,
+                "globals",
+                bytemuck::bytes_of(globals),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            );
             let tile_stride = (size_of::<GpuTile>() as u32)
                 .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
             let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {

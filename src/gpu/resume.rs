@@ -7,10 +7,9 @@ use std::ops::Range;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use wgpu::util::DeviceExt;
-
 use super::render::{GpuScene, compile, read_mapped, scoped};
 use super::specialization::Specialization;
+use super::upload::buffer_init;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
@@ -79,11 +78,12 @@ pub(super) fn resume(
         use wgpu::BufferUsages as U;
         let (state, pending, pending_back, state_back, group) =
             scoped(device, "resuming pixels", || {
-                let list = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("resume pixels"),
-                    contents: bytemuck::cast_slice(chunk),
-                    usage: U::STORAGE,
-                });
+                let list = buffer_init(
+                    device,
+                    "resume pixels",
+                    bytemuck::cast_slice(chunk),
+                    U::STORAGE,
+                );
                 let state = buffer("resume state", state_bytes, U::STORAGE | U::COPY_SRC);
                 let pending = buffer("resume pending", 4, U::STORAGE | U::COPY_DST | U::COPY_SRC);
                 let pending_back = buffer("resume pending readback", 4, U::MAP_READ | U::COPY_DST);

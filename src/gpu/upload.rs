@@ -2,8 +2,6 @@
 //! as texture arrays, which grow by layers past one texture's size; the small rest as
 //! storage buffers), checked first against the device's limits.
 
-use wgpu::util::DeviceExt;
-
 use super::render::scoped;
 use crate::error::{Error, Result};
 use crate::gpu_types::TEXTURE_WIDTH;
@@ -46,13 +44,8 @@ pub(super) fn upload_scene(
     scene: &SceneBuffers,
     layer_rows: u32,
 ) -> Result<SceneData> {
-    let storage = |label: &str, bytes: &[u8]| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some(label),
-            contents: bytes,
-            usage: wgpu::BufferUsages::STORAGE,
-        })
-    };
+    let storage =
+        |label: &str, bytes: &[u8]| buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE);
     scoped(device, "uploading the scene", || {
         let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows);
         let nodes = texels("nodes", bytemuck::cast_slice(&scene.nodes));
@@ -71,6 +64,31 @@ pub(super) fn upload_scene(
             lights: storage("lights", non_empty(&scene.lights)),
         }
     })
+}
+
+/// A buffer holding `contents`: `DeviceExt::create_buffer_init` without its panic. On a
+/// lost device wgpu hands back an invalid buffer that cannot be mapped, and its helper
+/// unwraps the mapping; here the copy is skipped, and the error scope around the call
+/// (`scoped`) reports the invalid buffer as an error naming what was being done.
+pub(crate) fn buffer_init(
+    device: &wgpu::Device,
+    label: &str,
+    contents: &[u8],
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let align = wgpu::COPY_BUFFER_ALIGNMENT;
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: (contents.len() as u64).next_multiple_of(align).max(align),
+        usage,
+        mapped_at_creation: true,
+    });
+    // Every caller's contents are whole 4-byte words, as a mapped range must be.
+    if let Ok(mut view) = buffer.slice(..contents.len() as u64).get_mapped_range_mut() {
+        view.copy_from_slice(contents);
+    }
+    buffer.unmap();
+    buffer
 }
 
 /// Rows of `TEXTURE_WIDTH` texels that hold `bytes` (at least one).

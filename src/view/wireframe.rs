@@ -13,7 +13,6 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use image::RgbImage;
-use wgpu::util::DeviceExt;
 
 use super::readback::TextureReadback;
 use crate::error::{Error, Result};
@@ -295,11 +294,12 @@ impl Wireframe {
             } else {
                 points.iter().map(|p| p.to_array()).collect()
             };
-            let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("wireframe vertices"),
-                contents: bytemuck::cast_slice(&flat),
-                usage: wgpu::BufferUsages::VERTEX,
-            });
+            let vertices = crate::gpu::upload::buffer_init(
+                device,
+                "wireframe vertices",
+                bytemuck::cast_slice(&flat),
+                wgpu::BufferUsages::VERTEX,
+            );
             Wireframe {
                 pipeline,
                 bind_group,

@@ -879,3 +879,39 @@ fn extreme_values_render_finite_and_match_cpu() {
     }
     check_all(outcomes);
 }
+
+/// A device lost mid-render (destroyed here, between the upload and the trace, and again
+/// before an upload) ends the render with an error naming the GPU, never a panic or an
+/// image.
+#[test]
+fn a_lost_device_is_an_error_not_an_image() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let scene = features_scene("");
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let globals = frame::globals(&buffers, &opts(&scene));
+    let never = AtomicBool::new(false);
+
+    let (device, queue) = device_with(g, g.ctx.adapter.limits());
+    let renderer = GpuRenderer::new(&device, None).expect("shader module");
+    let uploaded = renderer
+        .upload(&device, &queue, &buffers, &globals)
+        .expect("uploads");
+    device.destroy();
+    let err = gpurt::gpu::trace(&device, &queue, &uploaded, &|_| {}, &never)
+        .map(|_| ())
+        .expect_err("a trace on a lost device fails");
+    println!("trace on a lost device: {err}");
+    assert!(err.to_string().starts_with("GPU error: "), "{err}");
+
+    let (device, queue) = device_with(g, g.ctx.adapter.limits());
+    let renderer = GpuRenderer::new(&device, None).expect("shader module");
+    device.destroy();
+    let err = renderer
+        .render(&device, &queue, &buffers, &globals, &|_| {}, &never)
+        .map(|_| ())
+        .expect_err("a render on a lost device fails");
+    println!("render on a lost device: {err}");
+    assert!(err.to_string().starts_with("GPU error: "), "{err}");
+}
