@@ -126,3 +126,33 @@ fn non_finite_numbers_are_refused_at_their_line_and_column() {
         assert!(msg.starts_with("t.nff:3:"), "{body:?}: {msg}");
     }
 }
+
+/// A hundred thousand copies of one triangle: the BVH builder must not crawl (obvhs took
+/// over 100 s on them; identical boxes are now split by median), and the image is finite.
+#[test]
+fn a_hundred_thousand_coincident_triangles_build_and_render() {
+    let mut src = String::from(VIEW);
+    for _ in 0..100_000 {
+        src.push_str("p 3 -1 0 -1 1 0 -1 0 0 1\n");
+    }
+    let image = within_time("coincident triangles", move || {
+        let scene = nff::parse(src.as_bytes(), "t.nff", Path::new(".")).expect("parses");
+        assert_eq!(scene.triangles.len(), 100_000);
+        let buffers = gpurt::pack::pack(scene).expect("packs");
+        let opts = gpurt::frame::RenderOptions {
+            width: 8,
+            height: 8,
+            ..gpurt::frame::RenderOptions::for_camera(&buffers.camera)
+        };
+        let globals = gpurt::frame::globals(&buffers, &opts);
+        let never = std::sync::atomic::AtomicBool::new(false);
+        gpurt::cpu::render(&buffers, &globals, &|_| {}, &never)
+            .expect("renders")
+            .0
+    });
+    assert!(image.pixels.iter().flatten().all(|v| v.is_finite()));
+    assert!(
+        image.pixels.iter().flatten().any(|&v| v > 0.0),
+        "the triangle shows"
+    );
+}
