@@ -112,22 +112,23 @@ fn slabs(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>) ->
 // box face, and boxes whose near face lies exactly at a hit, overlap on both renderers.
 const SLAB_WIDEN: f32 = 1.0000152587890625;
 
-fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+// Where the ray enters and leaves the box, clamped to [tmin, tmax]: (near, far).
+fn slab(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> vec2<f32> {
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let near = max(max_element(min(t0, t1)), tmin);
-    let far = min(min_element(max(t0, t1)), tmax);
-    return near <= far * SLAB_WIDEN;
+    return vec2<f32>(max(max_element(min(t0, t1)), tmin), min(min_element(max(t0, t1)), tmax));
+}
+
+fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> bool {
+    let s = slab(lo, hi, origin, inv_dir, tmin, tmax);
+    return s.x <= s.y * SLAB_WIDEN;
 }
 
 // `overlaps`, returning where the ray enters the box (clamped to tmin), NO_HIT when it
 // does not overlap: the pairs traversal enters the nearer child first.
 fn slab_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = max(max_element(min(t0, t1)), tmin);
-    let far = min(min_element(max(t0, t1)), tmax);
-    return select(NO_HIT, near, near <= far * SLAB_WIDEN);
+    let s = slab(lo, hi, origin, inv_dir, tmin, tmax);
+    return select(NO_HIT, s.x, s.x <= s.y * SLAB_WIDEN);
 }
 
 // Takes the primitive's index rather than the primitive, so that only the texels its

@@ -122,14 +122,14 @@ pub fn slabs(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3) -> Vec2 {
 /// overlapping on both renderers instead of depending on the last bits of arithmetic.
 pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
 
-/// Whether the ray's interval `[tmin, tmax]` overlaps the box (BVH node test).
+/// Where the ray enters and leaves the box, clamped to `[tmin, tmax]`: `(near, far)`.
 ///
-/// The hottest function of the CPU renderer. Its minima and maxima are plain
-/// comparisons, not `f32::min`/`max`, whose NaN rules cost extra instructions on x86:
-/// no NaN can arise here (`safe_inverse` keeps the inverse direction finite, and node
-/// bounds are finite), so the result is the shader's to the bit.
+/// The hottest code of the CPU renderer. Its minima and maxima are plain comparisons, not
+/// `f32::min`/`max`, whose NaN rules cost extra instructions on x86: no NaN can arise
+/// here (`safe_inverse` keeps the inverse direction finite, and node bounds are finite),
+/// so the result is the shader's to the bit.
 #[inline]
-pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> bool {
+pub fn slab(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> (f32, f32) {
     let min = |a: f32, b: f32| if a < b { a } else { b };
     let max = |a: f32, b: f32| if a > b { a } else { b };
     let t0 = (lo - origin) * inv_dir;
@@ -143,6 +143,13 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
         min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)),
         tmax,
     );
+    (near, far)
+}
+
+/// Whether the ray's interval `[tmin, tmax]` overlaps the box (BVH node test).
+#[inline]
+pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> bool {
+    let (near, far) = slab(lo, hi, origin, inv_dir, tmin, tmax);
     near <= far * SLAB_WIDEN
 }
 
@@ -150,18 +157,7 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
 /// it does not overlap: the pairs traversal enters the nearer child first.
 #[inline]
 pub fn slab_entry(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax: f32) -> f32 {
-    let min = |a: f32, b: f32| if a < b { a } else { b };
-    let max = |a: f32, b: f32| if a > b { a } else { b };
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = max(
-        max(max(min(t0.x, t1.x), min(t0.y, t1.y)), min(t0.z, t1.z)),
-        tmin,
-    );
-    let far = min(
-        min(min(max(t0.x, t1.x), max(t0.y, t1.y)), max(t0.z, t1.z)),
-        tmax,
-    );
+    let (near, far) = slab(lo, hi, origin, inv_dir, tmin, tmax);
     if near <= far * SLAB_WIDEN {
         near
     } else {
