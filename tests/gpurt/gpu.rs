@@ -447,19 +447,24 @@ fn with_triangles(n: usize) -> Scene {
     scene
 }
 
-fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
+/// Renders `scene` at the test size with `renderer` on `device`.
+fn render_with(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    renderer: &GpuRenderer,
+    scene: &Scene,
+) -> gpurt::Result<()> {
     let buffers = pack::pack(scene.clone()).expect("packs");
     let globals = frame::globals(&buffers, &opts(scene));
-    let renderer = GpuRenderer::new(device, None).expect("shader module");
+    let never = AtomicBool::new(false);
     renderer
-        .render(
-            device,
-            queue,
-            &buffers,
-            &globals,
-            &|_| {},
-            &AtomicBool::new(false),
-        )
+        .render(device, queue, &buffers, &globals, &|_| {}, &never)
+        .map(|_| ())
+}
+
+fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
+    let renderer = GpuRenderer::new(device, None).expect("shader module");
+    render_with(device, queue, &renderer, scene)
         .expect_err("oversized scene must be refused")
         .to_string()
 }
@@ -495,18 +500,8 @@ fn oversized_scene_is_refused_with_the_limit_named() {
     );
     // Triangle normals travel in a texture array, like nodes and primitives: 30000
     // triangles' normals (1.4 MiB) render under that 1 MiB storage limit.
-    let buffers = pack::pack(with_triangles(30_000)).expect("packs");
-    let globals = frame::globals(&buffers, &opts(&features_scene("")));
-    GpuRenderer::new(&device, None)
-        .expect("shader module")
-        .render(
-            &device,
-            &queue,
-            &buffers,
-            &globals,
-            &|_| {},
-            &AtomicBool::new(false),
-        )
+    let renderer = GpuRenderer::new(&device, None).expect("shader module");
+    render_with(&device, &queue, &renderer, &with_triangles(30_000))
         .expect("normals beyond a storage binding render");
     // Nodes and primitives travel as texture arrays 4096 texels wide.
     let (device, queue) = device_with(
@@ -530,20 +525,10 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             ..g.ctx.adapter.limits()
         },
     );
-    let buffers = pack::pack(with_triangles(30_000)).expect("packs");
-    let globals = frame::globals(&buffers, &opts(&features_scene("")));
     let renderer = GpuRenderer::new(&device, None)
         .expect("shader module")
         .with_layer_rows(2);
-    let msg = renderer
-        .render(
-            &device,
-            &queue,
-            &buffers,
-            &globals,
-            &|_| {},
-            &AtomicBool::new(false),
-        )
+    let msg = render_with(&device, &queue, &renderer, &with_triangles(30_000))
         .expect_err("a scene over more layers than allowed must be refused")
         .to_string();
     assert!(
