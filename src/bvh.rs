@@ -43,10 +43,8 @@ pub fn build(aabbs: &[Aabb]) -> FlatBvh {
     if aabbs.is_empty() {
         return FlatBvh::default();
     }
-    let flat = if mostly_coincident(aabbs) {
-        median_split(aabbs, MAX_LEAF_PRIMS as usize)
-    } else if aabbs.len() <= BUILD_CHUNK {
-        flatten(&build_obvhs(aabbs), aabbs)
+    let flat = if aabbs.len() <= BUILD_CHUNK {
+        build_group(aabbs)
     } else {
         median_split(aabbs, BUILD_CHUNK)
     };
@@ -54,6 +52,16 @@ pub fn build(aabbs: &[Aabb]) -> FlatBvh {
         flat
     } else {
         median_split(aabbs, MAX_LEAF_PRIMS as usize)
+    }
+}
+
+/// One group's tree: obvhs' build, or median splits where the boxes are mostly
+/// coincident.
+fn build_group(aabbs: &[Aabb]) -> FlatBvh {
+    if mostly_coincident(aabbs) {
+        median_split(aabbs, MAX_LEAF_PRIMS as usize)
+    } else {
+        flatten(&build_obvhs(aabbs), aabbs)
     }
 }
 
@@ -241,11 +249,7 @@ fn median_split(aabbs: &[Aabb], chunk: usize) -> FlatBvh {
 fn append_subtree(out: &mut FlatBvh, aabbs: &[Aabb], range: std::ops::Range<usize>, depth: usize) {
     let ids = out.order[range.clone()].to_vec();
     let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabbs[i as usize]).collect();
-    let sub = if mostly_coincident(&sub_aabbs) {
-        median_split(&sub_aabbs, MAX_LEAF_PRIMS as usize)
-    } else {
-        flatten(&build_obvhs(&sub_aabbs), &sub_aabbs)
-    };
+    let sub = build_group(&sub_aabbs);
     drop(sub_aabbs);
     let base = out.nodes.len() as u32;
     out.nodes.extend(sub.nodes.iter().map(|n| GpuNode {
