@@ -1,6 +1,6 @@
 //! BVH build time on the two largest shared SPD scenes (`bvh::build` on primitive bounds,
-//! and the whole `pack::pack`, which adds the primitive reordering and buffer filling),
-//! and CPU render throughput in rays per second on small scenes.
+//! at both qualities, and the whole `pack::pack`, which adds the primitive reordering and
+//! buffer filling), and CPU render throughput in rays per second on small scenes.
 //! `cargo bench --bench render`; shared scenes are skipped when ../shared is missing.
 
 use std::hint::black_box;
@@ -62,9 +62,12 @@ fn bvh_build(c: &mut Criterion) {
         };
         let bounds = prim_bounds(&scene);
         g.throughput(Throughput::Elements(bounds.len() as u64));
-        g.bench_function(BenchmarkId::new("bvh::build", name), |b| {
-            b.iter(|| gpurt::bvh::build(black_box(&bounds)))
-        });
+        for quality in [gpurt::bvh::Quality::Medium, gpurt::bvh::Quality::High] {
+            let id = format!("bvh::build {}", quality.name());
+            g.bench_function(BenchmarkId::new(id, name), |b| {
+                b.iter(|| gpurt::bvh::build(black_box(&bounds), quality))
+            });
+        }
         g.bench_function(BenchmarkId::new("pack::pack", name), |b| {
             b.iter_batched(
                 || scene.clone(),

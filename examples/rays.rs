@@ -51,7 +51,8 @@ fn main() -> anyhow::Result<()> {
     let size: u32 = args.next().map_or(Ok(512), |s| s.parse())?;
     let out = args.next().map(PathBuf::from);
 
-    let buffers = gpurt::run::prepare(&scene, None)?.buffers;
+    let buffers =
+        gpurt::run::prepare(&scene, None, |c| u64::from(c.width) * u64::from(c.height))?.buffers;
     anyhow::ensure!(
         buffers.planes.is_empty()
             && buffers.prims.iter().all(|p| p.kind() != PRIM_BOX)

@@ -14,6 +14,7 @@ use crate::film::Format;
 use crate::frame::{self, RenderOptions};
 use crate::gpu::GpuContext;
 use crate::run;
+use crate::scene::Camera;
 use crate::session::{CpuRenderer, GpuSession, Renderer};
 
 /// The name an image of `scene` gets: its file name without `.gz` and the scene's own
@@ -176,12 +177,9 @@ fn render_one(
     session: &mut Option<GpuSession>,
     cancel: &AtomicBool,
 ) -> Result<(u64, Vec<String>)> {
-    let prepared = run::prepare(scene, opts.view.as_deref())?;
-    let buffers = Arc::new(prepared.buffers);
-    let defaults = RenderOptions::for_camera(&buffers.camera);
-    let frame = frame::globals(
-        &buffers,
-        &RenderOptions {
+    let options = |camera: &Camera| {
+        let defaults = RenderOptions::for_camera(camera);
+        RenderOptions {
             width: opts.width.unwrap_or(defaults.width),
             height: opts.height.unwrap_or(defaults.height),
             spp: opts.spp,
@@ -189,8 +187,11 @@ fn render_one(
             ambient: opts.ambient,
             aov: opts.aov,
             seed: opts.seed,
-        },
-    );
+        }
+    };
+    let prepared = run::prepare(scene, opts.view.as_deref(), |c| options(c).samples())?;
+    let buffers = Arc::new(prepared.buffers);
+    let frame = frame::globals(&buffers, &options(&buffers.camera));
     let mut cpu;
     let renderer: &mut dyn Renderer = match (gpu, session.as_mut()) {
         (Some(_), Some(s)) => {

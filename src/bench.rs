@@ -19,6 +19,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+use crate::bvh;
 use crate::error::Result;
 use crate::frame::{self, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
@@ -26,6 +27,7 @@ use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_PAIRS};
 use crate::outln;
 use crate::pack;
 use crate::run;
+use crate::scene::Camera;
 
 /// What to measure.
 pub struct BenchConfig {
@@ -133,7 +135,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     );
     outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for path in &config.scenes {
-        let prepared = run::prepare(path, None)?;
+        // Each row traces the tree a render of its size and samples would get: one build
+        // per BVH quality the rows need.
+        let mut builds: Vec<run::Prepared> = Vec::new();
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -141,13 +145,30 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         let name = name.split('.').next().unwrap_or_default().to_string();
         for &(width, height) in &config.sizes {
             for &spp in &config.spps {
-                let opts = RenderOptions {
+                let with_camera = |camera: &Camera| RenderOptions {
                     width,
                     height,
                     spp,
                     max_depth: config.depth,
-                    ..RenderOptions::for_camera(&prepared.buffers.camera)
+                    ..RenderOptions::for_camera(camera)
                 };
+                let wanted = |b: &run::Prepared| {
+                    let samples = with_camera(&b.buffers.camera).samples();
+                    b.buffers.bvh_quality == bvh::Quality::for_work(b.buffers.prims.len(), samples)
+                };
+                let prepared = match builds.iter().position(wanted) {
+                    Some(i) => &builds[i],
+                    None => {
+                        let b = run::prepare(path, None, |c| with_camera(c).samples())?;
+                        eprintln!(
+                            "  {name}: BVH built at {} quality for {width}x{height}, {spp} spp",
+                            b.buffers.bvh_quality.name()
+                        );
+                        builds.push(b);
+                        &builds[builds.len() - 1]
+                    }
+                };
+                let opts = with_camera(&prepared.buffers.camera);
                 let globals = frame::globals(&prepared.buffers, &opts);
                 let gpu = match (&ctx, &renderer) {
                     (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),

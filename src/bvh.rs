@@ -38,31 +38,76 @@ pub fn aabb(b: Bounds) -> Aabb {
     }
 }
 
+/// How much work obvhs puts into a tree: `High` is its slowest, best build, `Medium`
+/// about 5 times faster to build for trees that trace 8 to 20% slower.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    Medium,
+    High,
+}
+
+impl Quality {
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Medium => "medium",
+            Quality::High => "high",
+        }
+    }
+
+    /// The build that makes a render of `samples` camera samples (pixels times samples
+    /// per pixel, over all its frames) over `prims` primitives fastest from start to end:
+    /// `High` for small scenes, where it costs at most 45 ms, and for renders of at least
+    /// `HIGH_QUALITY_SAMPLES_PER_PRIM` samples per primitive, where the faster tracing
+    /// repays the slower build on machines without a GPU (docs/bvh.md has the figures).
+    pub fn for_work(prims: usize, samples: u64) -> Quality {
+        if prims <= THOROUGH_BUILD_MAX_PRIMS
+            || samples >= HIGH_QUALITY_SAMPLES_PER_PRIM.saturating_mul(prims as u64)
+        {
+            Quality::High
+        } else {
+            Quality::Medium
+        }
+    }
+}
+
+/// Samples per primitive from which `Quality::High` pays for itself. Measured on two cores
+/// (mount-9, 512x512): the high build takes 1.2 s longer and saves 0.024 s of tracing
+/// for every 262 144 samples on the CPU backend (break-even at 25 samples a primitive)
+/// and 0.073 s on lavapipe (8). A fast GPU traces so quickly that it would need about
+/// 1 600, but its host builds quickly too, and every frame of a view gains.
+pub const HIGH_QUALITY_SAMPLES_PER_PRIM: u64 = 32;
+
 /// Builds a BVH over primitive bounds. An empty input gives an empty tree.
-pub fn build(aabbs: &[Aabb]) -> FlatBvh {
+pub fn build(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
     if aabbs.is_empty() {
         return FlatBvh::default();
     }
     let flat = if aabbs.len() <= BUILD_CHUNK {
-        build_group(aabbs)
+        build_group(aabbs, quality)
     } else {
-        median_split(aabbs, BUILD_CHUNK)
+        median_split(aabbs, BUILD_CHUNK, quality)
     };
     if flat.depth < TRAVERSAL_STACK {
         flat
     } else {
-        median_split(aabbs, MAX_LEAF_PRIMS as usize)
+        median_leaves(aabbs)
     }
 }
 
 /// One group's tree: obvhs' build, or median splits where the boxes are mostly
 /// coincident.
-fn build_group(aabbs: &[Aabb]) -> FlatBvh {
+fn build_group(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
     if mostly_coincident(aabbs) {
-        median_split(aabbs, MAX_LEAF_PRIMS as usize)
+        median_leaves(aabbs)
     } else {
-        flatten(&build_obvhs(aabbs), aabbs)
+        flatten(&build_obvhs(aabbs, quality), aabbs)
     }
+}
+
+/// A balanced tree by object median splits all the way down to leaves.
+fn median_leaves(aabbs: &[Aabb]) -> FlatBvh {
+    // Groups of MAX_LEAF_PRIMS are leaves, so obvhs (and its quality) is never called.
+    median_split(aabbs, MAX_LEAF_PRIMS as usize, Quality::Medium)
 }
 
 /// Whether one box repeats a thousand times or more, judged on up to 1024 boxes spread
@@ -95,17 +140,17 @@ fn mostly_coincident(aabbs: &[Aabb]) -> bool {
 /// peak of the whole load; docs/bvh.md).
 pub const BUILD_CHUNK: usize = 1 << 19;
 
-/// Scenes up to this many primitives get obvhs' most thorough build: at about 2 us a
-/// primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
-/// (0.80 s against 0.92 s). Larger scenes get the medium build, about 4 times faster to
-/// build (mount-9: 0.29 s against 1.46 s) for a few percent slower tracing.
+/// Scenes up to this many primitives always get obvhs' most thorough build: at about 2 us
+/// a primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
+/// (0.80 s against 0.92 s). Larger scenes get it when the render is long enough to repay
+/// it (`Quality::for_work`); the medium build is about 5 times faster to build (mount-9:
+/// 0.29 s against 1.46 s on two cores).
 pub const THOROUGH_BUILD_MAX_PRIMS: usize = 20_000;
 
-fn build_obvhs(aabbs: &[Aabb]) -> Bvh2 {
-    let quality = if aabbs.len() <= THOROUGH_BUILD_MAX_PRIMS {
-        BvhBuildParams::very_slow_build()
-    } else {
-        BvhBuildParams::medium_build()
+fn build_obvhs(aabbs: &[Aabb], quality: Quality) -> Bvh2 {
+    let quality = match quality {
+        Quality::High => BvhBuildParams::very_slow_build(),
+        Quality::Medium => BvhBuildParams::medium_build(),
     };
     let params = BvhBuildParams {
         max_prims_per_leaf: MAX_LEAF_PRIMS,
@@ -188,7 +233,7 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
 /// A tree by object median on the widest centroid axis down to ranges of at most `chunk`
 /// primitives: leaves where `chunk` is `MAX_LEAF_PRIMS` (a balanced tree, depth <= log2(n)
 /// + 1), else subtrees built by obvhs, each over its own range.
-fn median_split(aabbs: &[Aabb], chunk: usize) -> FlatBvh {
+fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
     let bound = |i: u32| {
         let b = &aabbs[i as usize];
         Bounds {
@@ -209,7 +254,7 @@ fn median_split(aabbs: &[Aabb], chunk: usize) -> FlatBvh {
             out.nodes[p].offset = here as u32;
         }
         if hi - lo > MAX_LEAF_PRIMS as usize && hi - lo <= chunk {
-            append_subtree(&mut out, aabbs, lo..hi, depth);
+            append_subtree(&mut out, aabbs, lo..hi, depth, quality);
             continue;
         }
         out.depth = out.depth.max(depth);
@@ -246,10 +291,16 @@ fn median_split(aabbs: &[Aabb], chunk: usize) -> FlatBvh {
 /// Builds the primitives `out.order[range]` with obvhs and appends the flattened subtree
 /// at the end of `out.nodes` (its root at depth `depth`), reordering that range as its
 /// leaves hold them.
-fn append_subtree(out: &mut FlatBvh, aabbs: &[Aabb], range: std::ops::Range<usize>, depth: usize) {
+fn append_subtree(
+    out: &mut FlatBvh,
+    aabbs: &[Aabb],
+    range: std::ops::Range<usize>,
+    depth: usize,
+    quality: Quality,
+) {
     let ids = out.order[range.clone()].to_vec();
     let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabbs[i as usize]).collect();
-    let sub = build_group(&sub_aabbs);
+    let sub = build_group(&sub_aabbs, quality);
     drop(sub_aabbs);
     let base = out.nodes.len() as u32;
     out.nodes.extend(sub.nodes.iter().map(|n| GpuNode {
@@ -323,9 +374,10 @@ mod tests {
     fn obvhs_and_median_trees_are_well_formed() {
         for n in [1, 2, 3, 5, 100, 1000] {
             let b = unit_boxes(n);
-            let t = build(&b);
-            check(&t, &b);
-            let m = median_split(&b, MAX_LEAF_PRIMS as usize);
+            for quality in [Quality::Medium, Quality::High] {
+                check(&build(&b, quality), &b);
+            }
+            let m = median_leaves(&b);
             check(&m, &b);
             assert!(m.depth <= (n as f64).log2().ceil() as usize + 1);
         }
@@ -354,7 +406,7 @@ mod tests {
     fn trees_built_in_groups_are_well_formed() {
         for (n, chunk) in [(5, 4), (1000, 64), (5000, 300), (4097, 4096)] {
             let b = unit_boxes(n);
-            let t = median_split(&b, chunk);
+            let t = median_split(&b, chunk, Quality::Medium);
             check(&t, &b);
             assert_eq!(t.depth, walked_depth(&t), "{n} boxes in groups of {chunk}");
             assert!(t.nodes.len() < 2 * n, "{} nodes", t.nodes.len());
@@ -374,13 +426,24 @@ mod tests {
         assert!(mostly_coincident(&b));
         assert!(!mostly_coincident(&unit_boxes(100_000)));
         let start = std::time::Instant::now();
-        let t = build(&b);
+        let t = build(&b, Quality::Medium);
         assert!(start.elapsed().as_secs_f64() < 5.0, "{:?}", start.elapsed());
         check(&t, &b);
     }
 
     #[test]
+    fn long_renders_and_small_scenes_get_the_high_quality_build() {
+        let (small, large) = (THOROUGH_BUILD_MAX_PRIMS, 500_000);
+        assert_eq!(Quality::for_work(small, 1), Quality::High);
+        assert_eq!(Quality::for_work(large, 512 * 512), Quality::Medium);
+        let enough = HIGH_QUALITY_SAMPLES_PER_PRIM * large as u64;
+        assert_eq!(Quality::for_work(large, enough - 1), Quality::Medium);
+        assert_eq!(Quality::for_work(large, enough), Quality::High);
+        assert_eq!(Quality::for_work(usize::MAX, u64::MAX - 1), Quality::Medium);
+    }
+
+    #[test]
     fn empty_input_gives_empty_tree() {
-        assert!(build(&[]).nodes.is_empty());
+        assert!(build(&[], Quality::High).nodes.is_empty());
     }
 }

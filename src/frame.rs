@@ -33,6 +33,11 @@ pub struct RenderOptions {
 }
 
 impl RenderOptions {
+    /// Camera samples the frame traces: pixels times samples per pixel.
+    pub fn samples(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height) * u64::from(self.spp)
+    }
+
     /// The camera's own resolution and the defaults: `DEFAULT_SPP`, `DEFAULT_DEPTH`, the
     /// scene's ambient, colour output.
     pub fn for_camera(camera: &Camera) -> Self {

@@ -411,7 +411,14 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         .transpose()?;
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(&args.scene, args.view.as_deref())?;
+    } = run::prepare(&args.scene, args.view.as_deref(), |camera| {
+        // Quick to the first image: the build that suits one frame at the window's size.
+        let (w, h) = (
+            args.width.unwrap_or(camera.width),
+            args.height.unwrap_or(camera.height),
+        );
+        u64::from(w) * u64::from(h)
+    })?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -507,7 +514,9 @@ fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<
     let cancel = cancel_on_signals();
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(scene, args.view.as_deref())?;
+    } = run::prepare(scene, args.view.as_deref(), |camera| {
+        render_options(args, camera).samples() / u64::from(shard.count)
+    })?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -850,7 +859,9 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         warnings,
         parse_time,
         build_time,
-    } = run::prepare(scene_path, args.view.as_deref())?;
+    } = run::prepare(scene_path, args.view.as_deref(), |camera| {
+        render_options(&args, camera).samples()
+    })?;
     for w in &warnings {
         eprintln!("gpurt: warning: {w}");
     }
@@ -967,8 +978,9 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
         );
         eprintln!("parse       {:.3} s", parse_time.as_secs_f64());
         eprintln!(
-            "build       {:.3} s (BVH + packing)",
-            build_time.as_secs_f64()
+            "build       {:.3} s (BVH, {} quality, + packing)",
+            build_time.as_secs_f64(),
+            buffers.bvh_quality.name()
         );
         for line in &report {
             eprintln!("{line}");

@@ -29,6 +29,8 @@ pub struct SceneBuffers {
     pub bounds: Bounds,
     pub epsilon: f32,
     pub bvh_depth: usize,
+    /// The build the BVH got (for the render it was packed for).
+    pub bvh_quality: bvh::Quality,
     /// The scene's camera, background and `am` (`None`: the default), kept here so that
     /// the `Scene` can be dropped once packed.
     pub camera: Camera,
@@ -45,10 +47,17 @@ fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
-/// Flattens a scene, consuming it: its primitives are freed once packed, before the
-/// BVH is built, so that the largest scenes do not hold two copies of their geometry
-/// at the peak. Fails only on scenes beyond the layout's limits.
+/// Flattens a scene for one frame at its camera's resolution and one sample a pixel.
 pub fn pack(scene: Scene) -> Result<SceneBuffers> {
+    let samples = u64::from(scene.camera.width) * u64::from(scene.camera.height);
+    pack_for(scene, samples)
+}
+
+/// Flattens a scene, consuming it, with the BVH a render of `samples` camera samples
+/// should get (`bvh::Quality::for_work`): its primitives are freed once packed, before
+/// the BVH is built, so that the largest scenes do not hold two copies of their geometry
+/// at the peak. Fails only on scenes beyond the layout's limits.
+pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
         msg,
@@ -146,11 +155,12 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
     let lights = pack_lights(&scene.lights);
     let (camera, background, ambient) = (scene.camera.clone(), scene.background, scene.ambient);
     drop(scene);
+    let quality = bvh::Quality::for_work(aabbs.len(), samples);
     let FlatBvh {
         nodes,
         order,
         depth,
-    } = bvh::build(&aabbs);
+    } = bvh::build(&aabbs, quality);
     drop(aabbs);
     let prims = order.iter().map(|&i| prims[i as usize]).collect();
     Ok(SceneBuffers {
@@ -163,6 +173,7 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
         bounds,
         epsilon,
         bvh_depth: depth,
+        bvh_quality: quality,
         camera,
         background,
         ambient,

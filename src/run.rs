@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
-use crate::scene;
+use crate::scene::{self, Camera};
 use crate::session::Renderer;
 
 /// A scene read and packed, with the time each step took and the reader's warnings (the
@@ -23,8 +23,13 @@ pub struct Prepared {
 }
 
 /// Reads and packs the scene at `path`, with the camera of the NFF `v` block in `view`
-/// when one is given (a view found in `gpurt view`, printed with its C key).
-pub fn prepare(path: &Path, view: Option<&Path>) -> Result<Prepared> {
+/// when one is given (a view found in `gpurt view`, printed with its C key), for a
+/// render of `samples(camera)` camera samples (which picks the BVH's build quality).
+pub fn prepare(
+    path: &Path,
+    view: Option<&Path>,
+    samples: impl FnOnce(&Camera) -> u64,
+) -> Result<Prepared> {
     let t0 = Instant::now();
     let mut scene = scene::load(path)?;
     if let Some(view) = view {
@@ -32,7 +37,8 @@ pub fn prepare(path: &Path, view: Option<&Path>) -> Result<Prepared> {
     }
     let t1 = Instant::now();
     let warnings = std::mem::take(&mut scene.warnings);
-    let buffers = pack::pack(scene)?;
+    let samples = samples(&scene.camera);
+    let buffers = pack::pack_for(scene, samples)?;
     Ok(Prepared {
         buffers,
         warnings,

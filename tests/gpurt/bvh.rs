@@ -426,23 +426,26 @@ fn bvh_build_orders_every_primitive_once_with_exact_bounds() {
         let scene = scene::load(&path).unwrap();
         let bounds: Vec<Bounds> = scene.bounded_prims().map(|p| p.bounds()).collect();
         let aabbs: Vec<_> = bounds.iter().map(|&b| bvh::aabb(b)).collect();
-        let flat = bvh::build(&aabbs);
-        let mut sorted = flat.order.clone();
-        sorted.sort_unstable();
-        assert!(
-            sorted.iter().enumerate().all(|(i, &o)| o as usize == i),
-            "{name}: order is not a permutation"
-        );
-        for (i, n) in flat.nodes.iter().enumerate() {
-            let inside = |b: &Bounds| n.min.cmple(b.min).all() && n.max.cmpge(b.max).all();
-            if n.count() > 0 {
-                for k in n.offset..n.offset + n.count() {
-                    let b = &bounds[flat.order[k as usize] as usize];
-                    assert!(inside(b), "{name}: leaf {i} misses prim {k}");
+        for quality in [bvh::Quality::Medium, bvh::Quality::High] {
+            let name = format!("{name} ({} quality)", quality.name());
+            let flat = bvh::build(&aabbs, quality);
+            let mut sorted = flat.order.clone();
+            sorted.sort_unstable();
+            assert!(
+                sorted.iter().enumerate().all(|(i, &o)| o as usize == i),
+                "{name}: order is not a permutation"
+            );
+            for (i, n) in flat.nodes.iter().enumerate() {
+                let inside = |b: &Bounds| n.min.cmple(b.min).all() && n.max.cmpge(b.max).all();
+                if n.count() > 0 {
+                    for k in n.offset..n.offset + n.count() {
+                        let b = &bounds[flat.order[k as usize] as usize];
+                        assert!(inside(b), "{name}: leaf {i} misses prim {k}");
+                    }
                 }
             }
+            assert!(flat.depth < TRAVERSAL_STACK, "{name}: depth {}", flat.depth);
         }
-        assert!(flat.depth < TRAVERSAL_STACK, "{name}: depth {}", flat.depth);
     }
 }
 
