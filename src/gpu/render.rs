@@ -133,9 +133,11 @@ pub(super) fn compile(
     })
 }
 
-/// An error with its causes: wgpu's `Display` alone says only "Validation Error".
+/// An error with its causes, on one line: wgpu's `Display` says "Validation Error" and
+/// then the same causes again, indented over several lines, so only its first line is kept.
 fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
+    let shown = e.to_string();
+    let mut s = shown.lines().next().unwrap_or_default().to_string();
     let mut source = e.source();
     while let Some(cause) = source {
         s.push_str(&format!(": {cause}"));

@@ -8,7 +8,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use gpurt::agreement::noise_floor;
 use gpurt::compare::{self, DiffStats, Thresholds};
@@ -538,6 +538,33 @@ fn oversized_scene_is_refused_with_the_limit_named() {
     );
 }
 
+/// A validation error inside wgpu (here a device whose workgroups are smaller than the
+/// shader's 64 invocations, so the pipeline is invalid) is an error naming the step and
+/// wgpu's cause, never a panic or a black image.
+#[test]
+fn a_validation_error_is_an_error_naming_its_cause() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let (device, queue) = device_with(
+        g,
+        wgpu::Limits {
+            max_compute_workgroup_size_x: 32,
+            max_compute_invocations_per_workgroup: 32,
+            ..g.ctx.adapter.limits()
+        },
+    );
+    let renderer = GpuRenderer::new(&device, None).expect("shader module");
+    let msg = render_with(&device, &queue, &renderer, &features_scene(""))
+        .expect_err("an invalid pipeline must not render")
+        .to_string();
+    println!("{msg}");
+    assert!(
+        msg.starts_with("GPU error: compiling the shader: ") && msg.contains("orkgroup"),
+        "{msg}"
+    );
+}
+
 /// A scene larger than one texture layer is split over several, as many as it needs:
 /// with layers cut to 2 and 1 rows here (balls-4's 7383 primitives take 6 rows, its
 /// nodes 3), the images and costs still match the CPU's.
@@ -888,6 +915,40 @@ fn a_lost_device_is_an_error_not_an_image() {
         .map(|_| ())
         .expect_err("a trace on a lost device fails");
     println!("trace on a lost device: {err}");
+    assert!(err.to_string().starts_with("GPU error: "), "{err}");
+
+    // Lost while it renders: destroyed once the first band has been read back (bands of
+    // at most 1 MiB of output here: 256 rows of 256 pixels, four of them).
+    let (device, queue) = device_with(
+        g,
+        wgpu::Limits {
+            max_storage_buffer_binding_size: 1 << 20,
+            ..g.ctx.adapter.limits()
+        },
+    );
+    let renderer = GpuRenderer::new(&device, None).expect("shader module");
+    let tall = RenderOptions {
+        width: 256,
+        height: 1024,
+        ..opts(&scene)
+    };
+    let uploaded = renderer
+        .upload(&device, &queue, &buffers, &frame::globals(&buffers, &tall))
+        .expect("uploads");
+    let passes = AtomicU32::new(0);
+    let lose = |_| {
+        passes.fetch_add(1, Ordering::Relaxed);
+        device.destroy();
+    };
+    let err = gpurt::gpu::trace(&device, &queue, &uploaded, &lose, &never)
+        .map(|_| ())
+        .expect_err("a trace whose device is lost half-way fails");
+    println!("device lost mid-trace: {err}");
+    assert_eq!(
+        passes.load(Ordering::Relaxed),
+        1,
+        "lost after the first band"
+    );
     assert!(err.to_string().starts_with("GPU error: "), "{err}");
 
     let (device, queue) = device_with(g, g.ctx.adapter.limits());
