@@ -156,3 +156,48 @@ fn a_hundred_thousand_coincident_triangles_build_and_render() {
         "the triangle shows"
     );
 }
+
+/// The process's peak memory stays within the bound docs/farm.md documents:
+/// 32 MiB + 6 x the scene's decompressed bytes + 32 bytes a pixel, on the largest shared
+/// scenes (CPU backend; `--stats` prints the peak).
+#[test]
+fn peak_memory_stays_within_its_documented_bound() {
+    let Some(root) = crate::common::shared_scenes() else {
+        return;
+    };
+    let dir = crate::common::workdir("peak-memory");
+    for name in ["balls-6.nff.gz", "mount-9.nff.gz"] {
+        let path = root.join("spd").join(name);
+        let bytes = scene::read_file(&path).expect("reads").len() as f64;
+        let (w, h) = (320, 240);
+        let out = crate::common::gpurt(
+            &[
+                path.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--width",
+                &w.to_string(),
+                "--height",
+                &h.to_string(),
+                "-o",
+                "out.png",
+                "--stats",
+            ],
+            &dir,
+        );
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {stderr}");
+        let peak_mib: f64 = stderr
+            .lines()
+            .find_map(|l| l.strip_prefix("peak memory "))
+            .and_then(|l| l.trim_end_matches(" MiB").trim().parse().ok())
+            .unwrap_or_else(|| panic!("{name}: no peak memory line in {stderr}"));
+        let mib = (1u64 << 20) as f64;
+        let bound = 32.0 + (6.0 * bytes + 32.0 * f64::from(w * h)) / mib;
+        println!("{name}: {bytes} bytes of scene, peak {peak_mib:.1} MiB, bound {bound:.1} MiB");
+        assert!(
+            peak_mib <= bound,
+            "{name}: peak {peak_mib} MiB over {bound:.1} MiB"
+        );
+    }
+}
