@@ -431,6 +431,34 @@ mod tests {
         check(&t, &b);
     }
 
+    /// Boxes spaced ever wider apart (each twice as far from the origin as the last)
+    /// make obvhs' clustering chain them one by one, a tree deeper than the traversal
+    /// stack: `build` must fall back to median splits, which fit.
+    #[test]
+    fn a_tree_deeper_than_the_stack_is_rebuilt_by_median_splits() {
+        let b: Vec<Aabb> = (0..120)
+            .map(|k| {
+                let x = 2f32.powi(k);
+                Aabb {
+                    min: Vec3A::new(x, 0.0, 0.0),
+                    max: Vec3A::new(x * 1.25, 1.0, 1.0),
+                }
+            })
+            .collect();
+        for quality in [Quality::Medium, Quality::High] {
+            let chained = flatten(&build_obvhs(&b, quality), &b);
+            assert!(
+                chained.depth >= TRAVERSAL_STACK,
+                "obvhs depth {}",
+                chained.depth
+            );
+            let t = build(&b, quality);
+            check(&t, &b);
+            assert!(t.depth < TRAVERSAL_STACK, "depth {}", t.depth);
+            assert_eq!(t.depth, walked_depth(&t));
+        }
+    }
+
     #[test]
     fn long_renders_and_small_scenes_get_the_high_quality_build() {
         let (small, large) = (THOROUGH_BUILD_MAX_PRIMS, 500_000);

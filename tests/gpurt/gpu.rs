@@ -806,6 +806,33 @@ fn sample_pattern_matches_cpu_on_an_edge() {
     }
 }
 
+/// Spheres each 1.5 times as far out as the last chain obvhs' clustering into a tree
+/// deeper than the traversal stack (`bvh::tests` shows it); the scene is built by median
+/// splits instead (depth log2(n / 4) + 2) and renders the same on both backends, seen
+/// along the chain.
+#[test]
+fn a_scene_deeper_than_the_traversal_stack_renders_and_matches_cpu() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let mut src = String::from(
+        "v from -4 3 2 at 40 0 0 up 0 0 1 angle 60 hither 0.01 resolution 96 64\n\
+         b 0.1 0.1 0.2\nl -10 10 10\nf 1 0.5 0.2 0.7 0.3 20 0 1\n",
+    );
+    for k in 0..200 {
+        let x = 1.5f64.powi(k);
+        src.push_str(&format!("s {x} 0 0 {}\n", x * 0.3));
+    }
+    let scene = scene::nff::parse(src.as_bytes(), "chain", Path::new(".")).expect("parses");
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    assert!(
+        buffers.bvh_depth <= 7,
+        "median depth, got {}",
+        buffers.bvh_depth
+    );
+    check_all([check_scene(g, "chain", &scene, &opts(&scene))]);
+}
+
 /// A flat mesh (one triangle at z = 0, read as a bare STL) lies just above its automatic
 /// ground plane, not in it: no z-fighting, so both renderers agree.
 #[test]
