@@ -51,8 +51,8 @@ fn main() -> anyhow::Result<()> {
     let size: u32 = args.next().map_or(Ok(512), |s| s.parse())?;
     let out = args.next().map(PathBuf::from);
 
-    let buffers =
-        gpurt::run::prepare(&scene, None, |c| u64::from(c.width) * u64::from(c.height))?.buffers;
+    // The tree a one-sample render of these rays would get.
+    let buffers = gpurt::run::prepare(&scene, None, |_| u64::from(size) * u64::from(size))?.buffers;
     anyhow::ensure!(
         buffers.planes.is_empty()
             && buffers.prims.iter().all(|p| p.kind() != PRIM_BOX)

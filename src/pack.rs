@@ -5,6 +5,7 @@ use glam::Vec3;
 
 use crate::bvh::{self, FlatBvh};
 use crate::error::{Error, Result};
+use crate::frame::RenderOptions;
 use crate::gpu_types::*;
 use crate::scene::{self, Bounded, Bounds, Camera, Light, Scene};
 
@@ -47,9 +48,9 @@ fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
-/// Flattens a scene for one frame at its camera's resolution and one sample a pixel.
+/// Flattens a scene for one frame of the default options (`RenderOptions::for_camera`).
 pub fn pack(scene: Scene) -> Result<SceneBuffers> {
-    let samples = u64::from(scene.camera.width) * u64::from(scene.camera.height);
+    let samples = RenderOptions::for_camera(&scene.camera).samples();
     pack_for(scene, samples)
 }
 
