@@ -66,7 +66,11 @@ fn main() -> anyhow::Result<()> {
         ..RenderOptions::for_camera(&buffers.camera)
     };
     let g = frame::globals(&buffers, &opts);
-    let b = Bindings::new(&buffers, &g);
+    // GPURT_CPU_WALK=binary times the GPU's walk of the binary tree instead.
+    let b = match std::env::var("GPURT_CPU_WALK").as_deref() {
+        Ok("binary") => Bindings::gpu_walk(&buffers, &g),
+        _ => Bindings::new(&buffers, &g),
+    };
 
     // Primary rays, scanline order, as a renderer without tiles would shoot them.
     let primary: Vec<Ray> = (0..size * size)

@@ -1,9 +1,12 @@
 //! Scene + BVH -> `SceneBuffers`: the flat arrays both renderers read (one `Vec` per GPU
 //! binding), with the camera, background and ambient the frames of `frame` start from.
 
+use std::sync::OnceLock;
+
 use glam::Vec3;
 
 use crate::bvh::{self, FlatBvh};
+use crate::cpu::wide::{self, WideNode};
 use crate::error::{Error, Result};
 use crate::frame::RenderOptions;
 use crate::gpu_types::*;
@@ -37,6 +40,9 @@ pub struct SceneBuffers {
     pub camera: Camera,
     pub background: Vec3,
     pub ambient: Option<Vec3>,
+    /// The CPU renderer's four-wide copy of `nodes`, built on its first render
+    /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
+    wide: OnceLock<Vec<WideNode>>,
 }
 
 /// The three normals scaled to unit length, or `None` when one has no direction.
@@ -178,10 +184,17 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
         camera,
         background,
         ambient,
+        wide: OnceLock::new(),
     })
 }
 
 impl SceneBuffers {
+    /// `nodes` collapsed four-wide (`cpu::wide`), built the first time it is asked for:
+    /// `nodes` must not change after that.
+    pub fn wide_nodes(&self) -> &[WideNode] {
+        self.wide.get_or_init(|| wide::build(&self.nodes))
+    }
+
     /// Proves the invariants the GPU shader relies on, since it runs without runtime
     /// bounds checks: every index in range, every inner node's children after it (so a
     /// traversal visits each node at most once and ends), the tree shallow enough for the

@@ -166,7 +166,7 @@ pub fn slab_entry(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tm
 }
 
 /// Any bounded primitive: `(t0, t1, u, v)`; only triangles fill `u, v`.
-#[inline]
+#[inline(always)]
 pub fn intersect_prim(p: &GpuPrim, ray: &Ray, inv_dir: Vec3) -> Vec4 {
     match p.kind() {
         PRIM_SPHERE => intersect_sphere(p.p0, p.f0, ray).extend(0.0).extend(0.0),

@@ -3,13 +3,15 @@
 //! so it checks the packing and BVH layout as much as the shader.
 //!
 //! One module per WGSL file, same function names, same order of operations:
-//! `types`, `intersect`, `traverse`, `shade`, `main`.
+//! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
+//! the same tree four children at a time, which finds the same hits.
 
 pub mod intersect;
 pub mod main;
 pub mod shade;
 pub mod traverse;
 pub mod types;
+pub mod wide;
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -3,9 +3,9 @@
 
 use glam::{Vec3, Vec4};
 
-use super::intersect;
 use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
-use crate::gpu_types::{GpuNode, TRAVERSAL_PAIRS, TRAVERSAL_STACK};
+use super::{intersect, wide};
+use crate::gpu_types::{AOV_COST, GpuNode, TRAVERSAL_PAIRS, TRAVERSAL_STACK};
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
 fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
@@ -131,6 +131,30 @@ impl Walk {
     }
 }
 
+/// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
+#[inline]
+fn closest_in_leaf(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    first: u32,
+    count: u32,
+    tmin: f32,
+    hit: &mut Hit,
+) {
+    for i in first..first + count {
+        let p = &b.prims[i as usize];
+        let t = intersect::intersect_prim(p, ray, inv_dir);
+        let t_first = first_in(t, tmin, hit.t);
+        if t_first != NO_HIT {
+            hit.t = t_first;
+            hit.prim = i;
+            hit.u = t.z;
+            hit.v = t.w;
+        }
+    }
+}
+
 /// Nearest surface along the ray within `(tmin, tmax)`.
 pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     let mut hit = Hit {
@@ -151,28 +175,55 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
+    if let Some(wide) = b.wide.filter(|_| b.globals.aov != AOV_COST) {
+        let slabs = wide::Slabs::new(ray.origin, inv_dir);
+        wide::walk::<true>(wide, &slabs, tmin, hit.t, |first, count| {
+            closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
+            Some(hit.t)
+        });
+        return hit;
+    }
     let mut walk = Walk::new();
     loop {
         let (first, count) = walk.next_leaf(b, ray, inv_dir, tmin, hit.t, &mut hit.cost);
         if count == 0 {
             break;
         }
-        for i in first..first + count {
-            let p = &b.prims[i as usize];
-            let t = intersect::intersect_prim(p, ray, inv_dir);
-            let t_first = first_in(t, tmin, hit.t);
-            if t_first != NO_HIT {
-                hit.t = t_first;
-                hit.prim = i;
-                hit.u = t.z;
-                hit.v = t.w;
-            }
-        }
+        closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
         if !walk.pop() {
             break;
         }
     }
     hit
+}
+
+/// Multiplies `light` by the transmission of each crossing of the leaf's primitives within
+/// `(0, tmax)`; false when one of them is opaque.
+#[inline]
+fn transmit_leaf(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    first: u32,
+    count: u32,
+    tmax: f32,
+    light: &mut Vec3,
+) -> bool {
+    for i in first..first + count {
+        let p = &b.prims[i as usize];
+        let t = intersect::intersect_prim(p, ray, inv_dir);
+        let crossings = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
+        if crossings > 0 {
+            let m = &b.materials[p.material() as usize];
+            if m.t <= 0.0 {
+                return false;
+            }
+            for _ in 0..crossings {
+                *light *= m.t * m.color;
+            }
+        }
+    }
+    true
 }
 
 /// Light reaching the end of the segment `origin + t*dir, t in (0, tmax)`: an opaque
@@ -193,6 +244,15 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
         return light;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
+    if let Some(wide) = b.wide {
+        let slabs = wide::Slabs::new(ray.origin, inv_dir);
+        let mut blocked = false;
+        wide::walk::<false>(wide, &slabs, 0.0, tmax, |first, count| {
+            blocked = !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light);
+            (!blocked).then_some(tmax)
+        });
+        return if blocked { Vec3::ZERO } else { light };
+    }
     let mut walk = Walk::new();
     let mut visited = 0;
     loop {
@@ -200,19 +260,8 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
         if count == 0 {
             break;
         }
-        for i in first..first + count {
-            let p = &b.prims[i as usize];
-            let t = intersect::intersect_prim(p, ray, inv_dir);
-            let crossings = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
-            if crossings > 0 {
-                let m = &b.materials[p.material() as usize];
-                if m.t <= 0.0 {
-                    return Vec3::ZERO;
-                }
-                for _ in 0..crossings {
-                    light *= m.t * m.color;
-                }
-            }
+        if !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light) {
+            return Vec3::ZERO;
         }
         if !walk.pop() {
             break;

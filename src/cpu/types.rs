@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::wide::WideNode;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
 
@@ -23,10 +24,23 @@ pub struct Bindings<'a> {
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
+    /// The four-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
+    /// walks `nodes` as the shader does (`GpuGlobals::traversal`).
+    pub wide: Option<&'a [WideNode]>,
 }
 
 impl<'a> Bindings<'a> {
+    /// What the CPU renderer reads: the buffers, walked through the four-wide tree.
     pub fn new(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
+        Bindings {
+            wide: Some(buffers.wide_nodes()),
+            ..Self::gpu_walk(buffers, globals)
+        }
+    }
+
+    /// The bindings as the shader has them, walking the binary tree its way: for tests
+    /// of the GPU's traversal on the CPU.
+    pub fn gpu_walk(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
         Bindings {
             globals,
             nodes: &buffers.nodes,
@@ -35,6 +49,7 @@ impl<'a> Bindings<'a> {
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,
+            wide: None,
         }
     }
 }

@@ -207,8 +207,16 @@ fn check_closest_hit(
         agree,
         "{}: BVH walk {} {hit:?}, brute force prim {bp} at {bt}",
         context(),
-        b.globals.traversal
+        walk_name(b)
     );
+}
+
+fn walk_name(b: &Bindings) -> &'static str {
+    match (b.wide.is_some(), b.globals.traversal) {
+        (true, _) => "wide",
+        (false, TRAVERSAL_PAIRS) => "pairs",
+        (false, _) => "single",
+    }
 }
 
 /// What `check_rays` saw: rays that hit, and shadow segments that lost light.
@@ -231,9 +239,11 @@ fn check_rays(
         traversal: TRAVERSAL_PAIRS,
         ..globals
     };
+    // The GPU's two walks of the binary tree, and the CPU renderer's of the wide one.
     let walks = [
+        Bindings::gpu_walk(buffers, &globals),
+        Bindings::gpu_walk(buffers, &pairs),
         Bindings::new(buffers, &globals),
-        Bindings::new(buffers, &pairs),
     ];
     let b = &walks[0];
     let diag = buffers.bounds.extent().length().max(1e-3);
@@ -266,7 +276,7 @@ fn check_rays(
                 close3(got, want),
                 "{}: transmission to {seg}: BVH walk {} {got}, brute force {want}",
                 context(),
-                w.globals.traversal
+                walk_name(w)
             );
         }
         shadowed += usize::from(want != Vec3::ONE);

@@ -226,6 +226,18 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "RayCounts: the CPU counts rays by kind, the GPU one total",
     ),
     ("sample_sum", "the CPU's per-pixel driver, `main` in WGSL"),
+    (
+        "gpu_walk",
+        "Bindings for the binary walk: the CPU renders through the wide tree (wide.rs)",
+    ),
+    (
+        "closest_in_leaf",
+        "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
+    ),
+    (
+        "transmit_leaf",
+        "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
+    ),
 ];
 
 /// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.

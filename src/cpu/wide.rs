@@ -1,0 +1,338 @@
+//! A four-wide BVH for the CPU renderer alone: the binary tree of `SceneBuffers::nodes`
+//! collapsed so that each node holds up to four children, whose boxes one ray tests
+//! together in SIMD lanes (glam's `Vec4`: SSE on x86-64, NEON on AArch64).
+//!
+//! The leaves are the binary tree's leaves, the same primitive ranges of the same
+//! `prims` array, and each lane's box test is `intersect::overlaps` to the bit, so a ray
+//! finds the same primitives tested by the same code: only the order in which leaves are
+//! visited differs. The closest hit is therefore the binary walk's (the first of two
+//! primitives at exactly the same distance may differ), which is why the colour a pixel
+//! gets does not depend on the walk; the `cost` AOV, which counts the nodes of the GPU's
+//! walk, still uses the binary walk (`traverse.rs`).
+//!
+//! Why not on the GPU: lanes of a GPU already run one ray each, and lavapipe runs both
+//! sides of every branch; a four-child node there is four of today's box tests with more
+//! registers held (docs/bvh.md).
+
+use std::mem::MaybeUninit;
+
+use glam::{Vec3, Vec4};
+
+use super::intersect::SLAB_WIDEN;
+use crate::gpu_types::{GpuNode, TRAVERSAL_STACK};
+
+/// Children of a wide node.
+pub const WIDTH: usize = 4;
+
+/// `WideNode::count` of a lane that holds no child (its box is empty, so no ray enters).
+const EMPTY: u32 = u32::MAX;
+
+/// Four child boxes in structure-of-arrays form, and where each child leads.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    /// Lower and upper corners: `lo[axis]` holds that coordinate of the four boxes.
+    lo: [Vec4; 3],
+    hi: [Vec4; 3],
+    /// A wide node's index (`count == 0`), or a leaf's first primitive.
+    child: [u32; WIDTH],
+    /// Primitives of a leaf child, 0 for an inner child, `EMPTY` for no child.
+    count: [u32; WIDTH],
+}
+
+impl WideNode {
+    fn empty() -> Self {
+        WideNode {
+            lo: [Vec4::INFINITY; 3],
+            hi: [Vec4::NEG_INFINITY; 3],
+            child: [0; WIDTH],
+            count: [EMPTY; WIDTH],
+        }
+    }
+}
+
+/// Surface area of a binary node's box: the node opened first when collapsing.
+fn area(n: &GpuNode) -> f32 {
+    let d = n.max - n.min;
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
+/// `offset`) into wide nodes, root first: each inner node takes its children, then
+/// repeatedly replaces its largest inner child by that child's two children while a lane
+/// is free.
+pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
+    if nodes.is_empty() {
+        return Vec::new();
+    }
+    let mut wide = vec![WideNode::empty()];
+    // (wide node to fill, binary node it stands for)
+    let mut todo = vec![(0usize, 0u32)];
+    while let Some((w, i)) = todo.pop() {
+        let n = &nodes[i as usize];
+        let mut kids: Vec<u32> = if n.count() > 0 {
+            vec![i] // a tree that is one leaf
+        } else {
+            vec![i + 1, n.offset]
+        };
+        while kids.len() < WIDTH {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| nodes[k as usize].count() == 0)
+                .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
+            let Some((j, &k)) = open else { break };
+            kids.swap_remove(j);
+            kids.extend([k + 1, nodes[k as usize].offset]);
+        }
+        let mut node = WideNode::empty();
+        for (lane, &k) in kids.iter().enumerate() {
+            let c = &nodes[k as usize];
+            for axis in 0..3 {
+                node.lo[axis][lane] = c.min[axis];
+                node.hi[axis][lane] = c.max[axis];
+            }
+            if c.count() > 0 {
+                node.child[lane] = c.offset;
+                node.count[lane] = c.count();
+            } else {
+                node.child[lane] = wide.len() as u32;
+                node.count[lane] = 0;
+                todo.push((wide.len(), k));
+                wide.push(WideNode::empty());
+            }
+        }
+        wide[w] = node;
+    }
+    wide
+}
+
+/// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
+/// ray enters its box.
+#[derive(Clone, Copy)]
+struct Entry {
+    child: u32,
+    count: u32,
+    near: f32,
+}
+
+/// Entries a walk can hold: a wide tree is no deeper than the binary one, which is below
+/// `TRAVERSAL_STACK`, and each level leaves at most `WIDTH - 1` children waiting.
+const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
+
+/// The ray's constants for the four-lane slab test.
+pub struct Slabs {
+    origin: [Vec4; 3],
+    inv_dir: [Vec4; 3],
+    /// Per axis, whether the direction is negative: then `hi` is the near face.
+    neg: [bool; 3],
+}
+
+impl Slabs {
+    pub fn new(origin: Vec3, inv_dir: Vec3) -> Self {
+        Slabs {
+            origin: [0, 1, 2].map(|a| Vec4::splat(origin[a])),
+            inv_dir: [0, 1, 2].map(|a| Vec4::splat(inv_dir[a])),
+            neg: [0, 1, 2].map(|a| inv_dir[a] < 0.0),
+        }
+    }
+
+    /// `intersect::slab_entry` for the four boxes at once: where the ray enters each,
+    /// clamped to `tmin`, and a bit mask of those it overlaps within `[tmin, tmax]`.
+    /// Choosing the near face by the sign of the inverse direction gives the same value
+    /// as the scalar `min(t0, t1)`, since that sign orders `t0` and `t1`.
+    #[inline]
+    fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Vec4, u32) {
+        let t = |axis: usize, near: bool| {
+            let face = if self.neg[axis] == near {
+                n.hi[axis]
+            } else {
+                n.lo[axis]
+            };
+            (face - self.origin[axis]) * self.inv_dir[axis]
+        };
+        let near = t(0, true)
+            .max(t(1, true))
+            .max(t(2, true))
+            .max(Vec4::splat(tmin));
+        let far = t(0, false)
+            .min(t(1, false))
+            .min(t(2, false))
+            .min(Vec4::splat(tmax));
+        (near, near.cmple(far * SLAB_WIDEN).bitmask())
+    }
+}
+
+/// Depth-first walk of the wide tree, nearest child first: calls `leaf(first, count)`
+/// for each leaf the ray reaches, which returns the interval end to cull with from then
+/// on (the nearest hit so far), or `None` to stop.
+#[inline]
+pub fn walk<const NEAREST_FIRST: bool>(
+    wide: &[WideNode],
+    slabs: &Slabs,
+    tmin: f32,
+    mut tmax: f32,
+    mut leaf: impl FnMut(u32, u32) -> Option<f32>,
+) {
+    // Not zeroed: a ray's walk touches a few of these 193 entries, and clearing all
+    // 2.3 KB for every ray made the walk 20 to 30% slower (teapot-6, tree-11). Only
+    // entries below `sp` are ever read.
+    let mut stack = [const { MaybeUninit::<Entry>::uninit() }; STACK];
+    let mut sp = 0;
+    let mut next = Entry {
+        child: 0,
+        count: 0,
+        near: tmin,
+    };
+    loop {
+        if next.count > 0 {
+            match leaf(next.child, next.count) {
+                Some(t) => tmax = t,
+                None => return,
+            }
+        } else {
+            let n = &wide[next.child as usize];
+            let (near, mut mask) = slabs.test(n, tmin, tmax);
+            let entry = |lane: usize| Entry {
+                child: n.child[lane],
+                count: n.count[lane],
+                near: near[lane],
+            };
+            if mask != 0 && mask & (mask - 1) == 0 {
+                // One child reached (the common case): straight on, nothing pushed.
+                next = entry(mask.trailing_zeros() as usize);
+                continue;
+            }
+            // Push the children reached farthest first, so that the nearest is taken
+            // next: insertion into the run pushed for this node.
+            let base = sp;
+            while mask != 0 {
+                let e = entry(mask.trailing_zeros() as usize);
+                mask &= mask - 1;
+                let mut j = sp;
+                // SAFETY: entries below `sp` have been written.
+                while NEAREST_FIRST
+                    && j > base
+                    && unsafe { stack[j - 1].assume_init() }.near < e.near
+                {
+                    stack[j] = stack[j - 1];
+                    j -= 1;
+                }
+                stack[j] = MaybeUninit::new(e);
+                sp += 1;
+            }
+        }
+        // The next waiting child the ray can still reach before `tmax`.
+        loop {
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            // SAFETY: entries below the old `sp` have been written.
+            next = unsafe { stack[sp].assume_init() };
+            if next.near <= tmax * SLAB_WIDEN {
+                break;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{self, Quality};
+    use obvhs::aabb::Aabb;
+
+    fn boxes(n: usize) -> Vec<Aabb> {
+        (0..n)
+            .map(|i| {
+                let p = glam::Vec3A::new((i * 7 % 13) as f32, (i * 5 % 11) as f32, i as f32 * 0.1);
+                Aabb {
+                    min: p,
+                    max: p + 0.5,
+                }
+            })
+            .collect()
+    }
+
+    /// Walks the wide tree: every binary leaf appears once, as a lane with the leaf's own
+    /// box; every inner lane's box is that of a binary node; empty lanes come last and
+    /// hold empty boxes; no path is deeper than the binary tree's (the stack bound).
+    fn check(binary: &bvh::FlatBvh, wide: &[WideNode]) {
+        let leaves: Vec<&GpuNode> = binary.nodes.iter().filter(|n| n.count() > 0).collect();
+        let mut seen = vec![0u32; binary.order.len()];
+        let mut reached = vec![false; wide.len()];
+        let mut todo = vec![(0usize, 1usize)];
+        let mut depth = 0;
+        while let Some((w, d)) = todo.pop() {
+            assert!(!std::mem::replace(&mut reached[w], true), "node {w} twice");
+            depth = depth.max(d);
+            let n = &wide[w];
+            let lanes = n.count.iter().take_while(|&&c| c != EMPTY).count();
+            assert!(lanes >= 1 && n.count[lanes..].iter().all(|&c| c == EMPTY));
+            // A lane stays free only when no inner child was left to open into it.
+            assert!(
+                lanes == WIDTH || n.count[..lanes].iter().all(|&c| c > 0),
+                "node {w}"
+            );
+            for lane in 0..WIDTH {
+                let lo = Vec3::new(n.lo[0][lane], n.lo[1][lane], n.lo[2][lane]);
+                let hi = Vec3::new(n.hi[0][lane], n.hi[1][lane], n.hi[2][lane]);
+                if lane >= lanes {
+                    assert!(lo.cmpgt(hi).all(), "empty lane {lane} of {w} has a box");
+                    continue;
+                }
+                let box_of = |b: &GpuNode| b.min == lo && b.max == hi;
+                if n.count[lane] > 0 {
+                    let (first, count) = (n.child[lane], n.count[lane]);
+                    assert!(
+                        leaves
+                            .iter()
+                            .any(|l| l.offset == first && l.count() == count && box_of(l))
+                    );
+                    for k in first..first + count {
+                        seen[k as usize] += 1;
+                    }
+                } else {
+                    assert!(binary.nodes.iter().any(|b| b.count() == 0 && box_of(b)));
+                    todo.push((n.child[lane] as usize, d + 1));
+                }
+            }
+        }
+        assert!(reached.iter().all(|&r| r), "unreachable wide nodes");
+        assert!(
+            seen.iter().all(|&s| s == 1),
+            "a primitive is not in exactly one leaf"
+        );
+        assert!(
+            depth <= binary.depth,
+            "wide depth {depth} > {}",
+            binary.depth
+        );
+    }
+
+    #[test]
+    fn the_wide_tree_holds_the_binary_leaves_once_and_is_no_deeper() {
+        for n in [1, 2, 3, 5, 17, 1000] {
+            for quality in [Quality::Medium, Quality::High] {
+                let binary = bvh::build(&boxes(n), quality);
+                let wide = build(&binary.nodes);
+                check(&binary, &wide);
+            }
+        }
+        // A chain deeper than obvhs keeps, rebuilt by median splits (bvh.rs): the deepest
+        // tree the stack must hold.
+        let chain: Vec<Aabb> = (0..120)
+            .map(|k| {
+                let x = 2f32.powi(k);
+                Aabb {
+                    min: glam::Vec3A::new(x, 0.0, 0.0),
+                    max: glam::Vec3A::new(x * 1.25, 1.0, 1.0),
+                }
+            })
+            .collect();
+        let binary = bvh::build(&chain, Quality::Medium);
+        check(&binary, &build(&binary.nodes));
+        assert!(build(&[]).is_empty());
+    }
+}
