@@ -54,6 +54,28 @@ impl Cut {
         }
     }
 
+    /// A cut of the same frame and bands whose dispatches each do at most `1 / factor` of
+    /// this one's work (pixels x samples of a pass): fewer samples a pass first, down to
+    /// one, then tiles of half the side, down to `MIN_TILE_SIDE`, as far as needed or
+    /// possible. A band then holds more dispatches than before (`tiles` lists them all).
+    /// The image does not change: each pass adds to the sums in sample order.
+    pub(super) fn finer(&self, factor: f64) -> Cut {
+        let mut cut = *self;
+        let work = |c: &Cut| f64::from(c.tile_side).powi(2) * f64::from(c.pass_samples);
+        let goal = work(self) / factor.max(1.0);
+        while work(&cut) > goal {
+            if cut.pass_samples > 1 {
+                cut.pass_samples = cut.pass_samples.div_ceil(2);
+            } else if cut.tile_side > MIN_TILE_SIDE {
+                // Sides are powers of two, so the bands stay whole rows of tiles.
+                cut.tile_side /= 2;
+            } else {
+                break;
+            }
+        }
+        cut
+    }
+
     pub(super) fn passes(&self) -> u32 {
         self.spp.div_ceil(self.pass_samples)
     }
@@ -100,11 +122,54 @@ impl Cut {
     }
 }
 
+/// The smallest tile `Cut::finer` makes: one workgroup.
+pub(super) const MIN_TILE_SIDE: u32 = crate::gpu_types::WORKGROUP_SIDE;
+
 /// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.
 pub(super) fn tile_side(spp: u32) -> u32 {
     match spp {
         0..=4 => 256,
         5..=16 => 128,
         _ => 64,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every pixel of every band exactly once per sample, in pass order.
+    fn coverage(cut: &Cut) -> Vec<u32> {
+        let mut seen = vec![0u32; (cut.width * cut.height) as usize];
+        for (y0, rows) in cut.bands() {
+            let mut last_start = 0;
+            for t in cut.tiles(y0, rows, &(0..cut.spp)) {
+                assert!(t.sample_start >= last_start, "passes out of order");
+                last_start = t.sample_start;
+                for y in t.y..t.y + t.height {
+                    for x in t.x..t.x + t.width {
+                        seen[(y * cut.width + x) as usize] += t.sample_count;
+                    }
+                }
+            }
+        }
+        seen
+    }
+
+    #[test]
+    fn a_finer_cut_divides_the_work_and_covers_the_same_samples() {
+        let cut = Cut::new(1000, 333, 40, 16, 1 << 26, 1 << 30);
+        assert_eq!((cut.tile_side, cut.pass_samples), (128, 16));
+        let finer = cut.finer(100.0);
+        // 16 -> 1 sample a pass (16x), then 128 -> 32 pixels a side (16x more).
+        assert_eq!((finer.tile_side, finer.pass_samples), (32, 1));
+        assert_eq!(finer.band_rows, cut.band_rows);
+        assert!(coverage(&finer).iter().all(|&n| n == 40));
+        assert_eq!(cut.finer(1.0), cut);
+        assert_eq!(cut.finer(0.1), cut);
+        // No finer than one sample on one workgroup.
+        let finest = cut.finer(1e9);
+        assert_eq!((finest.tile_side, finest.pass_samples), (MIN_TILE_SIDE, 1));
+        assert!(coverage(&finest).iter().all(|&n| n == 40));
     }
 }

@@ -2,8 +2,9 @@
 //!
 //! A frame is cut (`Cut`) into tiles, one bounded dispatch each, so that no dispatch runs
 //! long enough to trip a driver watchdog, and the tiles into bands of rows, one submission
-//! and one readback each, so that the host does not wait on the GPU per tile. Pixels whose
-//! work does not fit one invocation are finished by `resume`.
+//! and one readback each, so that the host does not wait on the GPU per tile. On a GPU,
+//! bands whose dispatches took longer than `DISPATCH_BUDGET` make the rest cut finer.
+//! Pixels whose work does not fit one invocation are finished by `resume`.
 
 use std::collections::HashMap;
 use std::ops::Range;
@@ -36,6 +37,8 @@ pub(super) struct Bound {
     /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
     pub(super) tile_buf: wgpu::Buffer,
     pub(super) tile_stride: u32,
+    /// `GpuTile`s `tile_buf` holds: a band's dispatches, or one submission's of them.
+    pub(super) tile_slots: u32,
     pub(super) output: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
 }
@@ -57,7 +60,17 @@ pub struct GpuRenderer {
     traversal: u32,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
+    /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
+    /// which have no watchdog.
+    dispatch_budget: Option<Duration>,
 }
+
+/// Time one dispatch may take on a GPU, an eighth of the shortest common driver watchdog
+/// (Windows' two seconds): the mean dispatch of a band is what is measured, and one tile
+/// may take several times the mean. A band whose dispatches took longer on average makes
+/// the rest of the frame, and the frames after it, cut finer (`Cut::finer`), to half the
+/// budget.
+pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 
 /// The traversal for an adapter: `TRAVERSAL_PAIRS` on hardware GPUs, where a ray's time
 /// goes to waiting on node fetches and fetching two at once halves the wait;
@@ -217,6 +230,7 @@ impl GpuRenderer {
             software,
             traversal: traversal_for(software)?,
             layer_rows: upload::layer_rows(device),
+            dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
         })
     }
 
@@ -227,6 +241,15 @@ impl GpuRenderer {
         assert!(rows.is_power_of_two() && rows <= self.layer_rows);
         GpuRenderer {
             layer_rows: rows,
+            ..self
+        }
+    }
+
+    /// This renderer holding each dispatch to `budget` (instead of `DISPATCH_BUDGET` on
+    /// GPUs and none on software adapters): lets the tests make lavapipe refine its cut.
+    pub fn with_dispatch_budget(self, budget: Duration) -> Self {
+        GpuRenderer {
+            dispatch_budget: Some(budget),
             ..self
         }
     }
@@ -393,6 +416,7 @@ impl GpuRenderer {
                 globals: globals_buf,
                 tile_buf,
                 tile_stride,
+                tile_slots: tile_slots.max(1),
                 output,
                 readback,
             }
@@ -492,6 +516,8 @@ impl GpuRenderer {
             scene_bytes: scene_bytes(scene, self.layer_rows),
             resume: self.resume.clone(),
             spec,
+            dispatch_budget: self.dispatch_budget,
+            finer: Mutex::new(None),
         })
     }
 
@@ -528,6 +554,7 @@ impl GpuRenderer {
                 cut.dispatches_per_band(),
             )?;
             uploaded.cut = cut;
+            *uploaded.finer.lock().expect("cut lock") = None;
         }
         Ok(())
     }
@@ -558,9 +585,24 @@ pub struct GpuScene {
     pub(super) scene_bytes: u64,
     pub(super) resume: Arc<ResumePipelines>,
     pub(super) spec: Specialization,
+    pub(super) dispatch_budget: Option<Duration>,
+    /// The cut that dispatches over `dispatch_budget` made `trace_rows` switch to, kept
+    /// for the frames after (until `set_frame` changes the cut).
+    finer: Mutex<Option<Cut>>,
 }
 
 impl GpuScene {
+    /// Pixels a side of a tile and samples a pass of the dispatches traced now: the cut
+    /// made for the frame, or a finer one (`DISPATCH_BUDGET`).
+    pub fn dispatch_shape(&self) -> (u32, u32) {
+        let cut = self.tracing_cut();
+        (cut.tile_side, cut.pass_samples)
+    }
+
+    fn tracing_cut(&self) -> Cut {
+        self.finer.lock().expect("cut lock").unwrap_or(self.cut)
+    }
+
     /// Device memory held by the scene and a band's output and readback buffers, in bytes.
     pub fn device_bytes(&self) -> u64 {
         self.scene_bytes + 2 * self.cut.band_bytes()
@@ -654,18 +696,31 @@ pub fn trace_rows(
         let (lo, hi) = (y0.max(rows.start), (y0 + n).min(rows.end));
         (lo < hi).then(|| (lo, hi - lo))
     });
+    let mut tracing = scene.tracing_cut();
     for (y0, rows) in bands {
         if cancel.load(Ordering::Relaxed) {
             return Err(Error::Interrupted);
         }
         let bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
-        scoped(device, "tracing a band", || {
-            let mut enc = submit_band(device, queue, scene, y0, rows, &samples);
+        let start = Instant::now();
+        let dispatches = scoped(device, "tracing a band", || {
+            let (mut enc, dispatches) =
+                submit_band(device, queue, scene, &tracing, y0, rows, &samples);
             enc.copy_buffer_to_buffer(&scene.bound.output, 0, &scene.bound.readback, 0, bytes);
             queue.submit([enc.finish()]);
+            dispatches
         })?;
         let (band_rays, band_cut) =
             read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+        if let Some(budget) = scene.dispatch_budget {
+            // The band's time includes its readback: the mean dispatch is overestimated,
+            // on the safe side.
+            let mean = start.elapsed().as_secs_f64() / f64::from(dispatches.max(1));
+            if mean > budget.as_secs_f64() {
+                tracing = tracing.finer(2.0 * mean / budget.as_secs_f64());
+                *scene.finer.lock().expect("cut lock") = Some(tracing);
+            }
+        }
         rays += band_rays;
         unfinished.extend(band_cut);
         progress(u64::from(cut.width) * u64::from(rows));
@@ -700,37 +755,49 @@ pub fn trace_rows(
 /// Traces an uploaded scene's image and waits for the GPU, reading nothing back: the
 /// GPU's own time for a frame, as a viewer that displays on the device would see it.
 pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
-    for (y0, rows) in scene.cut.bands() {
+    let cut = scene.tracing_cut();
+    for (y0, rows) in cut.bands() {
         scoped(device, "tracing a band", || {
-            let enc = submit_band(device, queue, scene, y0, rows, &(0..scene.cut.spp));
+            let (enc, _) = submit_band(device, queue, scene, &cut, y0, rows, &(0..cut.spp));
             queue.submit([enc.finish()]);
         })?;
     }
     wait(device)
 }
 
-/// Writes the tiles of the band at row `y0` and encodes the clearing of its output (the
-/// passes add to it) and their dispatches.
+/// Writes the tiles of the band at row `y0` as `cut` cuts it and encodes the clearing of
+/// its output (the passes add to it) and their dispatches. A finer cut than the one the
+/// tile buffer was made for has more tiles than slots: all but the last buffer-full are
+/// submitted here. Returns the encoder of the last, and the band's dispatches.
 fn submit_band(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &GpuScene,
+    cut: &Cut,
     y0: u32,
     rows: u32,
     samples: &Range<u32>,
-) -> wgpu::CommandEncoder {
-    let tiles = scene.cut.tiles(y0, rows, samples);
+) -> (wgpu::CommandEncoder, u32) {
+    let tiles = cut.tiles(y0, rows, samples);
     let stride = scene.bound.tile_stride as usize;
-    let mut bytes = vec![0u8; tiles.len() * stride];
-    for (chunk, tile) in bytes.chunks_mut(stride).zip(&tiles) {
-        chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
-    }
-    queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
-    let band_bytes = u64::from(scene.cut.width) * u64::from(rows) * PIXEL_BYTES;
+    let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
     let mut enc = device.create_command_encoder(&Default::default());
     enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
-    encode_band(&mut enc, &scene.pipeline, &scene.bound, &tiles);
-    enc
+    let mut groups = tiles.chunks(scene.bound.tile_slots as usize).peekable();
+    while let Some(group) = groups.next() {
+        let mut bytes = vec![0u8; group.len() * stride];
+        for (chunk, tile) in bytes.chunks_mut(stride).zip(group) {
+            chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
+        }
+        // Queue order: this write lands after the submissions before it have run.
+        queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
+        encode_band(&mut enc, &scene.pipeline, &scene.bound, group);
+        if groups.peek().is_some() {
+            queue.submit([enc.finish()]);
+            enc = device.create_command_encoder(&Default::default());
+        }
+    }
+    (enc, tiles.len() as u32)
 }
 
 /// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes,

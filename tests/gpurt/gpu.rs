@@ -1006,3 +1006,58 @@ fn a_device_lost_half_way_is_an_error_not_an_image() {
     );
     assert!(err.to_string().starts_with("GPU error: "), "{err}");
 }
+
+/// Dispatches over the renderer's time budget (kept well inside a driver's watchdog) make
+/// the rest of the frame, and the frames after it, cut finer: on lavapipe, which has no
+/// watchdog, a budget of a nanosecond forces it. The image and the rays stay the same to
+/// the bit, although most tiles are then submitted in several buffer-fulls.
+#[test]
+fn dispatches_over_the_budget_are_cut_finer_and_change_nothing() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let scene = features_scene("");
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    // Two bands on a software adapter: 256 rows of 96 pixels at 8 samples fill one.
+    let frame = RenderOptions {
+        width: 96,
+        height: 300,
+        spp: 8,
+        ..opts(&scene)
+    };
+    let globals = frame::globals(&buffers, &frame);
+    let never = AtomicBool::new(false);
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let trace_twice = |r: &GpuRenderer| {
+        let up = r
+            .upload(device, queue, &buffers, &globals)
+            .expect("uploads");
+        let before = up.dispatch_shape();
+        let first = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+        let after = up.dispatch_shape();
+        let second = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+        (before, after, first, second)
+    };
+    // The default budget: none on a software adapter; a frame this small is far inside
+    // it on a GPU.
+    let (shape, kept, reference, again) = trace_twice(&g.renderer);
+    assert_eq!(shape, kept, "the default budget refined a small frame");
+    assert_eq!(again, reference);
+
+    let tight = GpuRenderer::new(device, None)
+        .expect("shader module")
+        .with_dispatch_budget(std::time::Duration::from_nanos(1));
+    let (before, after, first, second) = trace_twice(&tight);
+    assert_eq!(before, shape);
+    assert_eq!(
+        after,
+        (WORKGROUP_SIDE, 1),
+        "cut down to one workgroup, one sample"
+    );
+    println!("dispatch shape {shape:?} -> {after:?}");
+    assert!(
+        first == reference,
+        "a finer cut changed the image or the rays"
+    );
+    assert!(second == reference, "the refined cut's next frame changed");
+}
