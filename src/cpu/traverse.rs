@@ -5,7 +5,7 @@ use glam::{Vec3, Vec4};
 
 use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
 use super::{intersect, wide};
-use crate::gpu_types::{AOV_COST, GpuNode, TRAVERSAL_PAIRS, TRAVERSAL_STACK};
+use crate::gpu_types::{GpuNode, TRAVERSAL_PAIRS, TRAVERSAL_STACK};
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
 fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
@@ -175,7 +175,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
-    if let Some(wide) = b.wide.filter(|_| b.globals.aov != AOV_COST) {
+    if let Some(wide) = b.wide {
         let slabs = wide::Slabs::new(ray.origin, inv_dir);
         wide::walk::<true>(wide, &slabs, tmin, hit.t, |first, count| {
             closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);

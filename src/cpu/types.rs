@@ -30,10 +30,11 @@ pub struct Bindings<'a> {
 }
 
 impl<'a> Bindings<'a> {
-    /// What the CPU renderer reads: the buffers, walked through the four-wide tree.
+    /// What the CPU renderer reads: the buffers, walked through the four-wide tree, but
+    /// for the `cost` AOV, which counts the nodes of the GPU's walk.
     pub fn new(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
         Bindings {
-            wide: Some(buffers.wide_nodes()),
+            wide: (globals.aov != AOV_COST).then(|| buffers.wide_nodes()),
             ..Self::gpu_walk(buffers, globals)
         }
     }

@@ -8,7 +8,7 @@
 //! visited differs. The closest hit is therefore the binary walk's (the first of two
 //! primitives at exactly the same distance may differ), which is why the colour a pixel
 //! gets does not depend on the walk; the `cost` AOV, which counts the nodes of the GPU's
-//! walk, still uses the binary walk (`traverse.rs`).
+//! walk, still uses the binary walk (`Bindings::new`).
 //!
 //! Why not on the GPU: lanes of a GPU already run one ray each, and lavapipe runs both
 //! sides of every branch; a four-child node there is four of today's box tests with more

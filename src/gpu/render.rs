@@ -37,8 +37,6 @@ pub(super) struct Bound {
     /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
     pub(super) tile_buf: wgpu::Buffer,
     pub(super) tile_stride: u32,
-    /// `GpuTile`s `tile_buf` holds: a band's dispatches, or one submission's of them.
-    pub(super) tile_slots: u32,
     pub(super) output: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
 }
@@ -416,7 +414,6 @@ impl GpuRenderer {
                 globals: globals_buf,
                 tile_buf,
                 tile_stride,
-                tile_slots: tile_slots.max(1),
                 output,
                 readback,
             }
@@ -783,7 +780,9 @@ fn submit_band(
     let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
     let mut enc = device.create_command_encoder(&Default::default());
     enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
-    let mut groups = tiles.chunks(scene.bound.tile_slots as usize).peekable();
+    // `tile_buf` holds the dispatches of a band of the frame's own cut (`bind`).
+    let slots = scene.cut.dispatches_per_band().max(1) as usize;
+    let mut groups = tiles.chunks(slots).peekable();
     while let Some(group) = groups.next() {
         let mut bytes = vec![0u8; group.len() * stride];
         for (chunk, tile) in bytes.chunks_mut(stride).zip(group) {
