@@ -50,6 +50,9 @@ fn next_leaf(
     tmax: f32,
     cost: ptr<function, u32>,
 ) -> vec2<u32> {
+    if (WIDE) {
+        return next_leaf_wide(walk, ray, inv_dir, tmin, tmax, cost);
+    }
     if (PAIRS) {
         return next_leaf_pairs(walk, ray, inv_dir, tmin, tmax, cost);
     }
@@ -134,6 +137,81 @@ fn next_leaf_pairs(
             select(a.count_axis, b.count_axis, enter_b),
         );
         live = hit_a || hit_b;
+    }
+    // Reached only when the driver ends the loop.
+    cut_short = true;
+    return vec2<u32>(0u);
+}
+
+// Orders two lanes of a wide node, (entry distance as bits, stack entry), nearer first;
+// of two at the same distance the first stays first.
+fn nearer_first(a: ptr<function, vec2<u32>>, b: ptr<function, vec2<u32>>) {
+    let swap = bitcast<f32>((*b).x) < bitcast<f32>((*a).x);
+    let near = select(*a, *b, swap);
+    *b = select(*b, *a, swap);
+    *a = near;
+}
+
+// `next_leaf` for TRAVERSAL_WIDE, over the four-wide tree (node_texels holds WideNodes):
+// `walk.node` is a stack entry (WideNode::entry). A node's four boxes are tested
+// together, the children reached are sorted by entry distance (a sorting network), the
+// nearest is entered and the others pushed farthest first. A ray waits on half as many
+// dependent fetches as with pairs. A leaf entry, entered or popped, is returned as it is:
+// its box is not on hand to test again, so a popped leaf may be tested past the nearest
+// hit. The pushes are branch-free: each writes the top slot and keeps it only when its
+// lane was reached, so a node writes up to two slots past those it keeps
+// (`wide::gpu_nodes` checks that the stack holds them). `cost` counts the boxes tested.
+fn next_leaf_wide(
+    walk: ptr<function, Walk>,
+    ray: Ray,
+    inv_dir: vec3<f32>,
+    tmin: f32,
+    tmax: f32,
+    cost: ptr<function, u32>,
+) -> vec2<u32> {
+    let miss = bitcast<u32>(NO_HIT);
+    loop {
+        let e = (*walk).node;
+        if ((e & WIDE_LEAF) != 0u) {
+            return vec2<u32>((e & ~WIDE_LEAF) >> 2u, (e & 3u) + 1u);
+        }
+        let n = load_wide_node(e);
+        *cost += 4u;
+        work += 1u;
+        // `slab` for the four boxes, lane by lane the same arithmetic.
+        let o = ray.origin;
+        let x0 = (n.lo[0] - o.x) * inv_dir.x;
+        let x1 = (n.hi[0] - o.x) * inv_dir.x;
+        let y0 = (n.lo[1] - o.y) * inv_dir.y;
+        let y1 = (n.hi[1] - o.y) * inv_dir.y;
+        let z0 = (n.lo[2] - o.z) * inv_dir.z;
+        let z1 = (n.hi[2] - o.z) * inv_dir.z;
+        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
+        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
+        let reached = near <= far * SLAB_WIDEN & n.entry != vec4<u32>(WIDE_EMPTY);
+        let t = bitcast<vec4<u32>>(select(vec4<f32>(NO_HIT), near, reached));
+        var a = vec2<u32>(t.x, n.entry.x);
+        var b = vec2<u32>(t.y, n.entry.y);
+        var c = vec2<u32>(t.z, n.entry.z);
+        var d = vec2<u32>(t.w, n.entry.w);
+        nearer_first(&a, &b);
+        nearer_first(&c, &d);
+        nearer_first(&a, &c);
+        nearer_first(&b, &d);
+        nearer_first(&b, &c);
+        var sp = (*walk).sp;
+        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = d.y;
+        sp += u32(d.x != miss);
+        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = c.y;
+        sp += u32(c.x != miss);
+        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = b.y;
+        sp += u32(b.x != miss);
+        (*walk).sp = sp;
+        if (a.x != miss) {
+            (*walk).node = a.y;
+        } else if (!pop(walk)) {
+            return vec2<u32>(0u);
+        }
     }
     // Reached only when the driver ends the loop.
     cut_short = true;

@@ -27,6 +27,14 @@ struct Node {
     count_axis: u32,
 }
 
+// A node of the four-wide tree (TRAVERSAL_WIDE): the four children's boxes by axis and
+// each child's traversal-stack entry (src/gpu_types.rs: GpuWideNode).
+struct WideNode {
+    lo: array<vec4<f32>, 3>,
+    hi: array<vec4<f32>, 3>,
+    entry: vec4<u32>,
+}
+
 struct Plane {
     normal: vec3<f32>,
     d: f32,
@@ -165,6 +173,9 @@ const AOV_DEPTH: u32 = 2u;
 const AOV_COST: u32 = 3u;
 
 const TRAVERSAL_STACK: u32 = 64u;
+// GpuWideNode::entry: a leaf's flag, and a lane without a child.
+const WIDE_LEAF: u32 = 0x80000000u;
+const WIDE_EMPTY: u32 = 0xffffffffu;
 // Texels a row of node_texels and prim_texels (src/gpu_types.rs: TEXTURE_WIDTH).
 const TEXTURE_WIDTH: u32 = 4096u;
 // A workgroup of main.wgsl covers WORKGROUP_SIDE x WORKGROUP_SIDE pixels with
@@ -203,6 +214,8 @@ override MULTISAMPLE: bool = true;
 override AOV: u32 = 0u;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
+// globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.
+override WIDE: bool = false;
 // log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
 override LAYER_SHIFT: u32 = 25u;
 
@@ -212,10 +225,11 @@ override LAYER_SHIFT: u32 = 25u;
 @group(0) @binding(0) var<storage, read> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
 // BVH nodes and primitives, the data every traversal step reads, come through rgba32uint
-// textures holding the very bytes of `array<Node>` and `array<Prim>` (2 and 3 texels
-// each, TEXTURE_WIDTH texels a row). lavapipe loads a storage buffer one component and
-// one invocation at a time (a 32-byte node took 64 scalar loads), but fetches texels with
-// vector gathers; real GPUs read both through their caches.
+// textures holding the very bytes of `array<Node>` (`array<WideNode>` for the wide walk)
+// and `array<Prim>` (2, 7 and 3 texels each, TEXTURE_WIDTH texels a row). lavapipe loads
+// a storage buffer one component and one invocation at a time (a 32-byte node took 64
+// scalar loads), but fetches texels with vector gathers; real GPUs read both through
+// their caches.
 @group(0) @binding(2) var node_texels: texture_2d_array<u32>;
 @group(0) @binding(3) var prim_texels: texture_2d_array<u32>;
 @group(0) @binding(4) var normal_texels: texture_2d_array<u32>;
@@ -256,6 +270,23 @@ fn load_node(i: u32) -> Node {
     let a = texel(node_texels, 2u * i);
     let b = texel(node_texels, 2u * i + 1u);
     return Node(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+}
+
+fn load_wide_node(i: u32) -> WideNode {
+    let b = 7u * i;
+    return WideNode(
+        array<vec4<f32>, 3>(
+            bitcast<vec4<f32>>(texel(node_texels, b)),
+            bitcast<vec4<f32>>(texel(node_texels, b + 1u)),
+            bitcast<vec4<f32>>(texel(node_texels, b + 2u)),
+        ),
+        array<vec4<f32>, 3>(
+            bitcast<vec4<f32>>(texel(node_texels, b + 3u)),
+            bitcast<vec4<f32>>(texel(node_texels, b + 4u)),
+            bitcast<vec4<f32>>(texel(node_texels, b + 5u)),
+        ),
+        texel(node_texels, b + 6u),
+    );
 }
 
 fn load_tri_normals(i: u32) -> TriNormals {

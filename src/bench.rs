@@ -23,7 +23,7 @@ use crate::bvh;
 use crate::error::Result;
 use crate::frame::{self, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
-use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_PAIRS};
+use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE};
 use crate::outln;
 use crate::pack;
 use crate::run;
@@ -120,12 +120,12 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         None => None,
     };
     if let Some(r) = &renderer {
-        let walk = if r.traversal() == TRAVERSAL_PAIRS {
-            "pairs"
-        } else {
-            "single"
+        let walk = match r.traversal() {
+            TRAVERSAL_SINGLE => "single",
+            TRAVERSAL_PAIRS => "pairs",
+            _ => "wide (pairs where a scene's wide tree does not fit the stack)",
         };
-        eprintln!("traversal   {walk} (GPURT_TRAVERSAL=single|pairs to choose)");
+        eprintln!("traversal   {walk} (GPURT_TRAVERSAL=single|pairs|wide to choose)");
     }
     if config.cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());

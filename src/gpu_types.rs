@@ -7,7 +7,7 @@
 //! 16-byte alignment without hidden padding.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
@@ -86,6 +86,25 @@ impl GpuNode {
     }
 }
 
+/// A node of the four-wide BVH the `TRAVERSAL_WIDE` walk reads (`cpu::wide` collapses the
+/// binary tree into it), 112 bytes, seven texels: the four children's boxes by axis
+/// (`lo[axis]` holds that coordinate of the four boxes), and where each child leads,
+/// as a traversal-stack entry: a wide node's index, `WIDE_LEAF | first << 2 | (count - 1)`
+/// for a leaf of `count` (at most `MAX_LEAF_PRIMS`) primitives from `prims[first]`, or
+/// `WIDE_EMPTY` for a lane without a child (whose box is empty: lo above hi).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuWideNode {
+    pub lo: [Vec4; 3],
+    pub hi: [Vec4; 3],
+    pub entry: [u32; 4],
+}
+
+/// Bit of a `GpuWideNode::entry` that marks a leaf.
+pub const WIDE_LEAF: u32 = 1 << 31;
+/// `GpuWideNode::entry` of a lane without a child.
+pub const WIDE_EMPTY: u32 = u32::MAX;
+
 /// An infinite plane `dot(normal, p) = d`; tested outside the BVH.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -138,11 +157,16 @@ pub const AOV_DEPTH: u32 = 2;
 pub const AOV_COST: u32 = 3;
 
 /// BVH walk: one node fetched and tested per step, the nearer child along the split axis
-/// first. The choice for lavapipe and the CPU.
+/// first. What the CPU backend's own frames name (its renderer walks a wide tree of its
+/// own, `cpu::wide`, but for the cost AOV).
 pub const TRAVERSAL_SINGLE: u32 = 0;
 /// BVH walk: both children of a node fetched and tested together, the nearer by entry
-/// distance first. The choice for hardware GPUs (see docs/gpu.md).
+/// distance first. The fallback of `TRAVERSAL_WIDE` (see docs/gpu.md).
 pub const TRAVERSAL_PAIRS: u32 = 1;
+/// BVH walk: the four-wide tree (`GpuWideNode`), a node's four boxes tested together and
+/// the children reached entered nearest first. Every GPU's choice; falls back to `TRAVERSAL_PAIRS` for a
+/// scene whose wide tree does not fit the traversal stack (`SceneBuffers::gpu_wide_nodes`).
+pub const TRAVERSAL_WIDE: u32 = 2;
 
 /// Per-render constants (a read-only storage buffer).
 #[repr(C)]
@@ -171,7 +195,8 @@ pub struct GpuGlobals {
     pub n_planes: u32,
     pub n_lights: u32,
     pub aov: u32,
-    /// How the BVH is walked: `TRAVERSAL_SINGLE` or `TRAVERSAL_PAIRS` (see traverse.wgsl).
+    /// How the BVH is walked: `TRAVERSAL_SINGLE`, `TRAVERSAL_PAIRS` or `TRAVERSAL_WIDE`
+    /// (see traverse.wgsl).
     pub traversal: u32,
     pub _pad: [u32; 3],
 }

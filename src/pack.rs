@@ -43,6 +43,9 @@ pub struct SceneBuffers {
     /// The CPU renderer's four-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
+    /// The same tree as the GPU's wide walk reads it (`gpu_wide_nodes`), built on its
+    /// first upload for that walk.
+    gpu_wide: OnceLock<Option<Vec<GpuWideNode>>>,
 }
 
 /// The three normals scaled to unit length, or `None` when one has no direction.
@@ -185,6 +188,7 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
         background,
         ambient,
         wide: OnceLock::new(),
+        gpu_wide: OnceLock::new(),
     })
 }
 
@@ -193,6 +197,25 @@ impl SceneBuffers {
     /// `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))
+    }
+
+    /// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it, built the first time it
+    /// is asked for; `None` when that walk cannot take this scene (`wide::gpu_nodes`),
+    /// which then walks the binary tree in pairs.
+    pub fn gpu_wide_nodes(&self) -> Option<&[GpuWideNode]> {
+        self.gpu_wide
+            .get_or_init(|| wide::gpu_nodes(self.wide_nodes()))
+            .as_deref()
+    }
+
+    /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_WIDE` only
+    /// where the scene's wide tree fits it.
+    pub fn traversal_for(&self, traversal: u32) -> u32 {
+        if traversal == TRAVERSAL_WIDE && self.gpu_wide_nodes().is_none() {
+            TRAVERSAL_PAIRS
+        } else {
+            traversal
+        }
     }
 
     /// Proves the invariants the GPU shader relies on, since it runs without runtime
@@ -214,6 +237,20 @@ impl SceneBuffers {
         }
         if self.bvh_depth >= TRAVERSAL_STACK {
             return fail(format!("BVH depth {} exceeds the stack", self.bvh_depth));
+        }
+        if globals.traversal == TRAVERSAL_WIDE {
+            // The wide tree's leaves are the binary tree's (checked above); its inner
+            // entries must lead to later nodes, and `wide::gpu_nodes` bounded the stack.
+            let Some(wide) = self.gpu_wide_nodes() else {
+                return fail("the wide walk was chosen for a tree it cannot take".into());
+            };
+            for (i, node) in wide.iter().enumerate() {
+                for &e in &node.entry {
+                    if e & WIDE_LEAF == 0 && !(e as usize > i && (e as usize) < wide.len()) {
+                        return fail(format!("wide node {i} has a bad child"));
+                    }
+                }
+            }
         }
         for (i, p) in self.prims.iter().enumerate() {
             let slot_ok =

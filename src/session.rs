@@ -149,7 +149,7 @@ impl Renderer for GpuSession {
     }
 
     fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
-        self.renderer.frame(globals)
+        self.renderer.frame(&self.scene, globals)
     }
 
     /// Uploads the scene (the first time) or moves it to this frame, compiling the frame's

@@ -3,9 +3,12 @@
 
 use glam::{Vec3, Vec4};
 
+use super::intersect::SLAB_WIDEN;
 use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
 use super::{intersect, wide};
-use crate::gpu_types::{GpuNode, TRAVERSAL_PAIRS, TRAVERSAL_STACK};
+use crate::gpu_types::{
+    GpuNode, GpuWideNode, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
+};
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
 fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
@@ -58,7 +61,10 @@ impl Walk {
         tmax: f32,
         cost: &mut u32,
     ) -> (u32, u32) {
-        if b.globals.traversal == TRAVERSAL_PAIRS {
+        if let Some(wide) = b.gpu_wide {
+            return self.next_leaf_wide(wide, ray, inv_dir, tmin, tmax, cost);
+        }
+        if b.globals.traversal != TRAVERSAL_SINGLE {
             return self.next_leaf_pairs(b, ray, inv_dir, tmin, tmax, cost);
         }
         let neg = [ray.dir.x < 0.0, ray.dir.y < 0.0, ray.dir.z < 0.0];
@@ -127,6 +133,76 @@ impl Walk {
             }
             (self.node, n) = if enter_c { (second, c) } else { (first, a) };
             live = hit_a || hit_c;
+        }
+    }
+
+    /// Orders two lanes of a wide node, (entry distance as bits, stack entry), nearer
+    /// first; of two at the same distance the first stays first.
+    fn nearer_first(a: &mut (u32, u32), b: &mut (u32, u32)) {
+        if f32::from_bits(b.0) < f32::from_bits(a.0) {
+            std::mem::swap(a, b);
+        }
+    }
+
+    /// `next_leaf` for `TRAVERSAL_WIDE`, over the GPU's four-wide tree: `node` is a stack
+    /// entry (`GpuWideNode::entry`). A node's four boxes are tested together, the children
+    /// reached sorted by entry distance, the nearest entered and the others pushed
+    /// farthest first; a leaf entry, entered or popped, is returned untested. The pushes
+    /// are the shader's, branch-free (each writes the top slot, kept only when its lane
+    /// was reached). `cost` counts the boxes tested. (Why the GPU walks this way:
+    /// traverse.wgsl.)
+    fn next_leaf_wide(
+        &mut self,
+        wide: &[GpuWideNode],
+        ray: &Ray,
+        inv_dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+        cost: &mut u32,
+    ) -> (u32, u32) {
+        let miss = NO_HIT.to_bits();
+        loop {
+            let e = self.node;
+            if e & WIDE_LEAF != 0 {
+                return ((e & !WIDE_LEAF) >> 2, (e & 3) + 1);
+            }
+            let n = &wide[e as usize];
+            *cost += 4;
+            // `intersect::slab` for the four boxes, lane by lane the same arithmetic.
+            let o = ray.origin;
+            let (x0, x1) = ((n.lo[0] - o.x) * inv_dir.x, (n.hi[0] - o.x) * inv_dir.x);
+            let (y0, y1) = ((n.lo[1] - o.y) * inv_dir.y, (n.hi[1] - o.y) * inv_dir.y);
+            let (z0, z1) = ((n.lo[2] - o.z) * inv_dir.z, (n.hi[2] - o.z) * inv_dir.z);
+            let near = x0
+                .min(x1)
+                .max(y0.min(y1))
+                .max(z0.min(z1))
+                .max(Vec4::splat(tmin));
+            let far = x0
+                .max(x1)
+                .min(y0.max(y1))
+                .min(z0.max(z1))
+                .min(Vec4::splat(tmax));
+            let reached = near.cmple(far * SLAB_WIDEN).bitmask();
+            let lane = |l: usize| {
+                let hit = reached & (1 << l) != 0 && n.entry[l] != WIDE_EMPTY;
+                (if hit { near[l].to_bits() } else { miss }, n.entry[l])
+            };
+            let [mut a, mut b, mut c, mut d] = [lane(0), lane(1), lane(2), lane(3)];
+            Self::nearer_first(&mut a, &mut b);
+            Self::nearer_first(&mut c, &mut d);
+            Self::nearer_first(&mut a, &mut c);
+            Self::nearer_first(&mut b, &mut d);
+            Self::nearer_first(&mut b, &mut c);
+            for (t, entry) in [d, c, b] {
+                self.stack[self.sp] = entry;
+                self.sp += usize::from(t != miss);
+            }
+            if a.0 != miss {
+                self.node = a.1;
+            } else if !self.pop() {
+                return (0, 0);
+            }
         }
     }
 }

@@ -27,6 +27,9 @@ pub struct Bindings<'a> {
     /// The four-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
     /// walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
+    /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
+    /// is `TRAVERSAL_WIDE` and `wide` is `None`.
+    pub gpu_wide: Option<&'a [GpuWideNode]>,
 }
 
 impl<'a> Bindings<'a> {
@@ -51,6 +54,9 @@ impl<'a> Bindings<'a> {
             materials: &buffers.materials,
             lights: &buffers.lights,
             wide: None,
+            gpu_wide: (globals.traversal == TRAVERSAL_WIDE)
+                .then(|| buffers.gpu_wide_nodes())
+                .flatten(),
         }
     }
 }

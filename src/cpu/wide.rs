@@ -10,16 +10,15 @@
 //! gets does not depend on the walk; the `cost` AOV, which counts the nodes of the GPU's
 //! walk, still uses the binary walk (`Bindings::new`).
 //!
-//! Why not on the GPU: lanes of a GPU already run one ray each, and lavapipe runs both
-//! sides of every branch; a four-child node there is four of today's box tests with more
-//! registers held (docs/bvh.md).
+//! The GPU's `TRAVERSAL_WIDE` walk reads the same tree, as `GpuWideNode`s (`gpu_nodes`):
+//! there a ray waits on node fetches, and a wide node halves the chain of them.
 
 use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec4};
 
 use super::intersect::SLAB_WIDEN;
-use crate::gpu_types::{GpuNode, TRAVERSAL_STACK};
+use crate::gpu_types::{GpuNode, GpuWideNode, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF};
 
 /// Children of a wide node.
 pub const WIDTH: usize = 4;
@@ -105,6 +104,47 @@ pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
         wide[w] = node;
     }
     wide
+}
+
+/// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it (`GpuWideNode`), or `None`
+/// where that walk cannot take it: a path whose waiting children could overflow the
+/// traversal stack (see `next_leaf_wide` in traverse.wgsl: a node leaves at most three
+/// children waiting, and its pushes write up to two entries past those it keeps), a leaf
+/// of more than four primitives, or a first primitive beyond the entry's 29 bits.
+pub fn gpu_nodes(wide: &[WideNode]) -> Option<Vec<GpuWideNode>> {
+    let mut out = Vec::with_capacity(wide.len());
+    for n in wide {
+        let mut entry = [WIDE_EMPTY; WIDTH];
+        for ((e, &child), &count) in entry.iter_mut().zip(&n.child).zip(&n.count) {
+            *e = match count {
+                EMPTY => WIDE_EMPTY,
+                0 => child,
+                1..=4 if child < (1 << 29) - 1 => WIDE_LEAF | child << 2 | (count - 1),
+                _ => return None,
+            };
+        }
+        out.push(GpuWideNode {
+            lo: n.lo,
+            hi: n.hi,
+            entry,
+        });
+    }
+    // Entries waiting when the walk reaches each node: the sum over its ancestors of the
+    // children each left waiting (at most its children less the one entered).
+    let mut todo = vec![(0usize, 0usize)];
+    while let Some((w, waiting)) = todo.pop() {
+        if waiting + 3 > TRAVERSAL_STACK {
+            return None;
+        }
+        let n = &wide[w];
+        let children = n.count.iter().filter(|&&c| c != EMPTY).count();
+        for lane in 0..WIDTH {
+            if n.count[lane] == 0 {
+                todo.push((n.child[lane] as usize, waiting + children - 1));
+            }
+        }
+    }
+    Some(out)
 }
 
 /// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
@@ -334,5 +374,51 @@ mod tests {
         let binary = bvh::build(&chain, Quality::Medium);
         check(&binary, &build(&binary.nodes));
         assert!(build(&[]).is_empty());
+    }
+
+    /// A binary tree whose path to its deepest leaf passes `depth` inner nodes, each with
+    /// a larger two-leaf subtree beside it: collapsed, every wide node on that path leaves
+    /// three children waiting.
+    fn comb(depth: usize) -> Vec<GpuNode> {
+        fn node(nodes: &mut Vec<GpuNode>, size: f32, count: u32) -> usize {
+            nodes.push(GpuNode {
+                min: Vec3::ZERO,
+                max: Vec3::splat(size),
+                offset: 0,
+                count_axis: count,
+            });
+            nodes.len() - 1
+        }
+        fn path(nodes: &mut Vec<GpuNode>, depth: usize) -> usize {
+            if depth == 0 {
+                return node(nodes, 1.0, 1);
+            }
+            let i = node(nodes, 1.0, 0);
+            let side = node(nodes, 10.0, 0);
+            node(nodes, 10.0, 1);
+            let second = node(nodes, 10.0, 1);
+            nodes[side].offset = second as u32;
+            nodes[i].offset = path(nodes, depth - 1) as u32;
+            i
+        }
+        let mut nodes = Vec::new();
+        path(&mut nodes, depth);
+        nodes
+    }
+
+    /// The GPU's wide walk takes trees whose waiting children fit the traversal stack,
+    /// and refuses the others, which then walk the binary tree in pairs.
+    #[test]
+    fn the_gpu_wide_tree_is_refused_where_it_could_overflow_the_stack() {
+        for n in [1, 17, 1000] {
+            let binary = bvh::build(&boxes(n), Quality::High);
+            let gpu = gpu_nodes(&build(&binary.nodes)).expect("a shallow tree fits");
+            assert_eq!(gpu.len(), build(&binary.nodes).len());
+        }
+        // Two binary levels a wide node, three waiting each: 20 levels fit, 42 do not.
+        assert!(gpu_nodes(&build(&comb(20))).is_some());
+        let deep = comb(42);
+        assert!(deep.len() < 4 * 42 + 2);
+        assert!(gpu_nodes(&build(&deep)).is_none());
     }
 }

@@ -24,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
     GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE,
-    WORKGROUP_SIDE,
+    TRAVERSAL_WIDE, WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
 
@@ -70,22 +70,21 @@ pub struct GpuRenderer {
 /// budget.
 pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 
-/// The traversal for an adapter: `TRAVERSAL_PAIRS` on hardware GPUs, where a ray's time
-/// goes to waiting on node fetches and fetching two at once halves the wait;
-/// `TRAVERSAL_SINGLE` on software adapters, where every lane runs both children's tests
-/// and the single walk is the faster (docs/gpu.md has the figures). `GPURT_TRAVERSAL`
-/// (`single` or `pairs`) overrides it, for measuring both on one adapter.
-fn traversal_for(software: bool) -> Result<u32> {
+/// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
+/// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
+/// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
+/// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
+/// is 1.01 to 1.14 times faster than single on four SPD scenes and 3% slower on mount-7
+/// (docs/gpu.md has the figures). `GPURT_TRAVERSAL` (`single`, `pairs` or `wide`)
+/// overrides it, for measuring them on one adapter.
+fn traversal_for() -> Result<u32> {
     match std::env::var("GPURT_TRAVERSAL").as_deref() {
-        Err(_) | Ok("") => Ok(if software {
-            TRAVERSAL_SINGLE
-        } else {
-            TRAVERSAL_PAIRS
-        }),
+        Err(_) | Ok("") => Ok(TRAVERSAL_WIDE),
         Ok("single") => Ok(TRAVERSAL_SINGLE),
         Ok("pairs") => Ok(TRAVERSAL_PAIRS),
+        Ok("wide") => Ok(TRAVERSAL_WIDE),
         Ok(v) => Err(Error::Render(format!(
-            "GPURT_TRAVERSAL={v}: expected `single` or `pairs`"
+            "GPURT_TRAVERSAL={v}: expected `single`, `pairs` or `wide`"
         ))),
     }
 }
@@ -226,7 +225,7 @@ impl GpuRenderer {
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
             software,
-            traversal: traversal_for(software)?,
+            traversal: traversal_for()?,
             layer_rows: upload::layer_rows(device),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
         })
@@ -260,9 +259,9 @@ impl GpuRenderer {
         }
     }
 
-    /// How this renderer walks the BVH, `TRAVERSAL_SINGLE` or `TRAVERSAL_PAIRS`: the one
-    /// that is faster on its adapter (see `traversal_for`). A CPU render meant to match
-    /// this renderer's to the node must use the same (`frame`).
+    /// How this renderer walks the BVH (`TRAVERSAL_*`), where a scene's tree allows
+    /// (see `traversal_for`). A CPU render meant to match this renderer's to the node must
+    /// use the walk `frame` gives for its scene.
     pub fn traversal(&self) -> u32 {
         self.traversal
     }
@@ -272,10 +271,11 @@ impl GpuRenderer {
         GpuRenderer { traversal, ..self }
     }
 
-    /// `globals` with this renderer's traversal: what its frames of `globals` trace.
-    pub fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
+    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`):
+    /// what its frames of `globals` trace.
+    pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
         GpuGlobals {
-            traversal: self.traversal,
+            traversal: scene.traversal_for(self.traversal),
             ..*globals
         }
     }
@@ -296,12 +296,12 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<wgpu::ComputePipeline> {
-        let globals = &self.frame(globals);
+        let globals = &self.frame(scene, globals);
         let spec = self.spec(scene, globals);
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
         }
-        let data = upload_scene(device, queue, scene, self.layer_rows)?;
+        let data = upload_scene(device, queue, scene, globals.traversal, self.layer_rows)?;
         self.pipeline(device, queue, scene, &data, globals)
     }
 
@@ -488,12 +488,18 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<GpuScene> {
-        let globals = &self.frame(globals);
+        let globals = &self.frame(scene, globals);
         let cut = self.cut(device, globals);
-        check_sizes(device, scene, cut.band_bytes(), self.layer_rows)?;
+        check_sizes(
+            device,
+            scene,
+            globals.traversal,
+            cut.band_bytes(),
+            self.layer_rows,
+        )?;
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        let data = upload_scene(device, queue, scene, self.layer_rows)?;
+        let data = upload_scene(device, queue, scene, globals.traversal, self.layer_rows)?;
         let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
         let bound = self.bind(
             device,
@@ -510,7 +516,7 @@ impl GpuRenderer {
             bound,
             pipeline,
             cut,
-            scene_bytes: scene_bytes(scene, self.layer_rows),
+            scene_bytes: scene_bytes(scene, globals.traversal, self.layer_rows),
             resume: self.resume.clone(),
             spec,
             dispatch_budget: self.dispatch_budget,
@@ -531,7 +537,7 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<()> {
-        let globals = &self.frame(globals);
+        let globals = &self.frame(scene, globals);
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
         if spec != uploaded.spec {
@@ -542,7 +548,13 @@ impl GpuRenderer {
         if cut == uploaded.cut {
             queue.write_buffer(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
         } else {
-            check_sizes(device, scene, cut.band_bytes(), self.layer_rows)?;
+            check_sizes(
+                device,
+                scene,
+                globals.traversal,
+                cut.band_bytes(),
+                self.layer_rows,
+            )?;
             uploaded.bound = self.bind(
                 device,
                 &uploaded.data,

@@ -26,6 +26,7 @@ pub struct Specialization {
     pub multisample: bool,
     pub aov: u32,
     pub pairs: bool,
+    pub wide: bool,
     /// log2 of the texels in a layer of the node and primitive textures (set by the
     /// renderer from its device's limits).
     pub layer_shift: u32,
@@ -50,6 +51,7 @@ impl Specialization {
             multisample: g.spp > 1,
             aov: g.aov,
             pairs: g.traversal == TRAVERSAL_PAIRS,
+            wide: g.traversal == TRAVERSAL_WIDE,
             layer_shift: 0,
         }
     }
@@ -72,6 +74,7 @@ impl Specialization {
             ("MULTISAMPLE", b(self.multisample)),
             ("AOV", f64::from(self.aov)),
             ("PAIRS", b(self.pairs)),
+            ("WIDE", b(self.wide)),
             ("LAYER_SHIFT", f64::from(self.layer_shift)),
         ]
     }
@@ -106,6 +109,7 @@ mod tests {
             multisample: true,
             aov: 0,
             pairs: true,
+            wide: true,
             layer_shift: 25,
         };
         let mut host: Vec<String> = spec

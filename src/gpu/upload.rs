@@ -4,7 +4,7 @@
 
 use super::render::scoped;
 use crate::error::{Error, Result};
-use crate::gpu_types::TEXTURE_WIDTH;
+use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 
 /// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
@@ -17,14 +17,24 @@ pub(super) struct SceneData {
     pub(super) lights: wgpu::Buffer,
 }
 
+/// The bytes of the BVH the walk `traversal` reads: the wide nodes for `TRAVERSAL_WIDE`
+/// (which `SceneBuffers::traversal_for` picks only where they exist), else the binary
+/// nodes.
+fn node_bytes(scene: &SceneBuffers, traversal: u32) -> &[u8] {
+    match scene.gpu_wide_nodes() {
+        Some(wide) if traversal == TRAVERSAL_WIDE => bytemuck::cast_slice(wide),
+        _ => bytemuck::cast_slice(&scene.nodes),
+    }
+}
+
 /// Device memory a scene's arrays take: the node and primitive textures (padded to whole
 /// rows) and the other arrays.
-pub(super) fn scene_bytes(scene: &SceneBuffers, layer_rows: u32) -> u64 {
+pub(super) fn scene_bytes(scene: &SceneBuffers, traversal: u32, layer_rows: u32) -> u64 {
     let texture = |bytes: usize| {
         let (rows, layers) = texture_extent(bytes, layer_rows);
         u64::from(rows) * u64::from(layers) * u64::from(TEXTURE_WIDTH) * 16
     };
-    texture(size_of_val(&scene.nodes[..]))
+    texture(node_bytes(scene, traversal).len())
         + texture(size_of_val(&scene.prims[..]))
         + texture(size_of_val(&scene.tri_normals[..]))
         + [
@@ -42,13 +52,14 @@ pub(super) fn upload_scene(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &SceneBuffers,
+    traversal: u32,
     layer_rows: u32,
 ) -> Result<SceneData> {
     let storage =
         |label: &str, bytes: &[u8]| buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE);
     scoped(device, "uploading the scene", || {
         let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows);
-        let nodes = texels("nodes", bytemuck::cast_slice(&scene.nodes));
+        let nodes = texels("nodes", node_bytes(scene, traversal));
         let prims = texels("prims", bytemuck::cast_slice(&scene.prims));
         let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals));
         let array = wgpu::TextureViewDescriptor {
@@ -215,6 +226,7 @@ pub(super) fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
 pub(super) fn check_sizes(
     device: &wgpu::Device,
     scene: &SceneBuffers,
+    traversal: u32,
     out_bytes: u64,
     layer_rows: u32,
 ) -> Result<()> {
@@ -229,7 +241,7 @@ pub(super) fn check_sizes(
     }
     let max_layers = limits.max_texture_array_layers;
     for (what, bytes) in [
-        ("BVH nodes", size_of_val(&scene.nodes[..])),
+        ("BVH nodes", node_bytes(scene, traversal).len()),
         ("primitives", size_of_val(&scene.prims[..])),
         ("triangle normals", size_of_val(&scene.tri_normals[..])),
     ] {

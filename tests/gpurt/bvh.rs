@@ -214,6 +214,7 @@ fn check_closest_hit(
 fn walk_name(b: &Bindings) -> &'static str {
     match (b.wide.is_some(), b.globals.traversal) {
         (true, _) => "wide",
+        (false, _) if b.gpu_wide.is_some() => "GPU wide",
         (false, TRAVERSAL_PAIRS) => "pairs",
         (false, _) => "single",
     }
@@ -239,10 +240,16 @@ fn check_rays(
         traversal: TRAVERSAL_PAIRS,
         ..globals
     };
-    // The GPU's two walks of the binary tree, and the CPU renderer's of the wide one.
+    let wide = GpuGlobals {
+        traversal: buffers.traversal_for(TRAVERSAL_WIDE),
+        ..globals
+    };
+    // The GPU's two walks of the binary tree and its walk of the wide one, and the CPU
+    // renderer's walk of the wide one.
     let walks = [
         Bindings::gpu_walk(buffers, &globals),
         Bindings::gpu_walk(buffers, &pairs),
+        Bindings::gpu_walk(buffers, &wide),
         Bindings::new(buffers, &globals),
     ];
     let b = &walks[0];

@@ -127,7 +127,7 @@ type Outcome = Result<(String, DiffStats), String>;
 fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
     // The CPU walks the BVH as the GPU renderer does, so costs match node for node.
-    let globals = g.renderer.frame(&frame::globals(&buffers, opts));
+    let globals = g.renderer.frame(&buffers, &frame::globals(&buffers, opts));
     let (cpu, gpu) = render_both(g, scene, &buffers, &globals);
     if cpu.pixels.iter().flatten().any(|v| !v.is_finite()) {
         return Err(format!("{label}: CPU image has non-finite values"));
@@ -324,51 +324,55 @@ fn lights_lens_and_every_primitive_kind_match_cpu() {
     check_all(cases);
 }
 
-/// The same GPU with the traversal its adapter does not use by default (pairs on
-/// lavapipe, single on a hardware GPU), so that both are checked against the CPU on every
-/// adapter the suite runs on.
-fn other_traversal() -> Option<&'static Gpu> {
-    static OTHER: OnceLock<Option<Gpu>> = OnceLock::new();
-    OTHER
-        .get_or_init(|| {
-            let g = gpu()?;
-            let other = match g.renderer.traversal() {
-                TRAVERSAL_PAIRS => TRAVERSAL_SINGLE,
-                _ => TRAVERSAL_PAIRS,
-            };
-            let renderer = GpuRenderer::new(&g.ctx.device, None)
-                .expect("shader compiles")
-                .with_traversal(other);
-            Some(Gpu {
+/// The same GPU with each traversal its adapter does not use by default (two of single,
+/// pairs and wide), so that every walk is checked against the CPU on every adapter the
+/// suite runs on.
+fn other_traversals() -> &'static [Gpu] {
+    static OTHERS: OnceLock<Vec<Gpu>> = OnceLock::new();
+    OTHERS.get_or_init(|| {
+        let Some(g) = gpu() else {
+            return Vec::new();
+        };
+        [TRAVERSAL_SINGLE, TRAVERSAL_PAIRS, TRAVERSAL_WIDE]
+            .into_iter()
+            .filter(|&t| t != g.renderer.traversal())
+            .map(|t| Gpu {
                 ctx: g.ctx.clone(),
-                renderer,
+                renderer: GpuRenderer::new(&g.ctx.device, None)
+                    .expect("shader compiles")
+                    .with_traversal(t),
             })
-        })
-        .as_ref()
+            .collect()
+    })
 }
 
-/// The other traversal finds the same images and, walking the tree as the CPU twin of it
-/// does, the same node costs: on the features scene, the bundled scenes and three SPD
-/// scenes of thousands of primitives.
+/// The other traversals find the same images and, walking the tree as the CPU twin of
+/// each does, the same node costs: on the features scene, the bundled scenes and three
+/// SPD scenes of thousands of primitives.
 #[test]
-fn the_other_traversal_matches_cpu_too() {
-    let Some(g) = other_traversal() else {
-        return;
-    };
-    let mut cases = check_variants(g, "features (other traversal)", &features_scene(""));
-    for f in files_with(&own_scenes(), &[".nff"]) {
-        let scene = scene::load(&f).expect("own scene loads");
-        let name = format!("{} (other traversal)", f.display());
-        cases.extend(check_variants(g, &name, &scene));
-    }
-    if let Some(root) = shared_scenes() {
-        for name in ["spd/balls-3.nff", "spd/mount-5.nff", "spd/teapot-6.nff"] {
-            let scene = scene::load(&root.join(name)).expect("shared scene loads");
-            cases.extend(check_variants(
-                g,
-                &format!("{name} (other traversal)"),
-                &scene,
-            ));
+fn the_other_traversals_match_cpu_too() {
+    let mut cases = Vec::new();
+    for g in other_traversals() {
+        let walk = match g.renderer.traversal() {
+            TRAVERSAL_SINGLE => "single",
+            TRAVERSAL_PAIRS => "pairs",
+            _ => "wide",
+        };
+        cases.extend(check_variants(
+            g,
+            &format!("features ({walk})"),
+            &features_scene(""),
+        ));
+        for f in files_with(&own_scenes(), &[".nff"]) {
+            let scene = scene::load(&f).expect("own scene loads");
+            let name = format!("{} ({walk})", f.display());
+            cases.extend(check_variants(g, &name, &scene));
+        }
+        if let Some(root) = shared_scenes() {
+            for name in ["spd/balls-3.nff", "spd/mount-5.nff", "spd/teapot-6.nff"] {
+                let scene = scene::load(&root.join(name)).expect("shared scene loads");
+                cases.extend(check_variants(g, &format!("{name} ({walk})"), &scene));
+            }
         }
     }
     check_all(cases);
@@ -601,7 +605,7 @@ fn scenes_over_several_texture_layers_match_cpu() {
 /// lights case), where dropped samples or bounces lose a tenth or more.
 fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
-    let globals = g.renderer.frame(&frame::globals(&buffers, opts));
+    let globals = g.renderer.frame(&buffers, &frame::globals(&buffers, opts));
     let never = AtomicBool::new(false);
     let (cpu, counts) =
         gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");

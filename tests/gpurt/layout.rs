@@ -25,6 +25,7 @@ fn rust_layouts() -> Vec<Layout> {
             [n0, _pad0, n1, _pad1, n2, _pad2]
         ),
         layout!("Node", GpuNode, [min, offset, max, count_axis]),
+        layout!("WideNode", GpuWideNode, [lo, hi, entry]),
         layout!("Material", GpuMaterial, [color, kd, ks, shine, t, ior]),
         layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, _pad]),
         layout!(
@@ -145,6 +146,8 @@ fn shared_constants_match() {
     let (module, _) = shaders::validate().expect("shader validates");
     let u32s = [
         ("TRAVERSAL_STACK", TRAVERSAL_STACK as u32),
+        ("WIDE_LEAF", WIDE_LEAF),
+        ("WIDE_EMPTY", WIDE_EMPTY),
         ("TEXTURE_WIDTH", TEXTURE_WIDTH),
         ("RAY_STACK", RAY_STACK as u32),
         ("PRIM_SPHERE", PRIM_SPHERE),
@@ -198,6 +201,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
         "texture fetch: the CPU indexes the arrays",
     ),
     ("load_prim_tag", "texture fetch: the CPU indexes the arrays"),
+    (
+        "load_wide_node",
+        "texture fetch: the CPU indexes the arrays",
+    ),
     ("node_count", "bit field the CPU's GpuNode methods read"),
     ("node_axis", "bit field the CPU's GpuNode methods read"),
     ("cone_valid", "inlined in the CPU's intersect_cone"),
