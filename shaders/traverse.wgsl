@@ -2,12 +2,15 @@
 // fixed stack, near child first, plus the planes kept outside it
 // (CPU twin: src/cpu/traverse.rs).
 //
-// The traversal stacks live in workgroup memory, one TRAVERSAL_STACK slice per invocation
-// (the CPU twin uses a local array). On lavapipe a function-local array indexed at run
-// time costs time in proportion to its length at every push and pop (halving it made
-// traversal 1.6x faster); workgroup memory is indexed directly everywhere. 64 invocations
-// x 64 entries x 4 bytes = 16 KiB, the WebGPU minimum of max_compute_workgroup_storage_size.
-var<workgroup> traversal_stack: array<u32, WORKGROUP_INVOCATIONS * TRAVERSAL_STACK>;
+// The traversal stacks live in workgroup memory, one slice of STACK entries per
+// invocation (the CPU twin uses a local array of TRAVERSAL_STACK). On lavapipe a
+// function-local array indexed at run time costs time in proportion to its length at
+// every push and pop (halving it made traversal 1.6x faster); workgroup memory is indexed
+// directly everywhere. STACK is what the scene's walk needs, at most TRAVERSAL_STACK:
+// 64 invocations x 64 entries x 4 bytes = 16 KiB, the WebGPU minimum of
+// max_compute_workgroup_storage_size; on a real GPU a smaller stack leaves room for more
+// workgroups at once.
+var<workgroup> traversal_stack: array<u32, WORKGROUP_INVOCATIONS * STACK>;
 // First entry of this invocation's slice (set once in main).
 var<private> stack_base: u32;
 

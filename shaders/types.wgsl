@@ -216,6 +216,9 @@ override AOV: u32 = 0u;
 override PAIRS: bool = false;
 // globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.
 override WIDE: bool = false;
+// Entries of each invocation's slice of traversal_stack: what the scene's walk needs, at
+// most TRAVERSAL_STACK (src/gpu/specialization.rs).
+override STACK: u32 = 64u;
 // log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
 override LAYER_SHIFT: u32 = 25u;
 

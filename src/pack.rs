@@ -43,9 +43,9 @@ pub struct SceneBuffers {
     /// The CPU renderer's four-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
-    /// The same tree as the GPU's wide walk reads it (`gpu_wide_nodes`), built on its
-    /// first upload for that walk.
-    gpu_wide: OnceLock<Option<Vec<GpuWideNode>>>,
+    /// The same tree as the GPU's wide walk reads it (`gpu_wide_nodes`) and the stack
+    /// entries that walk needs, built on its first upload for that walk.
+    gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
 }
 
 /// The three normals scaled to unit length, or `None` when one has no direction.
@@ -203,9 +203,24 @@ impl SceneBuffers {
     /// is asked for; `None` when that walk cannot take this scene (`wide::gpu_nodes`),
     /// which then walks the binary tree in pairs.
     pub fn gpu_wide_nodes(&self) -> Option<&[GpuWideNode]> {
+        self.gpu_wide().map(|(nodes, _)| &nodes[..])
+    }
+
+    fn gpu_wide(&self) -> Option<&(Vec<GpuWideNode>, u32)> {
         self.gpu_wide
             .get_or_init(|| wide::gpu_nodes(self.wide_nodes()))
-            .as_deref()
+            .as_ref()
+    }
+
+    /// Traversal-stack entries the GPU's walk `traversal` (as `traversal_for` gives it)
+    /// can need on this scene, at most `TRAVERSAL_STACK`: for the binary walks, one per
+    /// inner node on the longest path (the tree's depth bounds it); for the wide walk,
+    /// what `wide::gpu_nodes` found.
+    pub fn stack_entries(&self, traversal: u32) -> u32 {
+        match self.gpu_wide() {
+            Some(&(_, need)) if traversal == TRAVERSAL_WIDE => need,
+            _ => self.bvh_depth.max(1) as u32,
+        }
     }
 
     /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_WIDE` only

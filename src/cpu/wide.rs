@@ -106,12 +106,13 @@ pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
     wide
 }
 
-/// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it (`GpuWideNode`), or `None`
-/// where that walk cannot take it: a path whose waiting children could overflow the
-/// traversal stack (see `next_leaf_wide` in traverse.wgsl: a node leaves at most three
-/// children waiting, and its pushes write up to two entries past those it keeps), a leaf
-/// of more than four primitives, or a first primitive beyond the entry's 29 bits.
-pub fn gpu_nodes(wide: &[WideNode]) -> Option<Vec<GpuWideNode>> {
+/// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it (`GpuWideNode`), and the
+/// traversal-stack entries that walk can need on it; `None` where that walk cannot take
+/// the tree: a path whose waiting children could overflow `TRAVERSAL_STACK` (see
+/// `next_leaf_wide` in traverse.wgsl: a node leaves at most three children waiting, and
+/// its pushes write up to two slots past those it keeps), a leaf of more than four
+/// primitives, or a first primitive beyond the entry's 29 bits.
+pub fn gpu_nodes(wide: &[WideNode]) -> Option<(Vec<GpuWideNode>, u32)> {
     let mut out = Vec::with_capacity(wide.len());
     for n in wide {
         let mut entry = [WIDE_EMPTY; WIDTH];
@@ -132,8 +133,10 @@ pub fn gpu_nodes(wide: &[WideNode]) -> Option<Vec<GpuWideNode>> {
     // Entries waiting when the walk reaches each node: the sum over its ancestors of the
     // children each left waiting (at most its children less the one entered).
     let mut todo = vec![(0usize, 0usize)];
+    let mut need = 0;
     while let Some((w, waiting)) = todo.pop() {
-        if waiting + 3 > TRAVERSAL_STACK {
+        need = need.max(waiting + 3);
+        if need > TRAVERSAL_STACK {
             return None;
         }
         let n = &wide[w];
@@ -144,7 +147,7 @@ pub fn gpu_nodes(wide: &[WideNode]) -> Option<Vec<GpuWideNode>> {
             }
         }
     }
-    Some(out)
+    Some((out, need as u32))
 }
 
 /// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
@@ -412,11 +415,13 @@ mod tests {
     fn the_gpu_wide_tree_is_refused_where_it_could_overflow_the_stack() {
         for n in [1, 17, 1000] {
             let binary = bvh::build(&boxes(n), Quality::High);
-            let gpu = gpu_nodes(&build(&binary.nodes)).expect("a shallow tree fits");
+            let (gpu, need) = gpu_nodes(&build(&binary.nodes)).expect("a shallow tree fits");
             assert_eq!(gpu.len(), build(&binary.nodes).len());
+            assert!((3..=TRAVERSAL_STACK as u32).contains(&need));
         }
-        // Two binary levels a wide node, three waiting each: 20 levels fit, 42 do not.
-        assert!(gpu_nodes(&build(&comb(20))).is_some());
+        // Two binary levels a wide node, three waiting each: 20 levels need 3 * 10 + 3
+        // entries, 42 need 66, more than the stack.
+        assert_eq!(gpu_nodes(&build(&comb(20))).map(|(_, need)| need), Some(33));
         let deep = comb(42);
         assert!(deep.len() < 4 * 42 + 2);
         assert!(gpu_nodes(&build(&deep)).is_none());

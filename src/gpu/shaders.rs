@@ -66,7 +66,14 @@ mod tests {
         ] {
             let constants = names
                 .iter()
-                .map(|n| (n.clone(), if n == "AOV" { 0.0 } else { on }))
+                .map(|n| {
+                    let value = match n.as_str() {
+                        "AOV" => 0.0,
+                        "STACK" => crate::gpu_types::TRAVERSAL_STACK as f64,
+                        _ => on,
+                    };
+                    (n.clone(), value)
+                })
                 .collect();
             let (module, info) = naga::back::pipeline_constants::process_overrides(
                 &module,
