@@ -74,8 +74,7 @@ pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 /// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
 /// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
 /// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
-/// is 1.01 to 1.14 times faster than single on four SPD scenes and 3% slower on mount-7
-/// (docs/gpu.md has the figures). `GPURT_TRAVERSAL` (`single`, `pairs` or `wide`)
+/// is 2 to 19% faster than single (docs/gpu.md has the figures). `GPURT_TRAVERSAL` (`single`, `pairs` or `wide`)
 /// overrides it, for measuring them on one adapter.
 fn traversal_for() -> Result<u32> {
     match std::env::var("GPURT_TRAVERSAL").as_deref() {
