@@ -108,6 +108,10 @@ pub struct GpuSession {
     scene: Arc<SceneBuffers>,
     uploaded: Option<(GpuGlobals, GpuScene)>,
     uploads: u32,
+    /// `GPURT_FAULT=lose-device`: the device is destroyed once the first band of a render
+    /// is in, so that the command line's handling of a GPU lost mid-render (an error
+    /// naming the step, a non-zero exit, no output file) can be tested end to end.
+    lose_device: bool,
 }
 
 impl GpuSession {
@@ -115,12 +119,22 @@ impl GpuSession {
     /// cached on disk where the device allows, keyed by the adapter).
     pub fn new(ctx: GpuContext, scene: Arc<SceneBuffers>) -> Result<Self> {
         let renderer = gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
+        let lose_device = match std::env::var("GPURT_FAULT").as_deref() {
+            Err(_) | Ok("") => false,
+            Ok("lose-device") => true,
+            Ok(v) => {
+                return Err(crate::Error::Render(format!(
+                    "GPURT_FAULT={v}: expected `lose-device`"
+                )));
+            }
+        };
         Ok(GpuSession {
             ctx,
             renderer,
             scene,
             uploaded: None,
             uploads: 0,
+            lose_device,
         })
     }
 
@@ -172,8 +186,15 @@ impl Renderer for GpuSession {
         self.set_frame(globals)?;
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let (_, uploaded) = self.uploaded.as_ref().expect("uploaded by set_frame");
+        let lose_device = self.lose_device;
+        let progress = |pixels| {
+            progress(pixels);
+            if lose_device {
+                device.destroy();
+            }
+        };
         gpu::trace_rows(
-            device, queue, uploaded, rows, samples, accum, progress, cancel,
+            device, queue, uploaded, rows, samples, accum, &progress, cancel,
         )
     }
 }

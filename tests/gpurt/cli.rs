@@ -547,6 +547,47 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
     );
 }
 
+/// A GPU lost mid-render (`GPURT_FAULT=lose-device` destroys the device once the first
+/// band is in) ends the command with an error naming the step, a non-zero exit and no
+/// output file, partial or temporary.
+#[test]
+fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    drop(ctx);
+    let d = workdir("device-lost");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    // Four bands on a software adapter (2^18 samples a band), several on any other.
+    let size = ["--width", "512", "--height", "2048", "--spp", "4"];
+    let run = |fault: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["ball.nff", "--backend", "gpu", "-o", "out.png"])
+            .args(size)
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_FAULT", fault)
+            .output()
+            .expect("gpurt runs")
+    };
+    let o = run("lose-device");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("GPU error: reading back"),
+        "{}",
+        stderr(&o)
+    );
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["ball.nff"], "no output file, partial or temporary");
+    // Without the fault the same command writes its image.
+    let o = run("");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("out.png").exists());
+}
+
 #[test]
 fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() {
     let d = workdir("batch");
