@@ -3,7 +3,7 @@
 //! crossings `(t0, t1)`, nearest first, `NO_HIT` where there is none: closest-hit takes the
 //! first one past `tmin`, shadow rays count every crossing of the segment.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Mat4, Vec2, Vec3, Vec4};
 
 use super::types::{NO_HIT, Ray};
 use crate::gpu_types::*;
@@ -49,6 +49,48 @@ pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
         return Vec3::splat(NO_HIT);
     }
     Vec3::new(e2.dot(qvec) * inv, u, v)
+}
+
+/// `intersect_triangle` for four triangles at once, lane by lane the same arithmetic in
+/// the same order (so the same bits; x86 and Arm round each SIMD lane as a scalar):
+/// `(t, u, v)` per lane, `t = NO_HIT` where the ray misses. A leaf holds up to four
+/// primitives, and on meshes they are triangles: four tests in the time of about one and
+/// a half (`closest_in_leaf`).
+#[inline]
+pub fn intersect_triangles4(p: [&GpuPrim; 4], ray: &Ray) -> (Vec4, Vec4, Vec4) {
+    // Rows of the four primitives' words, transposed: v0, e1, e2 by coordinate.
+    let rows = |k: usize| {
+        let words = p.map(|q| {
+            let w: &[f32; 12] = bytemuck::cast_ref(q);
+            Vec4::from_slice(&w[4 * k..4 * k + 4])
+        });
+        Mat4::from_cols(words[0], words[1], words[2], words[3]).transpose()
+    };
+    let (v0, e1, e2) = (rows(0), rows(1), rows(2));
+    let (o, d) = (ray.origin, ray.dir);
+    let [dx, dy, dz] = [d.x, d.y, d.z].map(Vec4::splat);
+    // pvec = dir x e2
+    let px = dy * e2.z_axis - e2.y_axis * dz;
+    let py = dz * e2.x_axis - e2.z_axis * dx;
+    let pz = dx * e2.y_axis - e2.x_axis * dy;
+    let det = e1.x_axis * px + e1.y_axis * py + e1.z_axis * pz;
+    let inv = Vec4::ONE / det;
+    let tx = Vec4::splat(o.x) - v0.x_axis;
+    let ty = Vec4::splat(o.y) - v0.y_axis;
+    let tz = Vec4::splat(o.z) - v0.z_axis;
+    let u = (tx * px + ty * py + tz * pz) * inv;
+    // qvec = tvec x e1
+    let qx = ty * e1.z_axis - e1.y_axis * tz;
+    let qy = tz * e1.x_axis - e1.z_axis * tx;
+    let qz = tx * e1.y_axis - e1.x_axis * ty;
+    let v = (dx * qx + dy * qy + dz * qz) * inv;
+    let t = (e2.x_axis * qx + e2.y_axis * qy + e2.z_axis * qz) * inv;
+    let hit = det.cmpne(Vec4::ZERO)
+        & u.cmpge(Vec4::ZERO)
+        & u.cmple(Vec4::ONE)
+        & !v.cmplt(Vec4::ZERO)
+        & !(u + v).cmpgt(Vec4::ONE);
+    (Vec4::select(hit, t, Vec4::splat(NO_HIT)), u, v)
 }
 
 /// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
@@ -229,5 +271,67 @@ pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
                 Vec3::Z * sign(local.z)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The four-lane triangle test gives the scalar one's bits, hit or miss, on random
+    /// triangles (some degenerate, some edge-on) and rays aimed near them.
+    #[test]
+    fn four_triangles_at_once_match_one_at_a_time_to_the_bit() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rand = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let mut hits = 0;
+        for n in 0..20_000 {
+            let tri = |rand: &mut dyn FnMut() -> f32| {
+                let v0 = Vec3::new(rand(), rand(), rand()) * 10.0;
+                let mut e1 = Vec3::new(rand(), rand(), rand()) * 3.0;
+                let e2 = Vec3::new(rand(), rand(), rand()) * 3.0;
+                if n % 7 == 0 {
+                    e1 = e2 * 0.5; // zero area
+                }
+                GpuPrim {
+                    p0: v0,
+                    p1: e1,
+                    p2: e2,
+                    f1: -1.0,
+                    tag: PRIM_TRIANGLE << PRIM_KIND_SHIFT,
+                    ..Default::default()
+                }
+            };
+            let prims = [
+                tri(&mut rand),
+                tri(&mut rand),
+                tri(&mut rand),
+                tri(&mut rand),
+            ];
+            let aim = prims[n % 4].p0 + 0.3 * prims[n % 4].p1 + 0.3 * prims[n % 4].p2;
+            let origin = Vec3::new(rand(), rand(), rand()) * 30.0;
+            let wobble = Vec3::new(rand(), rand(), rand()) * 0.5;
+            let ray = Ray {
+                origin,
+                dir: (aim + wobble - origin).normalize(),
+            };
+            let (t, u, v) =
+                intersect_triangles4([&prims[0], &prims[1], &prims[2], &prims[3]], &ray);
+            for (k, p) in prims.iter().enumerate() {
+                let one = intersect_triangle(p, &ray);
+                assert_eq!(t[k].to_bits(), one.x.to_bits(), "t, case {n} lane {k}");
+                if one.x != NO_HIT {
+                    hits += 1;
+                    assert_eq!(u[k].to_bits(), one.y.to_bits(), "u, case {n} lane {k}");
+                    assert_eq!(v[k].to_bits(), one.z.to_bits(), "v, case {n} lane {k}");
+                }
+            }
+        }
+        assert!(hits > 10_000, "only {hits} hits");
     }
 }

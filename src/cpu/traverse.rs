@@ -7,7 +7,7 @@ use super::intersect::SLAB_WIDEN;
 use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
 use super::{intersect, wide};
 use crate::gpu_types::{
-    GpuNode, GpuWideNode, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
+    GpuNode, GpuWideNode, PRIM_TRIANGLE, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
 };
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
@@ -218,6 +218,22 @@ fn closest_in_leaf(
     tmin: f32,
     hit: &mut Hit,
 ) {
+    let leaf = &b.prims[first as usize..(first + count) as usize];
+    if count > 1 && leaf.iter().all(|p| p.kind() == PRIM_TRIANGLE) {
+        // Four lanes at once (a shorter leaf repeats its first triangle), then taken in
+        // order, as the loop below would.
+        let lane = |k: usize| leaf.get(k).unwrap_or(&leaf[0]);
+        let (t, u, v) = intersect::intersect_triangles4([lane(0), lane(1), lane(2), lane(3)], ray);
+        for k in 0..count as usize {
+            if t[k] > tmin && t[k] < hit.t {
+                hit.t = t[k];
+                hit.prim = first + k as u32;
+                hit.u = u[k];
+                hit.v = v[k];
+            }
+        }
+        return;
+    }
     for i in first..first + count {
         let p = &b.prims[i as usize];
         let t = intersect::intersect_prim(p, ray, inv_dir);
@@ -285,6 +301,22 @@ fn transmit_leaf(
     tmax: f32,
     light: &mut Vec3,
 ) -> bool {
+    let leaf = &b.prims[first as usize..(first + count) as usize];
+    if count > 1 && leaf.iter().all(|p| p.kind() == PRIM_TRIANGLE) {
+        // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
+        let lane = |k: usize| leaf.get(k).unwrap_or(&leaf[0]);
+        let (t, _, _) = intersect::intersect_triangles4([lane(0), lane(1), lane(2), lane(3)], ray);
+        for (k, p) in leaf.iter().enumerate() {
+            if t[k] > 0.0 && t[k] < tmax {
+                let m = &b.materials[p.material() as usize];
+                if m.t <= 0.0 {
+                    return false;
+                }
+                *light *= m.t * m.color;
+            }
+        }
+        return true;
+    }
     for i in first..first + count {
         let p = &b.prims[i as usize];
         let t = intersect::intersect_prim(p, ray, inv_dir);

@@ -245,6 +245,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "transmit_leaf",
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),
+    (
+        "intersect_triangles4",
+        "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
+    ),
 ];
 
 /// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.
