@@ -30,6 +30,11 @@ struct Walk {
     sp: u32,
 }
 
+// Writes entry `k` of this invocation's stack slice.
+fn stack_store(k: u32, entry: u32) {
+    traversal_stack[k * WORKGROUP_INVOCATIONS + stack_base] = entry;
+}
+
 // Takes the next waiting node; false when the traversal is done.
 fn pop(walk: ptr<function, Walk>) -> bool {
     if ((*walk).sp == 0u) {
@@ -72,7 +77,7 @@ fn next_leaf(
             }
             // Branch-free: lavapipe would run both arms of an `if`.
             let second_first = neg[node_axis(n)];
-            traversal_stack[(*walk).sp * WORKGROUP_INVOCATIONS + stack_base] = select(n.offset, node + 1u, second_first);
+            stack_store((*walk).sp, select(n.offset, node + 1u, second_first));
             (*walk).node = select(node + 1u, n.offset, second_first);
             (*walk).sp += 1u;
         } else if (!pop(walk)) {
@@ -130,7 +135,7 @@ fn next_leaf_pairs(
         let hit_b = tb != NO_HIT;
         // Branch-free, as in `next_leaf`: enter b when it alone is hit or is nearer.
         let enter_b = hit_b && (!hit_a || tb < ta);
-        traversal_stack[(*walk).sp * WORKGROUP_INVOCATIONS + stack_base] = select(second, first, enter_b);
+        stack_store((*walk).sp, select(second, first, enter_b));
         (*walk).sp += u32(hit_a && hit_b);
         (*walk).node = select(first, second, enter_b);
         n = Node(
@@ -203,11 +208,11 @@ fn next_leaf_wide(
         nearer_first(&b, &d);
         nearer_first(&b, &c);
         var sp = (*walk).sp;
-        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = d.y;
+        stack_store(sp, d.y);
         sp += u32(d.x != miss);
-        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = c.y;
+        stack_store(sp, c.y);
         sp += u32(c.x != miss);
-        traversal_stack[sp * WORKGROUP_INVOCATIONS + stack_base] = b.y;
+        stack_store(sp, b.y);
         sp += u32(b.x != miss);
         (*walk).sp = sp;
         if (a.x != miss) {

@@ -26,6 +26,9 @@ struct Walk {
     node: u32,
     sp: usize,
     stack: [u32; TRAVERSAL_STACK],
+    /// Entries of the stack ever written, kept or not (`stack_high_water`): what the
+    /// shader's slice must hold.
+    high: usize,
 }
 
 impl Walk {
@@ -34,7 +37,14 @@ impl Walk {
             node: 0,
             sp: 0,
             stack: [0; TRAVERSAL_STACK],
+            high: 0,
         }
+    }
+
+    /// Writes stack entry `k`.
+    fn stack_store(&mut self, k: usize, entry: u32) {
+        self.stack[k] = entry;
+        self.high = self.high.max(k + 1);
     }
 
     /// Takes the next waiting node; false when the traversal is done.
@@ -78,7 +88,7 @@ impl Walk {
                     return (n.offset, count);
                 }
                 let second_first = neg[n.axis() as usize];
-                self.stack[self.sp] = if second_first { node + 1 } else { n.offset };
+                self.stack_store(self.sp, if second_first { node + 1 } else { n.offset });
                 self.node = if second_first { n.offset } else { node + 1 };
                 self.sp += 1;
             } else if !self.pop() {
@@ -127,10 +137,9 @@ impl Walk {
             let tc = intersect::slab_entry(c.min, c.max, ray.origin, inv_dir, tmin, tmax);
             let (hit_a, hit_c) = (ta != NO_HIT, tc != NO_HIT);
             let enter_c = hit_c && (!hit_a || tc < ta);
-            if hit_a && hit_c {
-                self.stack[self.sp] = if enter_c { first } else { second };
-                self.sp += 1;
-            }
+            // Written whatever the hits, as the shader does; kept when both are hit.
+            self.stack_store(self.sp, if enter_c { first } else { second });
+            self.sp += usize::from(hit_a && hit_c);
             (self.node, n) = if enter_c { (second, c) } else { (first, a) };
             live = hit_a || hit_c;
         }
@@ -195,7 +204,7 @@ impl Walk {
             Self::nearer_first(&mut b, &mut d);
             Self::nearer_first(&mut b, &mut c);
             for (t, entry) in [d, c, b] {
-                self.stack[self.sp] = entry;
+                self.stack_store(self.sp, entry);
                 self.sp += usize::from(t != miss);
             }
             if a.0 != miss {
@@ -287,6 +296,21 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         }
     }
     hit
+}
+
+/// Stack entries the GPU's walk (`b.globals.traversal`) writes for a ray that visits every
+/// leaf it overlaps in `(tmin, tmax)` without narrowing the interval: at least what its
+/// closest-hit and shadow walks write, which the shader's stack slice must hold (checked
+/// against `SceneBuffers::stack_entries` by the tests).
+pub fn stack_high_water(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> usize {
+    if b.globals.n_nodes == 0 {
+        return 0;
+    }
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    let mut walk = Walk::new();
+    let mut cost = 0;
+    while walk.next_leaf(b, ray, inv_dir, tmin, tmax, &mut cost).1 > 0 && walk.pop() {}
+    walk.high
 }
 
 /// Multiplies `light` by the transmission of each crossing of the leaf's primitives within

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use gpurt::bvh::{self, MAX_LEAF_PRIMS};
 use gpurt::cpu::intersect;
-use gpurt::cpu::traverse::{closest_hit, transmission};
+use gpurt::cpu::traverse::{closest_hit, stack_high_water, transmission};
 use gpurt::cpu::types::{Bindings, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
@@ -255,7 +255,7 @@ fn check_rays(
     let b = &walks[0];
     let diag = buffers.bounds.extent().length().max(1e-3);
     let mut rng = XorShift(seed ^ 0x9e37_79b9_7f4a_7c15);
-    let (mut hits, mut shadowed) = (0, 0);
+    let (mut hits, mut shadowed, mut deepest) = (0, 0, 0);
     for (k, ray) in random_rays(buffers, seed).iter().enumerate() {
         // Every fourth ray gets a bounded interval, as shadow rays have; the others the
         // renderer's unbounded one, `(tmin, NO_HIT)`.
@@ -266,6 +266,18 @@ fn check_rays(
             (0.0, NO_HIT)
         };
         let context = || format!("{name}: ray {k} {ray:?} in ({tmin}, {tmax})");
+        // The GPU's walks stay within the stack slice the scene is given.
+        for w in &walks[..3] {
+            let high = stack_high_water(w, ray, tmin, tmax);
+            let slice = buffers.stack_entries(w.globals.traversal) as usize;
+            assert!(
+                high <= slice,
+                "{}: walk {} wrote {high} stack entries, the slice holds {slice}",
+                context(),
+                walk_name(w)
+            );
+            deepest = deepest.max(high);
+        }
         if closest {
             hits += usize::from(check_closest(&walks, ray, tmin, tmax, &context));
         }
@@ -288,6 +300,10 @@ fn check_rays(
         }
         shadowed += usize::from(want != Vec3::ONE);
     }
+    assert!(
+        buffers.nodes.is_empty() || deepest > 0,
+        "{name}: no walk used its stack"
+    );
     Counts { hits, shadowed }
 }
 

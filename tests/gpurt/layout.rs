@@ -246,6 +246,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),
     (
+        "stack_high_water",
+        "the tests' probe of the stack bound; the shader's slice is sized from it",
+    ),
+    (
         "intersect_triangles4",
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
