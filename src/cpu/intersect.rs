@@ -51,13 +51,18 @@ pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
     Vec3::new(e2.dot(qvec) * inv, u, v)
 }
 
-/// `intersect_triangle` for four triangles at once, lane by lane the same arithmetic in
-/// the same order (so the same bits; x86 and Arm round each SIMD lane as a scalar):
-/// `(t, u, v)` per lane, `t = NO_HIT` where the ray misses. A leaf holds up to four
-/// primitives, and on meshes they are triangles: four tests in the time of about one and
-/// a half (`closest_in_leaf`).
+/// `intersect_triangle` for a leaf of two to four triangles at once, lane by lane the same
+/// arithmetic in the same order (so the same bits; x86 and Arm round each SIMD lane as a
+/// scalar): `(t, u, v)` per lane, `t = NO_HIT` where the ray misses (lanes past the leaf
+/// repeat its first triangle). `None` for any other leaf, which is tested one primitive
+/// at a time. A leaf holds up to four primitives, and on meshes they are triangles: four
+/// tests in the time of about one and a half (`closest_in_leaf`, `transmit_leaf`).
 #[inline]
-pub fn intersect_triangles4(p: [&GpuPrim; 4], ray: &Ray) -> (Vec4, Vec4, Vec4) {
+pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, Vec4)> {
+    if !(2..=4).contains(&leaf.len()) || leaf.iter().any(|p| p.kind() != PRIM_TRIANGLE) {
+        return None;
+    }
+    let p: [&GpuPrim; 4] = std::array::from_fn(|k| leaf.get(k).unwrap_or(&leaf[0]));
     // Rows of the four primitives' words, transposed: v0, e1, e2 by coordinate.
     let rows = |k: usize| {
         let words = p.map(|q| {
@@ -90,7 +95,7 @@ pub fn intersect_triangles4(p: [&GpuPrim; 4], ray: &Ray) -> (Vec4, Vec4, Vec4) {
         & u.cmple(Vec4::ONE)
         & !v.cmplt(Vec4::ZERO)
         & !(u + v).cmpgt(Vec4::ONE);
-    (Vec4::select(hit, t, Vec4::splat(NO_HIT)), u, v)
+    Some((Vec4::select(hit, t, Vec4::splat(NO_HIT)), u, v))
 }
 
 /// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
@@ -320,8 +325,7 @@ mod tests {
                 origin,
                 dir: (aim + wobble - origin).normalize(),
             };
-            let (t, u, v) =
-                intersect_triangles4([&prims[0], &prims[1], &prims[2], &prims[3]], &ray);
+            let (t, u, v) = intersect_triangles4(&prims, &ray).expect("four triangles");
             for (k, p) in prims.iter().enumerate() {
                 let one = intersect_triangle(p, &ray);
                 assert_eq!(t[k].to_bits(), one.x.to_bits(), "t, case {n} lane {k}");

@@ -7,7 +7,7 @@ use super::intersect::SLAB_WIDEN;
 use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
 use super::{intersect, wide};
 use crate::gpu_types::{
-    GpuNode, GpuWideNode, PRIM_TRIANGLE, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
+    GpuNode, GpuWideNode, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
 };
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
@@ -228,12 +228,9 @@ fn closest_in_leaf(
     hit: &mut Hit,
 ) {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    if count > 1 && leaf.iter().all(|p| p.kind() == PRIM_TRIANGLE) {
-        // Four lanes at once (a shorter leaf repeats its first triangle), then taken in
-        // order, as the loop below would.
-        let lane = |k: usize| leaf.get(k).unwrap_or(&leaf[0]);
-        let (t, u, v) = intersect::intersect_triangles4([lane(0), lane(1), lane(2), lane(3)], ray);
-        for k in 0..count as usize {
+    if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
+        // Four lanes at once, then taken in order, as the loop below would.
+        for k in 0..leaf.len() {
             if t[k] > tmin && t[k] < hit.t {
                 hit.t = t[k];
                 hit.prim = first + k as u32;
@@ -326,10 +323,8 @@ fn transmit_leaf(
     light: &mut Vec3,
 ) -> bool {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    if count > 1 && leaf.iter().all(|p| p.kind() == PRIM_TRIANGLE) {
+    if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
-        let lane = |k: usize| leaf.get(k).unwrap_or(&leaf[0]);
-        let (t, _, _) = intersect::intersect_triangles4([lane(0), lane(1), lane(2), lane(3)], ray);
         for (k, p) in leaf.iter().enumerate() {
             if t[k] > 0.0 && t[k] < tmax {
                 let m = &b.materials[p.material() as usize];
