@@ -23,7 +23,7 @@ use crate::bvh;
 use crate::error::Result;
 use crate::frame::{self, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
-use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE};
+use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
 use crate::pack;
 use crate::run;
@@ -120,12 +120,17 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         None => None,
     };
     if let Some(r) = &renderer {
-        let walk = match r.traversal() {
-            TRAVERSAL_SINGLE => "single",
-            TRAVERSAL_PAIRS => "pairs",
-            _ => "wide (pairs where a scene's wide tree does not fit the stack)",
+        let t = r.traversal();
+        let fallback = if t == TRAVERSAL_WIDE {
+            " (pairs where a scene's wide tree does not fit the stack)"
+        } else {
+            ""
         };
-        eprintln!("traversal   {walk} (GPURT_TRAVERSAL=single|pairs|wide to choose)");
+        eprintln!(
+            "traversal   {}{fallback} (GPURT_TRAVERSAL={} to choose)",
+            TRAVERSAL_NAMES[t as usize],
+            TRAVERSAL_NAMES.join("|")
+        );
     }
     if config.cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());

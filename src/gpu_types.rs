@@ -167,6 +167,8 @@ pub const TRAVERSAL_PAIRS: u32 = 1;
 /// the children reached entered nearest first. Every GPU's choice; falls back to `TRAVERSAL_PAIRS` for a
 /// scene whose wide tree does not fit the traversal stack (`SceneBuffers::gpu_wide_nodes`).
 pub const TRAVERSAL_WIDE: u32 = 2;
+/// The walks' names, indexed by `TRAVERSAL_*` (`GPURT_TRAVERSAL`, reports).
+pub const TRAVERSAL_NAMES: [&str; 3] = ["single", "pairs", "wide"];
 
 /// Per-render constants (a read-only storage buffer).
 #[repr(C)]

@@ -23,8 +23,8 @@ use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
-    GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE,
-    TRAVERSAL_WIDE, WORKGROUP_SIDE,
+    GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
+    WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
 
@@ -74,17 +74,19 @@ pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 /// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
 /// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
 /// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
-/// is 2 to 19% faster than single (docs/gpu.md has the figures). `GPURT_TRAVERSAL` (`single`, `pairs` or `wide`)
-/// overrides it, for measuring them on one adapter.
+/// is 2 to 19% faster than single (docs/gpu.md has the figures). `GPURT_TRAVERSAL`
+/// (`single`, `pairs` or `wide`: `TRAVERSAL_NAMES`) overrides it, for measuring them on
+/// one adapter.
 fn traversal_for() -> Result<u32> {
     match std::env::var("GPURT_TRAVERSAL").as_deref() {
         Err(_) | Ok("") => Ok(TRAVERSAL_WIDE),
-        Ok("single") => Ok(TRAVERSAL_SINGLE),
-        Ok("pairs") => Ok(TRAVERSAL_PAIRS),
-        Ok("wide") => Ok(TRAVERSAL_WIDE),
-        Ok(v) => Err(Error::Render(format!(
-            "GPURT_TRAVERSAL={v}: expected `single`, `pairs` or `wide`"
-        ))),
+        Ok(v) => match TRAVERSAL_NAMES.iter().position(|&n| n == v) {
+            Some(t) => Ok(t as u32),
+            None => Err(Error::Render(format!(
+                "GPURT_TRAVERSAL={v}: expected one of {}",
+                TRAVERSAL_NAMES.join(", ")
+            ))),
+        },
     }
 }
 

@@ -211,12 +211,11 @@ fn check_closest_hit(
     );
 }
 
-fn walk_name(b: &Bindings) -> &'static str {
-    match (b.wide.is_some(), b.globals.traversal) {
-        (true, _) => "wide",
-        (false, _) if b.gpu_wide.is_some() => "GPU wide",
-        (false, TRAVERSAL_PAIRS) => "pairs",
-        (false, _) => "single",
+/// The CPU renderer's own walk, or the GPU's it walks as the shader does.
+fn walk_name(b: &Bindings) -> String {
+    match b.wide {
+        Some(_) => "CPU wide".into(),
+        None => format!("GPU {}", TRAVERSAL_NAMES[b.globals.traversal as usize]),
     }
 }
 

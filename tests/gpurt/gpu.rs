@@ -353,11 +353,7 @@ fn other_traversals() -> &'static [Gpu] {
 fn the_other_traversals_match_cpu_too() {
     let mut cases = Vec::new();
     for g in other_traversals() {
-        let walk = match g.renderer.traversal() {
-            TRAVERSAL_SINGLE => "single",
-            TRAVERSAL_PAIRS => "pairs",
-            _ => "wide",
-        };
+        let walk = TRAVERSAL_NAMES[g.renderer.traversal() as usize];
         cases.extend(check_variants(
             g,
             &format!("features ({walk})"),
