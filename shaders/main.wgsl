@@ -56,16 +56,21 @@ fn aov(ray: Ray) -> vec3<f32> {
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn main(
     @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
 ) {
     stack_base = local_index;
+    // Workgroup i traces block i * scatter mod n of the tile (the host's `cut::scatter`
+    // spreads each software thread's run of workgroups over the whole tile).
+    let n = groups.x * groups.y;
+    let b = (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
     // Consecutive invocations cover 4x2 pixel blocks rather than rows of 8: the lanes
     // a SIMD unit runs together then trace neighbouring, more coherent rays.
     let block = local_index / 8u;
     let lane = local_index % 8u;
     let id = vec2<u32>(
-        group.x * WORKGROUP_SIDE + (block % 2u) * 4u + lane % 4u,
-        group.y * WORKGROUP_SIDE + (block / 2u) * 2u + lane / 4u,
+        (b % groups.x) * WORKGROUP_SIDE + (block % 2u) * 4u + lane % 4u,
+        (b / groups.x) * WORKGROUP_SIDE + (block / 2u) * 2u + lane / 4u,
     );
     if (id.x >= tile.width || id.y >= tile.height) {
         return;

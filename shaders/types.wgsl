@@ -98,6 +98,7 @@ struct Tile {
     out_stride: u32,
     sample_start: u32,
     sample_count: u32,
+    scatter: u32,
 }
 
 // One traced pixel: the sum of its samples traced so far in this band (the host divides)

@@ -218,6 +218,17 @@ pub struct GpuTile {
     pub out_stride: u32,
     pub sample_start: u32,
     pub sample_count: u32,
+    /// Which 8x8 block of the tile each workgroup traces: workgroup `i` of the dispatch
+    /// (row-major) traces block `i * scatter mod n` of the `n` (row-major), `scatter`
+    /// coprime with `n`; 0 or 1 keeps workgroup `i` on block `i`. See `cut::scatter`.
+    pub scatter: u32,
+}
+
+impl GpuTile {
+    /// The workgroups a dispatch of this tile runs, across and down.
+    pub fn workgroups(&self) -> [u32; 2] {
+        [self.width, self.height].map(|n| n.div_ceil(WORKGROUP_SIDE).max(1))
+    }
 }
 
 /// A pixel whose work continues across dispatches (`resume` in `shaders/main.wgsl`). The
@@ -285,7 +296,7 @@ const _: () = {
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 144);
-    assert!(size_of::<GpuTile>() == 32);
+    assert!(size_of::<GpuTile>() == 36);
     assert!(size_of::<GpuPixelState>() == 160 + 48 * RAY_STACK);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

@@ -26,6 +26,9 @@ pub(super) struct Cut {
     pub(super) pass_samples: u32,
     pub(super) tile_side: u32,
     pub(super) band_rows: u32,
+    /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
+    /// drivers that split a dispatch's workgroups into one contiguous run per thread.
+    pub(super) spread: bool,
 }
 
 impl Cut {
@@ -36,6 +39,7 @@ impl Cut {
         pass_samples: u32,
         band_samples: u64,
         max_bytes: u64,
+        spread: bool,
     ) -> Cut {
         let pass_samples = pass_samples.clamp(1, spp);
         let tile_side = tile_side(pass_samples);
@@ -51,6 +55,7 @@ impl Cut {
             pass_samples,
             tile_side,
             band_rows: band_rows.min(height.next_multiple_of(tile_side)),
+            spread,
         }
     }
 
@@ -105,7 +110,7 @@ impl Cut {
         for sample_start in samples.clone().step_by(self.pass_samples as usize) {
             for y in (y0..y0 + rows).step_by(side as usize) {
                 for x in (0..w).step_by(side as usize) {
-                    tiles.push(GpuTile {
+                    let mut tile = GpuTile {
                         x,
                         y,
                         width: side.min(w - x),
@@ -114,12 +119,38 @@ impl Cut {
                         out_stride: w,
                         sample_start,
                         sample_count: self.pass_samples.min(samples.end - sample_start),
-                    });
+                        scatter: 1,
+                    };
+                    if self.spread {
+                        let [gx, gy] = tile.workgroups();
+                        tile.scatter = scatter(gx * gy);
+                    }
+                    tiles.push(tile);
                 }
             }
         }
         tiles
     }
+}
+
+/// A stride coprime with `n` near `n` over the golden ratio: workgroup `i` of a dispatch
+/// of `n` traces block `i * stride mod n` of its tile, a permutation that spreads any run
+/// of consecutive workgroups evenly over the tile.
+///
+/// Lavapipe hands each of its threads one contiguous run of a dispatch's workgroups,
+/// fixed in advance, and the dispatch ends when the slowest run ends. Unscattered, one
+/// thread gets the top of the tile and another the bottom, whose costs differ as much as
+/// sky and scene: at 512x512 on two threads the threads were busy 1.3 of 2 cores' time.
+/// Scattered, every run samples the whole tile, so the runs cost about the same.
+pub(super) fn scatter(n: u32) -> u32 {
+    let gcd = |mut a: u32, mut b: u32| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a
+    };
+    let start = ((f64::from(n) * 0.618_033_988_75).round() as u32).max(1);
+    (start..n).find(|&s| gcd(s, n) == 1).unwrap_or(1)
 }
 
 /// The smallest tile `Cut::finer` makes: one workgroup.
@@ -158,7 +189,7 @@ mod tests {
 
     #[test]
     fn a_finer_cut_divides_the_work_and_covers_the_same_samples() {
-        let cut = Cut::new(1000, 333, 40, 16, 1 << 26, 1 << 30);
+        let cut = Cut::new(1000, 333, 40, 16, 1 << 26, 1 << 30, false);
         assert_eq!((cut.tile_side, cut.pass_samples), (128, 16));
         let finer = cut.finer(100.0);
         // 16 -> 1 sample a pass (16x), then 128 -> 32 pixels a side (16x more).
@@ -171,5 +202,31 @@ mod tests {
         let finest = cut.finer(1e9);
         assert_eq!((finest.tile_side, finest.pass_samples), (MIN_TILE_SIDE, 1));
         assert!(coverage(&finest).iter().all(|&n| n == 40));
+    }
+
+    /// Every scatter is a permutation of the dispatch's workgroups, and the first half of
+    /// them (one thread's run, on two threads) reaches both halves of the tile.
+    #[test]
+    fn scatter_permutes_and_spreads_the_workgroups() {
+        for n in 1..=4096u32 {
+            let s = scatter(n);
+            let mut seen = vec![false; n as usize];
+            for i in 0..n {
+                let j = (u64::from(i) * u64::from(s) % u64::from(n)) as usize;
+                assert!(!seen[j], "n = {n}: stride {s} repeats block {j}");
+                seen[j] = true;
+            }
+            if n >= 16 {
+                let low = (0..n / 2).filter(|&i| i * s % n < n / 2).count() as f64;
+                let share = low / f64::from(n / 2);
+                assert!(
+                    (0.3..0.7).contains(&share),
+                    "n = {n}: first half {share} in the top half"
+                );
+            }
+        }
+        // Within u32: the largest tile's dispatch, by its stride.
+        let n = (256 / crate::gpu_types::WORKGROUP_SIDE).pow(2);
+        assert!(u64::from(n) * u64::from(scatter(n)) < u64::from(u32::MAX));
     }
 }

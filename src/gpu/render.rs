@@ -24,7 +24,6 @@ use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{
     GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
-    WORKGROUP_SIDE,
 };
 use crate::pack::SceneBuffers;
 
@@ -476,6 +475,9 @@ impl GpuRenderer {
             limits
                 .max_storage_buffer_binding_size
                 .min(limits.max_buffer_size),
+            // Software adapters split a dispatch among their threads in fixed runs; a
+            // GPU's own scheduler balances, and neighbouring blocks share its caches.
+            self.software,
         )
     }
 
@@ -876,7 +878,7 @@ fn encode_band(
         pass.set_pipeline(pipeline);
         for (i, tile) in tiles.iter().enumerate() {
             pass.set_bind_group(0, &bound.bind_group, &[i as u32 * bound.tile_stride]);
-            let groups = [tile.width, tile.height].map(|n| n.div_ceil(WORKGROUP_SIDE).max(1));
+            let groups = tile.workgroups();
             pass.dispatch_workgroups(groups[0], groups[1], 1);
         }
     }

@@ -67,7 +67,8 @@ fn rust_layouts() -> Vec<Layout> {
                 out_base,
                 out_stride,
                 sample_start,
-                sample_count
+                sample_count,
+                scatter
             ]
         ),
     ]
