@@ -145,8 +145,11 @@ fn refracted_dir(s: Surface, m: Material, dir: vec3<f32>) -> vec3<f32> {
     return normalize(eta * dir + (eta * cos_i - sqrt(k)) * s.ns);
 }
 
+// The stack holds at most TRACE_STACK rays on the scene in hand (the host writes that
+// constant into the source: `SceneBuffers::trace_stack`), which keeps lavapipe's compile
+// short where few rays wait.
 fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
-    var stack: array<Pending, RAY_STACK>;
+    var stack: array<Pending, TRACE_STACK>;
     stack[0] = Pending(eye.origin, eye.dir, 1.0, 1u, globals.hither);
     var sp = 1u;
     var colour = vec3<f32>(0.0);

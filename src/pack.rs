@@ -192,6 +192,16 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
     })
 }
 
+/// `SceneBuffers::trace_stack` for a scene's materials; the CPU twin checks its own
+/// stack against it.
+pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
+    if materials.iter().any(|m| m.ks > 0.0 && m.t > 0.0) {
+        max_depth.clamp(1, MAX_DEPTH)
+    } else {
+        1
+    }
+}
+
 impl SceneBuffers {
     /// `nodes` collapsed four-wide (`cpu::wide`), built the first time it is asked for:
     /// `nodes` must not change after that.
@@ -221,6 +231,16 @@ impl SceneBuffers {
             Some(&(_, need)) if traversal == TRAVERSAL_WIDE => need,
             _ => self.bvh_depth.max(1) as u32,
         }
+    }
+
+    /// Pending rays `trace` can hold at once on this scene with rays `max_depth` deep
+    /// (the length of the shader's ray stack, `TRACE_STACK`). A surface pushes its
+    /// reflected and its refracted ray, then the refracted one is taken: each level holds
+    /// one ray more only where some material both reflects and transmits, so the stack
+    /// holds `max_depth` rays there (one waiting per level above the deepest, and the
+    /// deepest), and one elsewhere.
+    pub fn trace_stack(&self, max_depth: u32) -> u32 {
+        trace_stack(&self.materials, max_depth)
     }
 
     /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_WIDE` only

@@ -190,6 +190,8 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
         tmin: g.hither,
     };
     let mut sp = 1usize;
+    // The most rays waiting at once: the shader's stack holds `trace_stack` of them.
+    let mut most = 1usize;
     let mut colour = Vec3::ZERO;
     while sp > 0 {
         sp -= 1;
@@ -220,6 +222,11 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
             stack[sp] = secondary(&s, refracted_dir(&s, m, ray.dir), &ray_in, m.t, g.epsilon);
             sp += 1;
         }
+        most = most.max(sp);
     }
+    debug_assert!(
+        most <= crate::pack::trace_stack(b.materials, g.max_depth) as usize,
+        "{most} rays waited at once, beyond the shader's ray stack"
+    );
     colour
 }

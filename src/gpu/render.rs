@@ -47,7 +47,7 @@ pub struct GpuRenderer {
     pipeline_layout: wgpu::PipelineLayout,
     /// The `resume` entry point's layouts and pipelines, shared with the uploaded scenes.
     resume: Arc<ResumePipelines>,
-    module: wgpu::ShaderModule,
+    modules: Arc<Modules>,
     cache: Option<(wgpu::PipelineCache, PathBuf)>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
     compile_time: Mutex<Duration>,
@@ -115,16 +115,50 @@ pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T
     }
 }
 
+/// The shader modules made so far, one per length of `trace`'s ray stack (the only part
+/// of a specialisation written into the source, `shaders::source`), each on first use;
+/// shared by the `main` and `resume` pipelines.
+#[derive(Default)]
+pub(super) struct Modules(Mutex<HashMap<u32, wgpu::ShaderModule>>);
+
+impl Modules {
+    fn get(&self, device: &wgpu::Device, trace_stack: u32) -> Result<wgpu::ShaderModule> {
+        let mut modules = self.0.lock().expect("not poisoned");
+        if let Some(m) = modules.get(&trace_stack) {
+            return Ok(m.clone());
+        }
+        let module = scoped(device, "compiling the shader", || {
+            let desc = wgpu::ShaderModuleDescriptor {
+                label: Some("gpurt"),
+                source: wgpu::ShaderSource::Wgsl(shaders::source(trace_stack).into()),
+            };
+            // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
+            // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
+            // every index the shader follows (children, leaf ranges, materials, normal
+            // slots) in range, children after parents (so traversal ends), the tree depth
+            // within the stack and the ray depth within the ray stack (whose length,
+            // `SceneBuffers::trace_stack`, bounds the rays a trace holds). The checks cost
+            // lavapipe about a quarter of its tracing time.
+            unsafe {
+                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
+            }
+        })?;
+        modules.insert(trace_stack, module.clone());
+        Ok(module)
+    }
+}
+
 /// Compiles the shader's entry point `entry` for a specialisation.
 pub(super) fn compile(
     device: &wgpu::Device,
     layout: &wgpu::PipelineLayout,
-    module: &wgpu::ShaderModule,
+    modules: &Modules,
     entry: &str,
     spec: Specialization,
     cache: Option<&wgpu::PipelineCache>,
 ) -> Result<wgpu::ComputePipeline> {
     let constants = spec.constants();
+    let module = &modules.get(device, spec.trace_stack)?;
     scoped(device, "compiling the shader", || {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(entry),
@@ -157,7 +191,7 @@ fn error_chain(e: &dyn std::error::Error) -> String {
 }
 
 impl GpuRenderer {
-    /// Creates the shader module. Pipelines are compiled on first use by `render` (or
+    /// Sets up the layouts. Shader modules and pipelines are made on first use by `render` (or
     /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
     /// `PIPELINE_CACHE` (pass `None` to skip the cache).
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
@@ -168,7 +202,7 @@ impl GpuRenderer {
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
         let layout = bind_group_layout(device);
         let resume_layout = resume_group_layout(device);
-        let (pipeline_layout, resume_pipeline_layout, module, cache) =
+        let (pipeline_layout, resume_pipeline_layout, cache) =
             scoped(device, "compiling the shader", || {
                 let pipeline_layout =
                     device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -182,20 +216,6 @@ impl GpuRenderer {
                         bind_group_layouts: &[Some(&layout), Some(&resume_layout)],
                         immediate_size: 0,
                     });
-                let desc = wgpu::ShaderModuleDescriptor {
-                    label: Some("gpurt"),
-                    source: wgpu::ShaderSource::Wgsl(shaders::source().into()),
-                };
-                // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
-                // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
-                // every index the shader follows (children, leaf ranges, materials, normal
-                // slots) in range, children after parents (so traversal ends), the tree depth
-                // within the stack and the ray depth within the ray stack. The checks cost
-                // lavapipe about a quarter of its tracing time.
-                let module = unsafe {
-                    device
-                        .create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-                };
                 let cache = cache_file.map(|file| {
                     let data = std::fs::read(&file).ok();
                     // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
@@ -209,18 +229,19 @@ impl GpuRenderer {
                     };
                     (cache, file)
                 });
-                (pipeline_layout, resume_pipeline_layout, module, cache)
+                (pipeline_layout, resume_pipeline_layout, cache)
             })?;
+        let modules = Arc::new(Modules::default());
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
                 pipeline_layout: resume_pipeline_layout,
-                module: module.clone(),
+                modules: modules.clone(),
                 compiled: Mutex::new(HashMap::new()),
             }),
             layout,
             pipeline_layout,
-            module,
+            modules,
             cache,
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
@@ -280,7 +301,7 @@ impl GpuRenderer {
         }
     }
 
-    /// Total time spent creating the module and compiling pipelines, first dispatches
+    /// Total time spent creating modules and compiling pipelines, first dispatches
     /// included (lavapipe compiles there).
     pub fn compile_time(&self) -> Duration {
         *self.compile_time.lock().expect("not poisoned")
@@ -324,7 +345,7 @@ impl GpuRenderer {
         let pipeline = compile(
             device,
             &self.pipeline_layout,
-            &self.module,
+            &self.modules,
             "main",
             spec,
             self.cache.as_ref().map(|(c, _)| c),

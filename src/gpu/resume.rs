@@ -4,10 +4,10 @@
 
 use std::collections::HashMap;
 use std::ops::Range;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 
-use super::render::{GpuScene, compile, read_mapped, scoped};
+use super::render::{GpuScene, Modules, compile, read_mapped, scoped};
 use super::specialization::Specialization;
 use super::upload::buffer_init;
 use crate::error::{Error, Result};
@@ -20,7 +20,7 @@ use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS
 pub(super) struct ResumePipelines {
     pub(super) layout: wgpu::BindGroupLayout,
     pub(super) pipeline_layout: wgpu::PipelineLayout,
-    pub(super) module: wgpu::ShaderModule,
+    pub(super) modules: Arc<Modules>,
     pub(super) compiled: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
 }
 
@@ -37,7 +37,7 @@ impl ResumePipelines {
         let p = compile(
             device,
             &self.pipeline_layout,
-            &self.module,
+            &self.modules,
             "resume",
             spec,
             None,

@@ -32,6 +32,10 @@ pub struct Specialization {
     /// so that few sizes are compiled. A smaller stack lets more workgroups share a
     /// compute unit: on the H100, 48 entries instead of 64 made 4K frames 2 to 9% faster.
     pub stack: u32,
+    /// Length of `trace`'s ray stack (`SceneBuffers::trace_stack`). Not an override: WGSL
+    /// sizes a function's array with a constant only, so it selects the shader source
+    /// (`shaders::source`).
+    pub trace_stack: u32,
     /// log2 of the texels in a layer of the node and primitive textures (set by the
     /// renderer from its device's limits).
     pub layer_shift: u32,
@@ -58,6 +62,7 @@ impl Specialization {
             pairs: g.traversal == TRAVERSAL_PAIRS,
             wide: g.traversal == TRAVERSAL_WIDE,
             stack: scene.stack_entries(g.traversal).next_multiple_of(8),
+            trace_stack: scene.trace_stack(g.max_depth),
             layer_shift: 0,
         }
     }
@@ -118,6 +123,7 @@ mod tests {
             pairs: true,
             wide: true,
             stack: 64,
+            trace_stack: 16,
             layer_shift: 25,
         };
         let mut host: Vec<String> = spec
