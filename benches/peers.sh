@@ -4,8 +4,9 @@
 #
 # Times each whole process (start-up, parsing, BVH, render, PNG writing) with
 # /usr/bin/time, keeps the fastest of REPEAT runs (default 3; the machine may be shared),
-# and prints a markdown table. gpurt runs three ways: the default command (--backend
-# auto), the CPU backend, and the GPU backend (failures are ignored: no adapter).
+# and prints a markdown table. gpurt runs four ways: the default command (--backend
+# auto), the CPU backend, and the GPU backend with the driver's shader cache cold and
+# warm (failures are ignored: no adapter).
 # POV-Ray reads the SPD generators' own POV-Ray versions of the scenes, with the command
 # line of ../shared/peers/povray/README.md (-A: no antialiasing, +WT2: two threads).
 # Tachyon reads the NFF files themselves (-numthreads 2, -raydepth 5 as gpurt's default
@@ -72,15 +73,24 @@ for s in "${SCENES[@]}"; do
     default_backend=$("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" --width $SIZE \
         --height $SIZE -v 2>&1 | awk '$1 == "backend" {print $2}' | tr -d ':,')
 
-    gpu_cell="-"
-    if out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" \
-        --width $SIZE --height $SIZE --backend gpu --stats -v); then
+    # The GPU backend twice: with Mesa's shader cache cold (a new, empty cache directory
+    # for every run, and gpurt's own pipeline cache off), and warm (a cache directory
+    # that one untimed run has filled).
+    gpu_cell="-" cold_cell="-" u_wall="" c_wall=""
+    gpu=("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" --width $SIZE --height $SIZE
+        --backend gpu --stats -v)
+    if out=$(timed sh -c 'MESA_SHADER_CACHE_DIR=$(mktemp -d -p "$0") GPURT_CACHE_DIR= exec "$@"' \
+        "$WORK" "${gpu[@]}"); then
+        read -r c_wall _ c_log <<<"$out"
+        c_shader=$(awk '$1 == "shader" {print $2}' "$c_log")
+        cold_cell="$c_wall ($c_shader compiling)"
+        mkdir -p "$WORK/mesa-$s"
+        MESA_SHADER_CACHE_DIR="$WORK/mesa-$s" "${gpu[@]}" 2>/dev/null
+        out=$(timed env MESA_SHADER_CACHE_DIR="$WORK/mesa-$s" "${gpu[@]}")
         read -r u_wall _ u_log <<<"$out"
         u_mrays=$(grep -o '[0-9.]* Mrays/s' "$u_log" | awk '{print $1}')
         adapter=$(awk '$1 == "gpu" {$1 = ""; print substr($0, 2); exit}' "$u_log") || true
         gpu_cell="$u_wall ($u_mrays Mrays/s)"
-    else
-        gpu_cell="failed"
     fi
 
     out=$(timed tachyon "$SCENES_DIR/$s.nff" -res $SIZE $SIZE -numthreads 2 -raydepth 5 \
@@ -93,13 +103,13 @@ for s in "${SCENES[@]}"; do
         +W$SIZE +H$SIZE -A +WT2 -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
     read -r p_wall p_kb p_log <<<"$out"
 
-    ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
-    rows+=("| $s | $a_wall ($default_backend) | $(mb "$a_kb") | $g_wall | $g_mrays | $(mb "$g_kb") | $gpu_cell | $p_wall | $(mb "$p_kb") | $t_wall | $(mb "$t_kb") | $(ratio "$a_wall" "$p_wall") | $(ratio "$a_wall" "$t_wall") |")
+    ratio() { [[ -n $1 ]] && awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}' || echo -; }
+    rows+=("| $s | $a_wall ($default_backend) | $(mb "$a_kb") | $g_wall | $g_mrays | $(mb "$g_kb") | $cold_cell | $gpu_cell | $p_wall | $(mb "$p_kb") | $t_wall | $(mb "$t_kb") | $(ratio "$a_wall" "$p_wall") | $(ratio "$a_wall" "$t_wall") | $(ratio "$c_wall" "$p_wall") | $(ratio "$u_wall" "$p_wall") |")
 done
 
 echo
-echo "| scene | gpurt (default) wall s | peak MB | --backend cpu wall s | Mrays/s | peak MB | --backend gpu wall s | POV-Ray wall s | peak MB | Tachyon wall s | peak MB | default / POV-Ray | default / Tachyon |"
-echo "|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|"
+echo "| scene | gpurt (default) wall s | peak MB | --backend cpu wall s | Mrays/s | peak MB | --backend gpu, cold cache, wall s | --backend gpu, warm, wall s | POV-Ray wall s | peak MB | Tachyon wall s | peak MB | default / POV-Ray | default / Tachyon | gpu cold / POV-Ray | gpu warm / POV-Ray |"
+echo "|---|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"
 echo
 echo "${SIZE}x${SIZE}, 1 spp, $(nproc) threads; best of $REPEAT runs. Wall time and peak memory are"
