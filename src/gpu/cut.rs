@@ -1,5 +1,6 @@
 //! How a frame is cut into GPU work: tiles (one bounded dispatch each, in passes of
-//! samples) and bands of full-width rows (one submission and one readback each).
+//! samples), bands of full-width rows (one readback each), and a band's samples in
+//! submissions of bounded work.
 
 use std::ops::Range;
 
@@ -16,8 +17,9 @@ pub(super) const BAND_BYTES: u64 = 64 << 20;
 /// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's
 /// samples (so that no dispatch runs long enough to trip a driver watchdog, and no
 /// invocation runs into lavapipe's loop limit for want of splitting); each band of
-/// full-width rows is one submission with one readback, whose output fits `BAND_BYTES`
-/// and whose work fits `band_samples`.
+/// full-width rows has one readback, its output fitting `BAND_BYTES`, and is submitted
+/// in runs of `submit_samples` samples, so that one submission's work fits
+/// `band_samples` (the host checks for Ctrl-C and reports progress between them).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Cut {
     pub(super) width: u32,
@@ -26,6 +28,8 @@ pub(super) struct Cut {
     pub(super) pass_samples: u32,
     pub(super) tile_side: u32,
     pub(super) band_rows: u32,
+    /// Samples of a band's pixels one submission traces: a multiple of `pass_samples`.
+    pub(super) submit_samples: u32,
     /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
     /// drivers that split a dispatch's workgroups into one contiguous run per thread.
     pub(super) spread: bool,
@@ -47,14 +51,22 @@ impl Cut {
         let row_samples = u64::from(width) * u64::from(spp);
         let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
         // At least one row of tiles; whole rows of tiles, so only the last band is short.
-        let band_rows = (rows as u32 / tile_side).max(1) * tile_side;
+        let band_rows = (rows as u32 / tile_side)
+            .max(1)
+            .saturating_mul(tile_side)
+            .min(height.next_multiple_of(tile_side));
+        // Where even one row of tiles holds more samples than a submission should, the
+        // band's samples are submitted a run of passes at a time (at least one pass).
+        let pass_work = u64::from(width) * u64::from(band_rows) * u64::from(pass_samples);
+        let passes = (band_samples / pass_work.max(1)).clamp(1, u64::from(spp)) as u32;
         Cut {
             width,
             height,
             spp,
             pass_samples,
             tile_side,
-            band_rows: band_rows.min(height.next_multiple_of(tile_side)),
+            band_rows,
+            submit_samples: passes.saturating_mul(pass_samples).min(spp.max(1)),
             spread,
         }
     }
@@ -81,15 +93,22 @@ impl Cut {
         cut
     }
 
-    pub(super) fn passes(&self) -> u32 {
-        self.spp.div_ceil(self.pass_samples)
-    }
-
-    /// Dispatches per band: each tile once per pass.
-    pub(super) fn dispatches_per_band(&self) -> u32 {
+    /// Dispatches per submission: each tile of a band once per pass of the submission.
+    pub(super) fn dispatches_per_submission(&self) -> u32 {
         self.width.div_ceil(self.tile_side)
             * self.band_rows.div_ceil(self.tile_side)
-            * self.passes()
+            * self.submit_samples.div_ceil(self.pass_samples)
+    }
+
+    /// The samples of `samples` each submission of a band traces, in order.
+    pub(super) fn submissions(
+        &self,
+        samples: &Range<u32>,
+    ) -> impl Iterator<Item = Range<u32>> + use<> {
+        let (end, step) = (samples.end, self.submit_samples.max(1));
+        (samples.start..end)
+            .step_by(step as usize)
+            .map(move |s| s..s.saturating_add(step).min(end))
     }
 
     pub(super) fn band_bytes(&self) -> u64 {
@@ -202,6 +221,36 @@ mod tests {
         let finest = cut.finer(1e9);
         assert_eq!((finest.tile_side, finest.pass_samples), (MIN_TILE_SIDE, 1));
         assert!(coverage(&finest).iter().all(|&n| n == 40));
+    }
+
+    /// A band of 16384 pixels a row at 4096 samples is submitted a pass at a time (the
+    /// least a submission holds), a lighter one a few passes at a time within the work
+    /// it was given, and the runs cover the samples once.
+    #[test]
+    fn a_band_too_heavy_for_one_submission_is_submitted_in_runs_of_passes() {
+        let cut = Cut::new(16384, 16384, 4096, 1, 1 << 18, 1 << 27, false);
+        assert_eq!((cut.tile_side, cut.band_rows), (256, 256));
+        assert_eq!(
+            cut.submit_samples, 1,
+            "one pass of the band is 16x a submission's work"
+        );
+        let cut = Cut::new(512, 512, 4096, 1, 1 << 26, 1 << 27, false);
+        assert_eq!((cut.tile_side, cut.band_rows), (256, 256));
+        let work = 512 * 256 * u64::from(cut.submit_samples);
+        assert!(
+            work <= 1 << 26 && 2 * work > 1 << 26,
+            "{} samples a submission",
+            cut.submit_samples
+        );
+        assert_eq!(cut.dispatches_per_submission(), 2 * cut.submit_samples);
+        let runs: Vec<_> = cut.submissions(&(5..4096)).collect();
+        assert_eq!(runs.first().unwrap().start, 5);
+        assert!(runs.windows(2).all(|w| w[0].end == w[1].start));
+        assert_eq!(runs.last().unwrap().end, 4096);
+        // A light frame is one submission a band, as before.
+        let light = Cut::new(512, 512, 1, 1, 1 << 18, 1 << 27, false);
+        assert_eq!(light.submissions(&(0..1)).count(), 1);
+        assert_eq!(light.band_rows, 512);
     }
 
     /// Every scatter is a permutation of the dispatch's workgroups, and the first half of

@@ -530,7 +530,7 @@ impl GpuRenderer {
             &data,
             globals,
             cut.band_bytes(),
-            cut.dispatches_per_band(),
+            cut.dispatches_per_submission(),
         )?;
         // The texture uploads are queued: finish them, so a failure surfaces here.
         queue.submit([]);
@@ -584,7 +584,7 @@ impl GpuRenderer {
                 &uploaded.data,
                 globals,
                 cut.band_bytes(),
-                cut.dispatches_per_band(),
+                cut.dispatches_per_submission(),
             )?;
             uploaded.cut = cut;
             *uploaded.finer.lock().expect("cut lock") = None;
@@ -730,33 +730,51 @@ pub fn trace_rows(
         (lo < hi).then(|| (lo, hi - lo))
     });
     let mut tracing = scene.tracing_cut();
+    let all = u64::from(samples.end - samples.start).max(1);
     for (y0, rows) in bands {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Error::Interrupted);
-        }
         let bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
-        let start = Instant::now();
-        let dispatches = scoped(device, "tracing a band", || {
-            let (mut enc, dispatches) =
-                submit_band(device, queue, scene, &tracing, y0, rows, &samples);
-            enc.copy_buffer_to_buffer(&scene.bound.output, 0, &scene.bound.readback, 0, bytes);
-            queue.submit([enc.finish()]);
-            dispatches
-        })?;
-        let (band_rays, band_cut) =
-            read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
-        if let Some(budget) = scene.dispatch_budget {
-            // The band's time includes its readback: the mean dispatch is overestimated,
-            // on the safe side.
-            let mean = start.elapsed().as_secs_f64() / f64::from(dispatches.max(1));
-            if mean > budget.as_secs_f64() {
-                tracing = tracing.finer(2.0 * mean / budget.as_secs_f64());
-                *scene.finer.lock().expect("cut lock") = Some(tracing);
+        let pixels = u64::from(cut.width) * u64::from(rows);
+        // Progress is in pixels: a submission of part of the samples reports its share.
+        let mut reported = 0;
+        for run in cut.submissions(&samples) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Error::Interrupted);
             }
+            let last = run.end == samples.end;
+            let start = Instant::now();
+            let dispatches = scoped(device, "tracing a band", || {
+                let first = run.start == samples.start;
+                let (mut enc, dispatches) =
+                    submit_band(device, queue, scene, &tracing, y0, rows, &run, first);
+                if last {
+                    let (output, readback) = (&scene.bound.output, &scene.bound.readback);
+                    enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
+                }
+                queue.submit([enc.finish()]);
+                dispatches
+            })?;
+            if last {
+                let (band_rays, band_cut) =
+                    read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+                rays += band_rays;
+                unfinished.extend(band_cut);
+            } else {
+                // One submission at a time, so that Ctrl-C is seen within one.
+                wait(device)?;
+            }
+            if let Some(budget) = scene.dispatch_budget {
+                // The time includes the band's readback after its last submission: the
+                // mean dispatch is overestimated, on the safe side.
+                let mean = start.elapsed().as_secs_f64() / f64::from(dispatches.max(1));
+                if mean > budget.as_secs_f64() {
+                    tracing = tracing.finer(2.0 * mean / budget.as_secs_f64());
+                    *scene.finer.lock().expect("cut lock") = Some(tracing);
+                }
+            }
+            let done = pixels * u64::from(run.end - samples.start) / all;
+            progress(done - reported);
+            reported = done;
         }
-        rays += band_rays;
-        unfinished.extend(band_cut);
-        progress(u64::from(cut.width) * u64::from(rows));
     }
     if !unfinished.is_empty() {
         let (more_rays, cut) = resume(
@@ -790,18 +808,23 @@ pub fn trace_rows(
 pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
     let cut = scene.tracing_cut();
     for (y0, rows) in cut.bands() {
-        scoped(device, "tracing a band", || {
-            let (enc, _) = submit_band(device, queue, scene, &cut, y0, rows, &(0..cut.spp));
-            queue.submit([enc.finish()]);
-        })?;
+        for run in cut.submissions(&(0..cut.spp)) {
+            scoped(device, "tracing a band", || {
+                let first = run.start == 0;
+                let (enc, _) = submit_band(device, queue, scene, &cut, y0, rows, &run, first);
+                queue.submit([enc.finish()]);
+            })?;
+        }
     }
     wait(device)
 }
 
-/// Writes the tiles of the band at row `y0` as `cut` cuts it and encodes the clearing of
-/// its output (the passes add to it) and their dispatches. A finer cut than the one the
-/// tile buffer was made for has more tiles than slots: all but the last buffer-full are
-/// submitted here. Returns the encoder of the last, and the band's dispatches.
+/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
+/// their dispatches, after the clearing of the band's output when `clear` (the first
+/// samples of the band: each pass adds to what the passes before left). A finer cut than
+/// the one the tile buffer was made for has more tiles than slots: all but the last
+/// buffer-full are submitted here. Returns the encoder of the last, and the dispatches.
+#[allow(clippy::too_many_arguments)]
 fn submit_band(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -810,14 +833,17 @@ fn submit_band(
     y0: u32,
     rows: u32,
     samples: &Range<u32>,
+    clear: bool,
 ) -> (wgpu::CommandEncoder, u32) {
     let tiles = cut.tiles(y0, rows, samples);
     let stride = scene.bound.tile_stride as usize;
     let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
     let mut enc = device.create_command_encoder(&Default::default());
-    enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
-    // `tile_buf` holds the dispatches of a band of the frame's own cut (`bind`).
-    let slots = scene.cut.dispatches_per_band().max(1) as usize;
+    if clear {
+        enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
+    }
+    // `tile_buf` holds the dispatches of a submission of the frame's own cut (`bind`).
+    let slots = scene.cut.dispatches_per_submission().max(1) as usize;
     let mut groups = tiles.chunks(slots).peekable();
     while let Some(group) = groups.next() {
         let mut bytes = vec![0u8; group.len() * stride];

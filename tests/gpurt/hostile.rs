@@ -201,3 +201,82 @@ fn peak_memory_stays_within_its_documented_bound() {
         );
     }
 }
+
+/// `resolution 16384 16384` at `--spp 4096` (about 10^12 samples: hours of work) is
+/// accepted and started on each backend, holds little memory while it runs (the image's
+/// sums are touched only as rows finish), and stops within seconds of Ctrl-C with no
+/// file. On the GPU a band of such a frame is far more than one submission should hold:
+/// it is submitted a few passes at a time, with Ctrl-C checked between (one submission of
+/// 4096 passes over a band used to keep the render deaf to Ctrl-C for hours).
+#[test]
+fn a_16k_frame_at_4096_spp_starts_small_and_stops_on_ctrl_c() {
+    use std::process::{Command, Stdio};
+    use std::time::Instant;
+    let dir = temp_dir("huge-frame");
+    let scene = "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\n\
+                 resolution 16384 16384\nl 1 1 1\nf 1 0 0 1 0 1 0 1\ns 0 0 0 1\n";
+    std::fs::write(dir.join("huge.nff"), scene).unwrap();
+    let gpu = crate::common::gpu_context().is_some();
+    for backend in ["cpu", "gpu"].into_iter().filter(|b| *b == "cpu" || gpu) {
+        let out = format!("huge-{backend}.png");
+        let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([
+                "huge.nff",
+                "--spp",
+                "4096",
+                "--backend",
+                backend,
+                "-o",
+                &out,
+            ])
+            .current_dir(&dir)
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("gpurt starts");
+        std::thread::sleep(Duration::from_secs(3));
+        let status = std::fs::read_to_string(format!("/proc/{}/status", child.id()));
+        if status.as_deref().unwrap_or_default().contains("zombie") {
+            let early = child.wait_with_output().expect("gpurt ends");
+            panic!(
+                "{backend}: ended early: {}",
+                String::from_utf8_lossy(&early.stderr)
+            );
+        }
+        let peak_kib: u64 = status
+            .as_deref()
+            .unwrap_or_default()
+            .lines()
+            .find_map(|l| l.strip_prefix("VmHWM:"))
+            .and_then(|v| v.trim().trim_end_matches(" kB").parse().ok())
+            .unwrap_or_else(|| panic!("{backend}: no peak memory in /proc: {status:?}"));
+        let signalled = Instant::now();
+        let killed = Command::new("kill")
+            .args(["-INT", &child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(killed.success());
+        let pid = child.id().to_string();
+        let (tx, rx) = mpsc::channel();
+        std::thread::spawn(move || {
+            let _ = tx.send(child.wait_with_output());
+        });
+        let Ok(result) = rx.recv_timeout(Duration::from_secs(20)) else {
+            let _ = Command::new("kill").args(["-KILL", &pid]).status();
+            panic!("{backend}: still rendering 20 s after Ctrl-C");
+        };
+        let result = result.expect("gpurt ends");
+        let stderr = String::from_utf8_lossy(&result.stderr);
+        println!(
+            "{backend}: peak {} MiB after 3 s, stopped {:.2} s after Ctrl-C",
+            peak_kib / 1024,
+            signalled.elapsed().as_secs_f64()
+        );
+        assert_eq!(result.status.code(), Some(130), "{backend}: {stderr}");
+        assert!(stderr.contains("interrupted"), "{backend}: {stderr}");
+        assert!(
+            !dir.join(&out).exists(),
+            "{backend}: a partial image was written"
+        );
+        assert!(peak_kib < 1 << 20, "{backend}: {peak_kib} KiB after 3 s");
+    }
+}
