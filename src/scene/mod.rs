@@ -14,7 +14,6 @@ pub mod stl;
 pub mod triangulate;
 
 use glam::Vec3;
-use std::io::Read;
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -399,13 +398,22 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     decompress(raw, path, MAX_FILE_BYTES)
 }
 
+/// Decompressed bytes `decompress` holds before it knows the whole size: past this, it
+/// counts the rest without keeping it, and decompresses again into a buffer of the exact
+/// size only if the whole is within the limit. A gzip bomb then costs at most this (and
+/// the doubling of a growing buffer) on its way to being refused, instead of the limit;
+/// files up to this size (every shared scene) are decompressed once.
+pub const HELD_BYTES: u64 = 64 << 20;
+
 /// `raw` as `read_file` returns it for a file at `path`: decompressed when it starts with
 /// the gzip magic bytes (every member, as gzip does), unchanged otherwise. A file that
-/// decompresses to more than `limit` bytes is an error (`read_file` uses `MAX_FILE_BYTES`).
+/// decompresses to more than `limit` bytes is an error (`read_file` uses `MAX_FILE_BYTES`),
+/// found holding at most `HELD_BYTES` of it.
 pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
     if !raw.starts_with(&[0x1f, 0x8b]) {
         return Ok(raw);
     }
+    let io = |e| Error::io(path, e);
     // The gzip trailer ends with the decompressed size mod 2^32 (ISIZE): exact for the usual
     // one-member file, so the output is allocated once instead of doubling its way up (which
     // would hold up to twice the scene's bytes at the peak). Deflate cannot expand more than
@@ -413,24 +421,19 @@ pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
     let isize = raw.len().checked_sub(4).map_or(0, |i| {
         u32::from_le_bytes(raw[i..].try_into().unwrap()) as u64
     });
-    let hint = isize.min(raw.len() as u64 * 1032).min(limit);
+    let held = limit.min(HELD_BYTES);
+    let hint = isize.min(raw.len() as u64 * 1032).min(held);
     let mut out = Vec::with_capacity(hint as usize + 64);
-    // Member after member, as gzip does; zero bytes after the last member are padding
-    // (tape blocks, `dd`), which `gzip -t` accepts too.
-    let mut rest = &raw[..];
-    while !rest.iter().all(|&b| b == 0) {
-        let mut member = flate2::bufread::GzDecoder::new(rest);
-        let room = (limit + 1).saturating_sub(out.len() as u64);
-        (&mut member)
-            .take(room)
-            .read_to_end(&mut out)
-            .map_err(|e| Error::io(path, e))?;
-        if out.len() as u64 > limit {
-            break;
+    let mut total = inflate(&raw, &mut out, held + 1).map_err(io)?;
+    if total > held {
+        // Larger than is held before the size is known: count it all first.
+        total = inflate(&raw, &mut std::io::sink(), limit + 1).map_err(io)?;
+        if total <= limit {
+            out = Vec::with_capacity(total as usize);
+            inflate(&raw, &mut out, total).map_err(io)?;
         }
-        rest = member.into_inner();
     }
-    if out.len() as u64 > limit {
+    if total > limit {
         let msg = if limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {
             format!("decompresses to more than {} GiB", limit >> 30)
         } else {
@@ -442,6 +445,20 @@ pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
         });
     }
     Ok(out)
+}
+
+/// Writes the gzip members of `raw` to `out`, member after member as gzip does, stopping
+/// after `room` bytes; returns the bytes written. Zero bytes after the last member are
+/// padding (tape blocks, `dd`), which `gzip -t` accepts too.
+fn inflate(raw: &[u8], out: &mut impl std::io::Write, room: u64) -> std::io::Result<u64> {
+    use std::io::Read;
+    let (mut rest, mut written) = (raw, 0);
+    while written < room && !rest.iter().all(|&b| b == 0) {
+        let mut member = flate2::bufread::GzDecoder::new(rest);
+        written += std::io::copy(&mut (&mut member).take(room - written), out)?;
+        rest = member.into_inner();
+    }
+    Ok(written)
 }
 
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an

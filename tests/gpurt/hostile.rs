@@ -280,3 +280,66 @@ fn a_16k_frame_at_4096_spp_starts_small_and_stops_on_ctrl_c() {
         assert!(peak_kib < 1 << 20, "{backend}: {peak_kib} KiB after 3 s");
     }
 }
+
+/// A gzip bomb at the real limit: 4 GiB and one byte of zeros in 65 gzip members (about
+/// 4 MB on disk) is refused by the command line with the limit named, no output file,
+/// and without holding more than `scene::HELD_BYTES` of it (its size is counted before
+/// it is kept); the peak memory is sampled from /proc while it runs.
+#[test]
+fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = temp_dir("bomb");
+    let zeros = vec![0u8; 64 << 20];
+    let mut member = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    member.write_all(&zeros).unwrap();
+    let member = member.finish().unwrap();
+    let mut last = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+    last.write_all(b"\n").unwrap();
+    let mut bomb = member.repeat((scene::MAX_FILE_BYTES / zeros.len() as u64) as usize);
+    bomb.extend(last.finish().unwrap());
+    drop(zeros);
+    std::fs::write(dir.join("bomb.nff.gz"), &bomb).unwrap();
+    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["bomb.nff.gz", "--backend", "cpu", "-o", "out.png"])
+        .current_dir(&dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("gpurt starts");
+    let status = format!("/proc/{}/status", child.id());
+    let pid = child.id().to_string();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    let (mut peak_kib, start) = (0u64, std::time::Instant::now());
+    let out = loop {
+        if let Ok(out) = rx.recv_timeout(Duration::from_millis(20)) {
+            break out.expect("gpurt ends");
+        }
+        let hwm = std::fs::read_to_string(&status).ok().and_then(|s| {
+            let line = s.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
+            line.trim().trim_end_matches(" kB").parse::<u64>().ok()
+        });
+        peak_kib = peak_kib.max(hwm.unwrap_or(0));
+        if start.elapsed() > Duration::from_secs(120) {
+            let _ = Command::new("kill").args(["-KILL", &pid]).status();
+            panic!("still reading the bomb after 120 s");
+        }
+    };
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!(
+        "{} bytes of gzip refused in {:.1} s, peak {} MiB",
+        bomb.len(),
+        start.elapsed().as_secs_f64(),
+        peak_kib / 1024
+    );
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("bomb.nff.gz") && stderr.contains("decompresses to more than 4 GiB"),
+        "{stderr}"
+    );
+    assert!(!dir.join("out.png").exists());
+    let bound = 2 * scene::HELD_BYTES / 1024 + bomb.len() as u64 / 1024 + (64 << 10);
+    assert!(peak_kib > 0 && peak_kib < bound, "peak {peak_kib} KiB, bound {bound} KiB");
+}
