@@ -341,5 +341,8 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
     );
     assert!(!dir.join("out.png").exists());
     let bound = 2 * scene::HELD_BYTES / 1024 + bomb.len() as u64 / 1024 + (64 << 10);
-    assert!(peak_kib > 0 && peak_kib < bound, "peak {peak_kib} KiB, bound {bound} KiB");
+    assert!(
+        peak_kib > 0 && peak_kib < bound,
+        "peak {peak_kib} KiB, bound {bound} KiB"
+    );
 }

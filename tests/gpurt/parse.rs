@@ -1605,5 +1605,9 @@ fn decompress_is_what_read_file_does_and_honours_its_limit() {
     assert_eq!(out.len(), held + 7);
     assert!(out.ends_with(b"\0# tail\n") && out[..held].iter().all(|&b| b == 0));
     let e = scene::decompress(big, &path, held as u64 + 6).unwrap_err();
-    assert!(e.to_string().contains(&format!("more than {} bytes", held + 6)), "{e}");
+    assert!(
+        e.to_string()
+            .contains(&format!("more than {} bytes", held + 6)),
+        "{e}"
+    );
 }
