@@ -732,8 +732,8 @@ pub fn trace_rows(
     let mut tracing = scene.tracing_cut();
     let all = u64::from(samples.end - samples.start).max(1);
     for (y0, rows) in bands {
-        let bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
         let pixels = u64::from(cut.width) * u64::from(rows);
+        let bytes = pixels * PIXEL_BYTES;
         // Progress is in pixels: a submission of part of the samples reports its share.
         let mut reported = 0;
         for run in cut.submissions(&samples) {

@@ -24,6 +24,14 @@ fn within_time<T: Send + 'static>(what: &str, f: impl FnOnce() -> T + Send + 'st
         .unwrap_or_else(|_| panic!("{what}: still reading after 20 s"))
 }
 
+/// The peak resident memory of the running process `pid` in KiB (`VmHWM` in
+/// /proc/PID/status), `None` once it has exited (a zombie has none).
+fn peak_memory_kib(pid: u32) -> Option<u64> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let line = status.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
+    line.trim().trim_end_matches(" kB").parse().ok()
+}
+
 /// A directory with the hostile entries: `dir.obj/`, `fifo.stl` (where `mkfifo` exists),
 /// `zero.stl` -> /dev/zero, and `scene.nff`, a scene that names itself as a mesh.
 fn hostile_dir() -> (PathBuf, bool) {
@@ -234,21 +242,13 @@ fn a_16k_frame_at_4096_spp_starts_small_and_stops_on_ctrl_c() {
             .spawn()
             .expect("gpurt starts");
         std::thread::sleep(Duration::from_secs(3));
-        let status = std::fs::read_to_string(format!("/proc/{}/status", child.id()));
-        if status.as_deref().unwrap_or_default().contains("zombie") {
+        let Some(peak_kib) = peak_memory_kib(child.id()) else {
             let early = child.wait_with_output().expect("gpurt ends");
             panic!(
                 "{backend}: ended early: {}",
                 String::from_utf8_lossy(&early.stderr)
             );
-        }
-        let peak_kib: u64 = status
-            .as_deref()
-            .unwrap_or_default()
-            .lines()
-            .find_map(|l| l.strip_prefix("VmHWM:"))
-            .and_then(|v| v.trim().trim_end_matches(" kB").parse().ok())
-            .unwrap_or_else(|| panic!("{backend}: no peak memory in /proc: {status:?}"));
+        };
         let signalled = Instant::now();
         let killed = Command::new("kill")
             .args(["-INT", &child.id().to_string()])
@@ -306,8 +306,8 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("gpurt starts");
-    let status = format!("/proc/{}/status", child.id());
-    let pid = child.id().to_string();
+    let id = child.id();
+    let pid = id.to_string();
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let _ = tx.send(child.wait_with_output());
@@ -317,11 +317,7 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
         if let Ok(out) = rx.recv_timeout(Duration::from_millis(20)) {
             break out.expect("gpurt ends");
         }
-        let hwm = std::fs::read_to_string(&status).ok().and_then(|s| {
-            let line = s.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
-            line.trim().trim_end_matches(" kB").parse::<u64>().ok()
-        });
-        peak_kib = peak_kib.max(hwm.unwrap_or(0));
+        peak_kib = peak_kib.max(peak_memory_kib(id).unwrap_or(0));
         if start.elapsed() > Duration::from_secs(120) {
             let _ = Command::new("kill").args(["-KILL", &pid]).status();
             panic!("still reading the bomb after 120 s");
