@@ -880,10 +880,10 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
     let texels = |binding: u32| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type: wgpu::TextureSampleType::Uint,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::ReadOnly,
+            format: wgpu::TextureFormat::Rgba32Uint,
             view_dimension: wgpu::TextureViewDimension::D2Array,
-            multisampled: false,
         },
         count: None,
     };
