@@ -8,6 +8,8 @@
 #   benches/embree.sh [SCENE...]      (default: the five SPD scenes of benches/peers.sh)
 #   THREADS=4 SIZE=1024 benches/embree.sh
 #   GPURT_CPU_WALK=binary benches/embree.sh   (our side walks the binary tree, as the GPU)
+#   SPP=16 benches/embree.sh   (our side traces the tree gpurt builds for a 16-sample render;
+#                               the rays are the same)
 #
 # Needs Debian's libembree-dev (skipped with a message when it is missing) and ../shared.
 set -euo pipefail

@@ -51,8 +51,12 @@ fn main() -> anyhow::Result<()> {
     let size: u32 = args.next().map_or(Ok(512), |s| s.parse())?;
     let out = args.next().map(PathBuf::from);
 
-    // The tree a one-sample render of these rays would get.
-    let buffers = gpurt::run::prepare(&scene, None, |_| u64::from(size) * u64::from(size))?.buffers;
+    // The tree a render of these rays would get: one sample per pixel, or SPP (the rays
+    // are those of the first sample either way; a longer render gets a better tree,
+    // `bvh::Quality::for_work`).
+    let spp: u64 = std::env::var("SPP").map_or(Ok(1), |s| s.parse())?;
+    let buffers =
+        gpurt::run::prepare(&scene, None, |_| u64::from(size) * u64::from(size) * spp)?.buffers;
     anyhow::ensure!(
         buffers.planes.is_empty()
             && buffers.prims.iter().all(|p| p.kind() != PRIM_BOX)
