@@ -228,18 +228,17 @@ override LAYER_SHIFT: u32 = 25u;
 // for every scene and image size.
 @group(0) @binding(0) var<storage, read> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
-// BVH nodes and primitives, the data every traversal step reads, come through read-only
-// rgba32uint storage textures holding the very bytes of `array<Node>` (`array<WideNode>`
-// for the wide walk) and `array<Prim>` (2, 7 and 3 texels each, TEXTURE_WIDTH texels a
-// row). lavapipe loads a storage buffer one component and one invocation at a time (a
-// 32-byte node took 64 scalar loads) but a texel with one 16-byte load a lane; and a
-// storage texture has no mip levels, where its texel fetch from a sampled texture worked
-// out each lane's level, size and strides first (45% of balls-4's time on lavapipe went
-// to those fetches; storage textures made it 1.45 times faster). Real GPUs read all of
-// these through their caches.
-@group(0) @binding(2) var node_texels: texture_storage_2d_array<rgba32uint, read>;
-@group(0) @binding(3) var prim_texels: texture_storage_2d_array<rgba32uint, read>;
-@group(0) @binding(4) var normal_texels: texture_storage_2d_array<rgba32uint, read>;
+// BVH nodes and primitives, the data every traversal step reads, come through rgba32uint
+// textures holding the very bytes of `array<Node>` (`array<WideNode>` for the wide walk)
+// and `array<Prim>` (2, 7 and 3 texels each, TEXTURE_WIDTH texels a row): lavapipe loads
+// a storage buffer one component and one invocation at a time, but a texel with one
+// 16-byte load a lane. Read-only storage textures rather than sampled ones, whose fetch
+// works out each lane's mip level and strides first (docs/gpu.md, item 2; the host's
+// side is `upload::TEXEL_FORMAT`).
+alias Texels = texture_storage_2d_array<rgba32uint, read>;
+@group(0) @binding(2) var node_texels: Texels;
+@group(0) @binding(3) var prim_texels: Texels;
+@group(0) @binding(4) var normal_texels: Texels;
 @group(0) @binding(5) var<storage, read> planes: array<Plane>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
 @group(0) @binding(7) var<storage, read> lights: array<Light>;
@@ -268,7 +267,7 @@ fn prim_material(p: Prim) -> u32 {
 
 // Texel `i` of a texture array: layers of 2^LAYER_SHIFT texels, rows of TEXTURE_WIDTH
 // (both powers of two, so the divisions are shifts).
-fn texel(texels: texture_storage_2d_array<rgba32uint, read>, i: u32) -> vec4<u32> {
+fn texel(texels: Texels, i: u32) -> vec4<u32> {
     let j = i & ((1u << LAYER_SHIFT) - 1u);
     return textureLoad(texels, vec2<u32>(j % TEXTURE_WIDTH, j / TEXTURE_WIDTH), i >> LAYER_SHIFT);
 }

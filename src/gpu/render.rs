@@ -882,7 +882,7 @@ fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::StorageTexture {
             access: wgpu::StorageTextureAccess::ReadOnly,
-            format: wgpu::TextureFormat::Rgba32Uint,
+            format: super::upload::TEXEL_FORMAT,
             view_dimension: wgpu::TextureViewDimension::D2Array,
         },
         count: None,

@@ -127,6 +127,10 @@ pub(super) fn layer_rows(device: &wgpu::Device) -> u32 {
     1 << max.ilog2()
 }
 
+/// The format of the node, primitive and normal textures: 16 bytes a texel, bound as
+/// read-only storage textures (`Texels` in `shaders/types.wgsl`, which says why).
+pub(super) const TEXEL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
+
 /// Texture rows written per upload step: 4 MB (see `texels`).
 const UPLOAD_ROWS: u32 = 64;
 
@@ -153,7 +157,7 @@ pub(super) fn texels(
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba32Uint,
+        format: TEXEL_FORMAT,
         usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
