@@ -40,10 +40,10 @@ pub struct SceneBuffers {
     pub camera: Camera,
     pub background: Vec3,
     pub ambient: Option<Vec3>,
-    /// The CPU renderer's four-wide copy of `nodes`, built on its first render
+    /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
-    /// The same tree as the GPU's wide walk reads it (`gpu_wide_nodes`) and the stack
+    /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`), and the stack
     /// entries that walk needs, built on its first upload for that walk.
     gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
 }
@@ -203,22 +203,23 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
-    /// `nodes` collapsed four-wide (`cpu::wide`), built the first time it is asked for:
+    /// `nodes` collapsed eight wide (`cpu::wide`), built the first time it is asked for:
     /// `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))
     }
 
-    /// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it, built the first time it
-    /// is asked for; `None` when that walk cannot take this scene (`wide::gpu_nodes`),
-    /// which then walks the binary tree in pairs.
+    /// `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them, built
+    /// the first time they are asked for (the CPU's tree is not needed); `None` when that
+    /// walk cannot take this scene (`wide::gpu_nodes`), which then walks the binary tree
+    /// in pairs.
     pub fn gpu_wide_nodes(&self) -> Option<&[GpuWideNode]> {
         self.gpu_wide().map(|(nodes, _)| &nodes[..])
     }
 
     fn gpu_wide(&self) -> Option<&(Vec<GpuWideNode>, u32)> {
         self.gpu_wide
-            .get_or_init(|| wide::gpu_nodes(self.wide_nodes()))
+            .get_or_init(|| wide::gpu_nodes(&self.nodes))
             .as_ref()
     }
 

@@ -1,6 +1,7 @@
-//! A four-wide BVH for the CPU renderer alone: the binary tree of `SceneBuffers::nodes`
-//! collapsed so that each node holds up to four children, whose boxes one ray tests
-//! together in SIMD lanes (glam's `Vec4`: SSE on x86-64, NEON on AArch64).
+//! An eight-wide BVH for the CPU renderer alone: the binary tree of `SceneBuffers::nodes`
+//! collapsed so that each node holds up to eight children, whose boxes one ray tests
+//! together in SIMD lanes (two of glam's `Vec4`s per coordinate: SSE on x86-64, NEON on
+//! AArch64; one AVX register where the compiler may use it).
 //!
 //! The leaves are the binary tree's leaves, the same primitive ranges of the same
 //! `prims` array, and each lane's box test is `intersect::overlaps` to the bit, so a ray
@@ -10,8 +11,10 @@
 //! gets does not depend on the walk; the `cost` AOV, which counts the nodes of the GPU's
 //! walk, still uses the binary walk (`Bindings::new`).
 //!
-//! The GPU's `TRAVERSAL_WIDE` walk reads the same tree, as `GpuWideNode`s (`gpu_nodes`):
-//! there a ray waits on node fetches, and a wide node halves the chain of them.
+//! The GPU's `TRAVERSAL_WIDE` walk reads the binary tree collapsed the same way four wide,
+//! as `GpuWideNode`s (`gpu_nodes`): there a ray waits on node fetches, and a wide node
+//! halves the chain of them. On the CPU eight lanes beat four on primary rays (2 to 10%
+//! more a second on the five SPD scenes of `benches/embree.sh`), docs/bvh.md.
 
 use std::mem::MaybeUninit;
 
@@ -21,18 +24,21 @@ use super::intersect::SLAB_WIDEN;
 use crate::gpu_types::{GpuNode, GpuWideNode, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF};
 
 /// Children of a wide node.
-pub const WIDTH: usize = 4;
+pub const WIDTH: usize = 8;
+
+/// One coordinate of the boxes of a wide node's children: lane `l` is `[l / 4][l % 4]`.
+type Lanes = [Vec4; WIDTH / 4];
 
 /// `WideNode::count` of a lane that holds no child (its box is empty, so no ray enters).
 const EMPTY: u32 = u32::MAX;
 
-/// Four child boxes in structure-of-arrays form, and where each child leads.
+/// Eight child boxes in structure-of-arrays form, and where each child leads.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct WideNode {
-    /// Lower and upper corners: `lo[axis]` holds that coordinate of the four boxes.
-    lo: [Vec4; 3],
-    hi: [Vec4; 3],
+    /// Lower and upper corners: `lo[axis]` holds that coordinate of the eight boxes.
+    lo: [Lanes; 3],
+    hi: [Lanes; 3],
     /// A wide node's index (`count == 0`), or a leaf's first primitive.
     child: [u32; WIDTH],
     /// Primitives of a leaf child, 0 for an inner child, `EMPTY` for no child.
@@ -42,8 +48,8 @@ pub struct WideNode {
 impl WideNode {
     fn empty() -> Self {
         WideNode {
-            lo: [Vec4::INFINITY; 3],
-            hi: [Vec4::NEG_INFINITY; 3],
+            lo: [[Vec4::INFINITY; WIDTH / 4]; 3],
+            hi: [[Vec4::NEG_INFINITY; WIDTH / 4]; 3],
             child: [0; WIDTH],
             count: [EMPTY; WIDTH],
         }
@@ -56,15 +62,23 @@ fn area(n: &GpuNode) -> f32 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
+/// A binary node standing as a child of a wide node, and, for an inner one, the index of
+/// the wide node that stands for it in turn.
+#[derive(Clone, Copy)]
+struct Lane {
+    binary: u32,
+    wide: u32,
+}
+
 /// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
-/// `offset`) into wide nodes, root first: each inner node takes its children, then
-/// repeatedly replaces its largest inner child by that child's two children while a lane
-/// is free.
-pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
+/// `offset`) into nodes of up to `width` children, root first, as the lanes of each:
+/// each inner node takes its children, then repeatedly replaces its largest inner child
+/// by that child's two children while a lane is free.
+fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
     if nodes.is_empty() {
         return Vec::new();
     }
-    let mut wide = vec![WideNode::empty()];
+    let mut wide = vec![Vec::new()];
     // (wide node to fill, binary node it stands for)
     let mut todo = vec![(0usize, 0u32)];
     while let Some((w, i)) = todo.pop() {
@@ -74,7 +88,7 @@ pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
         } else {
             vec![i + 1, n.offset]
         };
-        while kids.len() < WIDTH {
+        while kids.len() < width {
             let open = kids
                 .iter()
                 .enumerate()
@@ -84,51 +98,79 @@ pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
             kids.swap_remove(j);
             kids.extend([k + 1, nodes[k as usize].offset]);
         }
-        let mut node = WideNode::empty();
-        for (lane, &k) in kids.iter().enumerate() {
-            let c = &nodes[k as usize];
-            for axis in 0..3 {
-                node.lo[axis][lane] = c.min[axis];
-                node.hi[axis][lane] = c.max[axis];
-            }
-            if c.count() > 0 {
-                node.child[lane] = c.offset;
-                node.count[lane] = c.count();
-            } else {
-                node.child[lane] = wide.len() as u32;
-                node.count[lane] = 0;
-                todo.push((wide.len(), k));
-                wide.push(WideNode::empty());
-            }
-        }
-        wide[w] = node;
+        let lanes = kids
+            .into_iter()
+            .map(|k| {
+                let mut lane = Lane { binary: k, wide: 0 };
+                if nodes[k as usize].count() == 0 {
+                    lane.wide = wide.len() as u32;
+                    todo.push((wide.len(), k));
+                    wide.push(Vec::new());
+                }
+                lane
+            })
+            .collect();
+        wide[w] = lanes;
     }
     wide
 }
 
-/// The wide tree as the GPU's `TRAVERSAL_WIDE` walk reads it (`GpuWideNode`), and the
-/// traversal-stack entries that walk can need on it; `None` where that walk cannot take
-/// the tree: a path whose waiting children could overflow `TRAVERSAL_STACK` (see
-/// `next_leaf_wide` in traverse.wgsl: a node leaves at most three children waiting, and
-/// its pushes write up to two slots past those it keeps), a leaf of more than four
-/// primitives, or a first primitive beyond the entry's 29 bits.
-pub fn gpu_nodes(wide: &[WideNode]) -> Option<(Vec<GpuWideNode>, u32)> {
+/// The CPU renderer's eight-wide tree over the binary `nodes`.
+pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
+    collapse(nodes, WIDTH)
+        .into_iter()
+        .map(|lanes| {
+            let mut node = WideNode::empty();
+            for (lane, Lane { binary, wide }) in lanes.into_iter().enumerate() {
+                let c = &nodes[binary as usize];
+                for axis in 0..3 {
+                    node.lo[axis][lane / 4][lane % 4] = c.min[axis];
+                    node.hi[axis][lane / 4][lane % 4] = c.max[axis];
+                }
+                (node.child[lane], node.count[lane]) = if c.count() > 0 {
+                    (c.offset, c.count())
+                } else {
+                    (wide, 0)
+                };
+            }
+            node
+        })
+        .collect()
+}
+
+/// The binary `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them
+/// (`GpuWideNode`), and the traversal-stack entries that walk can need on them; `None`
+/// where that walk cannot take the tree: a path whose waiting children could overflow
+/// `TRAVERSAL_STACK` (see `next_leaf_wide` in traverse.wgsl: a node leaves at most three
+/// children waiting, and its pushes write up to two slots past those it keeps), a leaf of
+/// more than four primitives, a first primitive beyond the entry's 29 bits, or no tree.
+pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
+    let wide = collapse(nodes, 4);
+    if wide.is_empty() {
+        return None;
+    }
     let mut out = Vec::with_capacity(wide.len());
-    for n in wide {
-        let mut entry = [WIDE_EMPTY; WIDTH];
-        for ((e, &child), &count) in entry.iter_mut().zip(&n.child).zip(&n.count) {
-            *e = match count {
-                EMPTY => WIDE_EMPTY,
-                0 => child,
-                1..=4 if child < (1 << 29) - 1 => WIDE_LEAF | child << 2 | (count - 1),
+    for lanes in &wide {
+        let mut node = GpuWideNode {
+            lo: [Vec4::INFINITY; 3],
+            hi: [Vec4::NEG_INFINITY; 3],
+            entry: [WIDE_EMPTY; 4],
+        };
+        for (lane, &Lane { binary, wide }) in lanes.iter().enumerate() {
+            let c = &nodes[binary as usize];
+            for axis in 0..3 {
+                node.lo[axis][lane] = c.min[axis];
+                node.hi[axis][lane] = c.max[axis];
+            }
+            node.entry[lane] = match c.count() {
+                0 => wide,
+                count @ 1..=4 if c.offset < (1 << 29) - 1 => {
+                    WIDE_LEAF | c.offset << 2 | (count - 1)
+                }
                 _ => return None,
             };
         }
-        out.push(GpuWideNode {
-            lo: n.lo,
-            hi: n.hi,
-            entry,
-        });
+        out.push(node);
     }
     // Entries waiting when the walk reaches each node: the sum over its ancestors of the
     // children each left waiting (at most its children less the one entered).
@@ -139,11 +181,10 @@ pub fn gpu_nodes(wide: &[WideNode]) -> Option<(Vec<GpuWideNode>, u32)> {
         if need > TRAVERSAL_STACK {
             return None;
         }
-        let n = &wide[w];
-        let children = n.count.iter().filter(|&&c| c != EMPTY).count();
-        for lane in 0..WIDTH {
-            if n.count[lane] == 0 {
-                todo.push((n.child[lane] as usize, waiting + children - 1));
+        let lanes = &wide[w];
+        for lane in lanes {
+            if nodes[lane.binary as usize].count() == 0 {
+                todo.push((lane.wide as usize, waiting + lanes.len() - 1));
             }
         }
     }
@@ -163,7 +204,7 @@ struct Entry {
 /// `TRAVERSAL_STACK`, and each level leaves at most `WIDTH - 1` children waiting.
 const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 
-/// The ray's constants for the four-lane slab test.
+/// The ray's constants for the eight-lane slab test.
 pub struct Slabs {
     origin: [Vec4; 3],
     inv_dir: [Vec4; 3],
@@ -180,29 +221,34 @@ impl Slabs {
         }
     }
 
-    /// `intersect::slab_entry` for the four boxes at once: where the ray enters each,
+    /// `intersect::slab_entry` for the eight boxes at once: where the ray enters each,
     /// clamped to `tmin`, and a bit mask of those it overlaps within `[tmin, tmax]`.
     /// Choosing the near face by the sign of the inverse direction gives the same value
     /// as the scalar `min(t0, t1)`, since that sign orders `t0` and `t1`.
     #[inline]
-    fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Vec4, u32) {
-        let t = |axis: usize, near: bool| {
-            let face = if self.neg[axis] == near {
-                n.hi[axis]
-            } else {
-                n.lo[axis]
+    fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
+        let mut near = [Vec4::ZERO; WIDTH / 4];
+        let mut mask = 0;
+        for (half, near) in near.iter_mut().enumerate() {
+            let t = |axis: usize, is_near: bool| {
+                let face = if self.neg[axis] == is_near {
+                    n.hi[axis][half]
+                } else {
+                    n.lo[axis][half]
+                };
+                (face - self.origin[axis]) * self.inv_dir[axis]
             };
-            (face - self.origin[axis]) * self.inv_dir[axis]
-        };
-        let near = t(0, true)
-            .max(t(1, true))
-            .max(t(2, true))
-            .max(Vec4::splat(tmin));
-        let far = t(0, false)
-            .min(t(1, false))
-            .min(t(2, false))
-            .min(Vec4::splat(tmax));
-        (near, near.cmple(far * SLAB_WIDEN).bitmask())
+            *near = t(0, true)
+                .max(t(1, true))
+                .max(t(2, true))
+                .max(Vec4::splat(tmin));
+            let far = t(0, false)
+                .min(t(1, false))
+                .min(t(2, false))
+                .min(Vec4::splat(tmax));
+            mask |= near.cmple(far * SLAB_WIDEN).bitmask() << (4 * half);
+        }
+        (near, mask)
     }
 }
 
@@ -229,9 +275,14 @@ pub fn walk<const NEAREST_FIRST: bool>(
     };
     loop {
         if next.count > 0 {
-            match leaf(next.child, next.count) {
-                Some(t) => tmax = t,
-                None => return,
+            // An empty lane is reached only by a ray whose slab distances are NaN (an
+            // origin at infinity), which the min/max chain lets through as the scalar
+            // test does: it leads nowhere.
+            if next.count != EMPTY {
+                match leaf(next.child, next.count) {
+                    Some(t) => tmax = t,
+                    None => return,
+                }
             }
         } else {
             let n = &wide[next.child as usize];
@@ -239,7 +290,7 @@ pub fn walk<const NEAREST_FIRST: bool>(
             let entry = |lane: usize| Entry {
                 child: n.child[lane],
                 count: n.count[lane],
-                near: near[lane],
+                near: near[lane / 4][lane % 4],
             };
             if mask != 0 && mask & (mask - 1) == 0 {
                 // One child reached (the common case): straight on, nothing pushed.
@@ -298,10 +349,57 @@ mod tests {
             .collect()
     }
 
-    /// Walks the wide tree: every binary leaf appears once, as a lane with the leaf's own
+    /// A lane of either wide tree, as `check` reads it: its box, and a leaf's (first,
+    /// count), an inner child's node, or nothing.
+    enum Child {
+        Leaf(u32, u32),
+        Inner(usize),
+        Empty,
+    }
+
+    fn cpu_lanes(wide: &[WideNode]) -> Vec<Vec<(Vec3, Vec3, Child)>> {
+        let at = |v: &[Lanes; 3], l: usize| Vec3::from_array([0, 1, 2].map(|a| v[a][l / 4][l % 4]));
+        wide.iter()
+            .map(|n| {
+                (0..WIDTH)
+                    .map(|l| {
+                        let child = match n.count[l] {
+                            EMPTY => Child::Empty,
+                            0 => Child::Inner(n.child[l] as usize),
+                            c => Child::Leaf(n.child[l], c),
+                        };
+                        (at(&n.lo, l), at(&n.hi, l), child)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn gpu_lanes(wide: &[GpuWideNode]) -> Vec<Vec<(Vec3, Vec3, Child)>> {
+        let at = |v: &[Vec4; 3], l: usize| Vec3::from_array([0, 1, 2].map(|a| v[a][l]));
+        wide.iter()
+            .map(|n| {
+                (0..4)
+                    .map(|l| {
+                        let e = n.entry[l];
+                        let child = if e == WIDE_EMPTY {
+                            Child::Empty
+                        } else if e & WIDE_LEAF != 0 {
+                            Child::Leaf((e & !WIDE_LEAF) >> 2, (e & 3) + 1)
+                        } else {
+                            Child::Inner(e as usize)
+                        };
+                        (at(&n.lo, l), at(&n.hi, l), child)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Walks a wide tree: every binary leaf appears once, as a lane with the leaf's own
     /// box; every inner lane's box is that of a binary node; empty lanes come last and
     /// hold empty boxes; no path is deeper than the binary tree's (the stack bound).
-    fn check(binary: &bvh::FlatBvh, wide: &[WideNode]) {
+    fn check(binary: &bvh::FlatBvh, wide: &[Vec<(Vec3, Vec3, Child)>]) {
         let leaves: Vec<&GpuNode> = binary.nodes.iter().filter(|n| n.count() > 0).collect();
         let mut seen = vec![0u32; binary.order.len()];
         let mut reached = vec![false; wide.len()];
@@ -311,34 +409,34 @@ mod tests {
             assert!(!std::mem::replace(&mut reached[w], true), "node {w} twice");
             depth = depth.max(d);
             let n = &wide[w];
-            let lanes = n.count.iter().take_while(|&&c| c != EMPTY).count();
-            assert!(lanes >= 1 && n.count[lanes..].iter().all(|&c| c == EMPTY));
+            let lanes = n
+                .iter()
+                .take_while(|l| !matches!(l.2, Child::Empty))
+                .count();
+            assert!(lanes >= 1 && n[lanes..].iter().all(|l| matches!(l.2, Child::Empty)));
             // A lane stays free only when no inner child was left to open into it.
             assert!(
-                lanes == WIDTH || n.count[..lanes].iter().all(|&c| c > 0),
+                lanes == n.len() || n[..lanes].iter().all(|l| matches!(l.2, Child::Leaf(..))),
                 "node {w}"
             );
-            for lane in 0..WIDTH {
-                let lo = Vec3::new(n.lo[0][lane], n.lo[1][lane], n.lo[2][lane]);
-                let hi = Vec3::new(n.hi[0][lane], n.hi[1][lane], n.hi[2][lane]);
-                if lane >= lanes {
-                    assert!(lo.cmpgt(hi).all(), "empty lane {lane} of {w} has a box");
-                    continue;
-                }
-                let box_of = |b: &GpuNode| b.min == lo && b.max == hi;
-                if n.count[lane] > 0 {
-                    let (first, count) = (n.child[lane], n.count[lane]);
-                    assert!(
-                        leaves
-                            .iter()
-                            .any(|l| l.offset == first && l.count() == count && box_of(l))
-                    );
-                    for k in first..first + count {
-                        seen[k as usize] += 1;
+            for (lo, hi, child) in n {
+                let box_of = |b: &GpuNode| b.min == *lo && b.max == *hi;
+                match *child {
+                    Child::Empty => assert!(lo.cmpgt(*hi).all(), "empty lane of {w} has a box"),
+                    Child::Leaf(first, count) => {
+                        assert!(
+                            leaves
+                                .iter()
+                                .any(|l| l.offset == first && l.count() == count && box_of(l))
+                        );
+                        for k in first..first + count {
+                            seen[k as usize] += 1;
+                        }
                     }
-                } else {
-                    assert!(binary.nodes.iter().any(|b| b.count() == 0 && box_of(b)));
-                    todo.push((n.child[lane] as usize, d + 1));
+                    Child::Inner(node) => {
+                        assert!(binary.nodes.iter().any(|b| b.count() == 0 && box_of(b)));
+                        todo.push((node, d + 1));
+                    }
                 }
             }
         }
@@ -359,8 +457,9 @@ mod tests {
         for n in [1, 2, 3, 5, 17, 1000] {
             for quality in [Quality::Medium, Quality::High] {
                 let binary = bvh::build(&boxes(n), quality);
-                let wide = build(&binary.nodes);
-                check(&binary, &wide);
+                check(&binary, &cpu_lanes(&build(&binary.nodes)));
+                let (gpu, _) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
+                check(&binary, &gpu_lanes(&gpu));
             }
         }
         // A chain deeper than obvhs keeps, rebuilt by median splits (bvh.rs): the deepest
@@ -375,8 +474,28 @@ mod tests {
             })
             .collect();
         let binary = bvh::build(&chain, Quality::Medium);
-        check(&binary, &build(&binary.nodes));
+        check(&binary, &cpu_lanes(&build(&binary.nodes)));
         assert!(build(&[]).is_empty());
+        assert!(gpu_nodes(&[]).is_none());
+    }
+
+    /// A ray from infinity gets NaN slab distances from the empty lanes' infinite
+    /// boxes, which the min/max chain lets through, and infinite ones from real boxes,
+    /// which it misses: the walk hands no leaf over (an empty lane would be a leaf of
+    /// `EMPTY` primitives).
+    #[test]
+    fn a_ray_from_infinity_reaches_only_real_leaves() {
+        let binary = bvh::build(&boxes(3), Quality::High);
+        let wide = build(&binary.nodes);
+        assert!(wide[0].count.contains(&EMPTY));
+        let origin = Vec3::new(f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY);
+        let slabs = Slabs::new(origin, Vec3::new(1.25, 1.75, -11.25));
+        let mut leaves = Vec::new();
+        walk::<true>(&wide, &slabs, 0.0, f32::MAX, |first, count| {
+            leaves.push((first, count));
+            Some(f32::MAX)
+        });
+        assert_eq!(leaves, []);
     }
 
     /// A binary tree whose path to its deepest leaf passes `depth` inner nodes, each with
@@ -415,15 +534,15 @@ mod tests {
     fn the_gpu_wide_tree_is_refused_where_it_could_overflow_the_stack() {
         for n in [1, 17, 1000] {
             let binary = bvh::build(&boxes(n), Quality::High);
-            let (gpu, need) = gpu_nodes(&build(&binary.nodes)).expect("a shallow tree fits");
-            assert_eq!(gpu.len(), build(&binary.nodes).len());
+            let (gpu, need) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
+            check(&binary, &gpu_lanes(&gpu));
             assert!((3..=TRAVERSAL_STACK as u32).contains(&need));
         }
         // Two binary levels a wide node, three waiting each: 20 levels need 3 * 10 + 3
         // entries, 42 need 66, more than the stack.
-        assert_eq!(gpu_nodes(&build(&comb(20))).map(|(_, need)| need), Some(33));
+        assert_eq!(gpu_nodes(&comb(20)).map(|(_, need)| need), Some(33));
         let deep = comb(42);
         assert!(deep.len() < 4 * 42 + 2);
-        assert!(gpu_nodes(&build(&deep)).is_none());
+        assert!(gpu_nodes(&deep).is_none());
     }
 }
