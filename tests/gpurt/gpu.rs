@@ -874,6 +874,13 @@ fn extreme_values_render_finite_and_match_cpu() {
             format!("{view}{lit}s 0 0 0 1e-30\ns 1e30 0 0 1e29\ns 0 3 0 1\ns 0 0 1e-30 1e-31\n"),
         ),
         (
+            // Shadow rays from the huge sphere start at infinity; three leaves leave a
+            // wide node's lanes partly empty, whose infinite boxes give such a ray NaN
+            // slab distances (the CPU walk once took one for a leaf and panicked).
+            "rays from infinity",
+            format!("{view}{lit}s 1e30 0 0 1e29\ns 0 3 0 1\ns 0 0 1e-30 1e-31\n"),
+        ),
+        (
             "camera inside a sphere",
             "v from 0 0 0 at 1 0 0 up 0 0 1 angle 60 resolution 64 64\nl 0 0 1\n\
              f 0.8 0.8 0.8 0.8 0.2 10 0 1\ns 0 0 0 10\ns 3 0 0 1\n"
