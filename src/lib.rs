@@ -14,6 +14,7 @@ pub mod compare;
 pub mod console;
 pub mod cpu;
 pub mod error;
+pub mod fault;
 pub mod film;
 pub mod frame;
 pub mod gpu;

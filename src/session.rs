@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use crate::error::Result;
+use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
 use crate::gpu::{self, GpuContext, GpuScene};
 use crate::gpu_types::GpuGlobals;
@@ -108,33 +109,28 @@ pub struct GpuSession {
     scene: Arc<SceneBuffers>,
     uploaded: Option<(GpuGlobals, GpuScene)>,
     uploads: u32,
-    /// `GPURT_FAULT=lose-device`: the device is destroyed once the first band of a render
-    /// is in, so that the command line's handling of a GPU lost mid-render (an error
-    /// naming the step, a non-zero exit, no output file) can be tested end to end.
-    lose_device: bool,
+    /// The fault `GPURT_FAULT` asks for (`fault::Fault`), so that the command line's
+    /// handling of a GPU lost mid-render or out of memory on upload can be tested end to
+    /// end.
+    fault: Option<Fault>,
 }
 
 impl GpuSession {
     /// Opens `ctx`'s device for `scene`; shader pipelines are compiled on first use (and
     /// cached on disk where the device allows, keyed by the adapter).
     pub fn new(ctx: GpuContext, scene: Arc<SceneBuffers>) -> Result<Self> {
-        let renderer = gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
-        let lose_device = match std::env::var("GPURT_FAULT").as_deref() {
-            Err(_) | Ok("") => false,
-            Ok("lose-device") => true,
-            Ok(v) => {
-                return Err(crate::Error::Render(format!(
-                    "GPURT_FAULT={v}: expected `lose-device`"
-                )));
-            }
-        };
+        let mut renderer = gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
+        let fault = Fault::from_env()?;
+        if fault == Some(Fault::OutOfMemory) {
+            renderer = renderer.with_texture_margin(OUT_OF_MEMORY_MARGIN);
+        }
         Ok(GpuSession {
             ctx,
             renderer,
             scene,
             uploaded: None,
             uploads: 0,
-            lose_device,
+            fault,
         })
     }
 
@@ -186,7 +182,7 @@ impl Renderer for GpuSession {
         self.set_frame(globals)?;
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let (_, uploaded) = self.uploaded.as_ref().expect("uploaded by set_frame");
-        let lose_device = self.lose_device;
+        let lose_device = self.fault == Some(Fault::LoseDevice);
         let progress = |pixels| {
             progress(pixels);
             if lose_device {

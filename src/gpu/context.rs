@@ -191,6 +191,7 @@ fn open_adapter(adapter: wgpu::Adapter) -> Result<GpuContext> {
         label: Some("gpurt"),
         required_features,
         required_limits: adapter.limits(),
+        memory_hints: crate::fault::memory_hints(),
         ..Default::default()
     }))
     .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;

@@ -60,6 +60,9 @@ pub struct GpuRenderer {
     /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
     /// which have no watchdog.
     dispatch_budget: Option<Duration>,
+    /// The address space each texture of a scene is allocated with, above the process's
+    /// size (`GPURT_FAULT=out-of-memory`, `fault::AddressSpaceCap`); `None`: no cap.
+    texture_margin: Option<u64>,
 }
 
 /// Time one dispatch may take on a GPU, an eighth of the shortest common driver watchdog
@@ -102,14 +105,16 @@ fn cache_dir() -> Option<PathBuf> {
 }
 
 /// Runs `f` inside validation and out-of-memory error scopes, turning any captured error
-/// into `Error::Gpu` (never a silent black image).
+/// into `Error::Gpu` (never a silent black image). An out-of-memory error is the one
+/// reported when both come: a resource that could not be allocated is invalid, and every
+/// later use of it is a validation error that hides the cause.
 pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
     let out = f();
     let v = pollster::block_on(validation.pop());
     let o = pollster::block_on(oom.pop());
-    match v.or(o) {
+    match o.or(v) {
         Some(e) => Err(Error::Gpu(format!("{what}: {}", error_chain(&e)))),
         None => Ok(out),
     }
@@ -249,6 +254,7 @@ impl GpuRenderer {
             traversal: traversal_for()?,
             layer_rows: upload::layer_rows(device),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
+            texture_margin: None,
         })
     }
 
@@ -259,6 +265,18 @@ impl GpuRenderer {
         assert!(rows.is_power_of_two() && rows <= self.layer_rows);
         GpuRenderer {
             layer_rows: rows,
+            ..self
+        }
+    }
+
+    /// This renderer allocating each texture of a scene with the process's address space
+    /// capped `margin` bytes above its size (the out-of-memory fault, `fault.rs`): on a
+    /// software adapter, whose device memory is the process's own, a texture larger than
+    /// that cannot be allocated. Only the allocations run capped, not the copies into
+    /// them, which lavapipe compiles code for.
+    pub fn with_texture_margin(self, margin: u64) -> Self {
+        GpuRenderer {
+            texture_margin: Some(margin),
             ..self
         }
     }
@@ -322,7 +340,14 @@ impl GpuRenderer {
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
         }
-        let data = upload_scene(device, queue, scene, globals.traversal, self.layer_rows)?;
+        let data = upload_scene(
+            device,
+            queue,
+            scene,
+            globals.traversal,
+            self.layer_rows,
+            self.texture_margin,
+        )?;
         self.pipeline(device, queue, scene, &data, globals)
     }
 
@@ -523,7 +548,14 @@ impl GpuRenderer {
         )?;
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        let data = upload_scene(device, queue, scene, globals.traversal, self.layer_rows)?;
+        let data = upload_scene(
+            device,
+            queue,
+            scene,
+            globals.traversal,
+            self.layer_rows,
+            self.texture_margin,
+        )?;
         let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
         let bound = self.bind(
             device,

@@ -4,6 +4,7 @@
 
 use super::render::scoped;
 use crate::error::{Error, Result};
+use crate::fault::AddressSpaceCap;
 use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 
@@ -47,34 +48,37 @@ pub(super) fn scene_bytes(scene: &SceneBuffers, traversal: u32, layer_rows: u32)
         .sum::<u64>()
 }
 
-/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage.
+/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage. With
+/// `texture_margin`, each texture is allocated with the address space capped that far
+/// above the process's size (`GpuRenderer::with_texture_margin`).
 pub(super) fn upload_scene(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &SceneBuffers,
     traversal: u32,
     layer_rows: u32,
+    texture_margin: Option<u64>,
 ) -> Result<SceneData> {
     let storage =
         |label: &str, bytes: &[u8]| buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE);
     scoped(device, "uploading the scene", || {
-        let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows);
-        let nodes = texels("nodes", node_bytes(scene, traversal));
-        let prims = texels("prims", bytemuck::cast_slice(&scene.prims));
-        let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals));
+        let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows, texture_margin);
+        let nodes = texels("nodes", node_bytes(scene, traversal))?;
+        let prims = texels("prims", bytemuck::cast_slice(&scene.prims))?;
+        let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?;
         let array = wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         };
-        SceneData {
+        Ok(SceneData {
             nodes: nodes.create_view(&array),
             prims: prims.create_view(&array),
             tri_normals: normals.create_view(&array),
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
             lights: storage("lights", non_empty(&scene.lights)),
-        }
-    })
+        })
+    })?
 }
 
 /// A buffer holding `contents`: `DeviceExt::create_buffer_init` without its panic. On a
@@ -138,15 +142,18 @@ const UPLOAD_ROWS: u32 = 64;
 /// `layer_rows` rows (see `texture_extent`), zero-padded to whole rows. Written from
 /// `bytes` in place, all but the last row in bands of `UPLOAD_ROWS`: a copy padded to
 /// whole rows would double the host memory of the largest scenes (400 MB of primitives
-/// for mount-11).
+/// for mount-11). With `margin`, the texture is allocated with the address space capped
+/// that far above the process's size (the out-of-memory fault).
 pub(super) fn texels(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     label: &str,
     bytes: &[u8],
     layer_rows: u32,
-) -> wgpu::Texture {
+    margin: Option<u64>,
+) -> Result<wgpu::Texture> {
     let (height, layers) = texture_extent(bytes.len(), layer_rows);
+    let cap = margin.map(AddressSpaceCap::new).transpose()?;
     let texture = device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
         size: wgpu::Extent3d {
@@ -161,6 +168,7 @@ pub(super) fn texels(
         usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     });
+    drop(cap);
     let row_bytes = TEXTURE_WIDTH as usize * 16;
     // Writes `rows` rows from image row `first` on (rows never cross a layer).
     let write = |first: u32, rows: u32, data: &[u8]| {
@@ -211,7 +219,7 @@ pub(super) fn texels(
         last.resize(row_bytes, 0);
         write(whole, 1, &last);
     }
-    texture
+    Ok(texture)
 }
 
 /// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element

@@ -588,6 +588,54 @@ fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
     assert!(d.join("out.png").exists());
 }
 
+/// A GPU out of memory on upload (`GPURT_FAULT=out-of-memory` allocates each texture of
+/// the scene on its own with the process's address space capped just above its size, and
+/// lavapipe's device memory is the process's own: `fault.rs`) ends in an error naming the
+/// upload and the allocation that failed, exit 2, and no output file. The scene's arrays
+/// (a million spheres, 48 MB of them primitives) are larger than the cap leaves, and than
+/// the 32 MiB above which glibc always maps fresh memory (a smaller texture may fit in
+/// heap space freed by the BVH build).
+#[cfg(target_os = "linux")]
+#[test]
+fn an_out_of_memory_on_upload_exits_non_zero_without_an_output_file() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    drop(ctx);
+    let d = workdir("out-of-memory");
+    let mut scene = String::from(SCENE);
+    for i in 0..1_000_000 {
+        scene += &format!("s {} {} -900 0.4\n", i % 1000 - 500, i / 1000 - 500);
+    }
+    std::fs::write(d.join("many.nff"), scene).unwrap();
+    let run = |fault: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["many.nff", "--backend", "gpu", "-o", "out.png"])
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_FAULT", fault)
+            .output()
+            .expect("gpurt runs")
+    };
+    let o = run("out-of-memory");
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("GPU error: uploading the scene: Out of Memory")
+            && err.contains("create_texture"),
+        "{err}"
+    );
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["many.nff"], "no output file, partial or temporary");
+    // Without the fault the same command writes its image.
+    let o = run("");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join("out.png").exists());
+}
+
 #[test]
 fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() {
     let d = workdir("batch");
