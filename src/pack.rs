@@ -43,8 +43,8 @@ pub struct SceneBuffers {
     /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
-    /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`), and the stack
-    /// entries that walk needs, built on its first upload for that walk.
+    /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`),
+    /// and the stack entries that walk needs, built on its first upload for that walk.
     gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
 }
 

@@ -24,7 +24,7 @@ pub struct Bindings<'a> {
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
-    /// The four-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
+    /// The eight-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
     /// walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
@@ -33,7 +33,7 @@ pub struct Bindings<'a> {
 }
 
 impl<'a> Bindings<'a> {
-    /// What the CPU renderer reads: the buffers, walked through the four-wide tree, but
+    /// What the CPU renderer reads: the buffers, walked through the eight-wide tree, but
     /// for the `cost` AOV, which counts the nodes of the GPU's walk.
     pub fn new(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
         Bindings {
