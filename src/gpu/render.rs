@@ -325,6 +325,25 @@ impl GpuRenderer {
         *self.compile_time.lock().expect("not poisoned")
     }
 
+    /// The scene's arrays on the device, laid out for the walk `traversal` as this
+    /// renderer's textures are (`layer_rows`, `texture_margin`).
+    fn upload_scene(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        traversal: u32,
+    ) -> Result<SceneData> {
+        upload_scene(
+            device,
+            queue,
+            scene,
+            traversal,
+            self.layer_rows,
+            self.texture_margin,
+        )
+    }
+
     /// Compiles (once) the pipeline for a scene and render settings. The first time, the
     /// scene is uploaded for the warm-up and let go; `upload` and `set_frame` compile on
     /// the scene they already hold instead.
@@ -340,14 +359,7 @@ impl GpuRenderer {
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
         }
-        let data = upload_scene(
-            device,
-            queue,
-            scene,
-            globals.traversal,
-            self.layer_rows,
-            self.texture_margin,
-        )?;
+        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
         self.pipeline(device, queue, scene, &data, globals)
     }
 
@@ -548,14 +560,7 @@ impl GpuRenderer {
         )?;
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        let data = upload_scene(
-            device,
-            queue,
-            scene,
-            globals.traversal,
-            self.layer_rows,
-            self.texture_margin,
-        )?;
+        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
         let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
         let bound = self.bind(
             device,
