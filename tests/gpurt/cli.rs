@@ -1,5 +1,6 @@
 //! The `gpurt` command as a user runs it: exit codes, messages, files written or not.
 
+use std::path::Path;
 use std::process::{Command, Output};
 
 use crate::common::{gpurt, workdir};
@@ -547,6 +548,39 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
     );
 }
 
+/// Runs `gpurt SCENE --backend gpu -o out.png ARGS` in `d` with `GPURT_FAULT=fault`: it
+/// must exit 2 and leave nothing in `d` but the scene (no output file, partial or
+/// temporary), and the same command without the fault must write its image. Returns the
+/// faulty run's error output.
+fn a_gpu_fault_exits_2_without_an_output_file(
+    d: &Path,
+    scene: &str,
+    args: &[&str],
+    fault: &str,
+) -> String {
+    let run = |fault: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([scene, "--backend", "gpu", "-o", "out.png"])
+            .args(args)
+            .current_dir(d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_FAULT", fault)
+            .output()
+            .expect("gpurt runs")
+    };
+    let o = run(fault);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, [scene], "no output file, partial or temporary");
+    let ok = run("");
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(d.join("out.png").exists());
+    stderr(&o)
+}
+
 /// A GPU lost mid-render (`GPURT_FAULT=lose-device` destroys the device once the first
 /// band is in) ends the command with an error naming the step, a non-zero exit and no
 /// output file, partial or temporary.
@@ -560,32 +594,8 @@ fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     // Four bands on a software adapter (2^18 samples a band), several on any other.
     let size = ["--width", "512", "--height", "2048", "--spp", "4"];
-    let run = |fault: &str| {
-        Command::new(env!("CARGO_BIN_EXE_gpurt"))
-            .args(["ball.nff", "--backend", "gpu", "-o", "out.png"])
-            .args(size)
-            .current_dir(&d)
-            .env("GPURT_CACHE_DIR", "")
-            .env("GPURT_FAULT", fault)
-            .output()
-            .expect("gpurt runs")
-    };
-    let o = run("lose-device");
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("GPU error: reading back"),
-        "{}",
-        stderr(&o)
-    );
-    let left: Vec<_> = std::fs::read_dir(&d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(left, ["ball.nff"], "no output file, partial or temporary");
-    // Without the fault the same command writes its image.
-    let o = run("");
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(d.join("out.png").exists());
+    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "ball.nff", &size, "lose-device");
+    assert!(err.contains("GPU error: reading back"), "{err}");
 }
 
 /// A GPU out of memory on upload (`GPURT_FAULT=out-of-memory` allocates each texture of
@@ -608,32 +618,12 @@ fn an_out_of_memory_on_upload_exits_non_zero_without_an_output_file() {
         scene += &format!("s {} {} -900 0.4\n", i % 1000 - 500, i / 1000 - 500);
     }
     std::fs::write(d.join("many.nff"), scene).unwrap();
-    let run = |fault: &str| {
-        Command::new(env!("CARGO_BIN_EXE_gpurt"))
-            .args(["many.nff", "--backend", "gpu", "-o", "out.png"])
-            .current_dir(&d)
-            .env("GPURT_CACHE_DIR", "")
-            .env("GPURT_FAULT", fault)
-            .output()
-            .expect("gpurt runs")
-    };
-    let o = run("out-of-memory");
-    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-    let err = stderr(&o);
+    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "many.nff", &[], "out-of-memory");
     assert!(
         err.contains("GPU error: uploading the scene: Out of Memory")
             && err.contains("create_texture"),
         "{err}"
     );
-    let left: Vec<_> = std::fs::read_dir(&d)
-        .unwrap()
-        .map(|e| e.unwrap().file_name())
-        .collect();
-    assert_eq!(left, ["many.nff"], "no output file, partial or temporary");
-    // Without the fault the same command writes its image.
-    let o = run("");
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(d.join("out.png").exists());
 }
 
 #[test]
