@@ -7,11 +7,12 @@
 
 pub mod context;
 mod cut;
+pub(crate) mod device;
 pub mod render;
 mod resume;
 pub mod shaders;
 pub mod specialization;
-pub(crate) mod upload;
+mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
 pub use render::{

@@ -16,6 +16,7 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::cut::{Cut, PIXEL_BYTES};
+use super::device::{buffer_init, read_mapped, scoped, wait};
 use super::resume::{ResumePipelines, resume, resume_group_layout};
 use super::shaders;
 use super::specialization::Specialization;
@@ -104,22 +105,6 @@ fn cache_dir() -> Option<PathBuf> {
     Some(base.join("gpurt"))
 }
 
-/// Runs `f` inside validation and out-of-memory error scopes, turning any captured error
-/// into `Error::Gpu` (never a silent black image). An out-of-memory error is the one
-/// reported when both come: a resource that could not be allocated is invalid, and every
-/// later use of it is a validation error that hides the cause.
-pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
-    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let out = f();
-    let v = pollster::block_on(validation.pop());
-    let o = pollster::block_on(oom.pop());
-    match o.or(v) {
-        Some(e) => Err(Error::Gpu(format!("{what}: {}", error_chain(&e)))),
-        None => Ok(out),
-    }
-}
-
 /// The shader modules made so far, one per length of `trace`'s ray stack (the only part
 /// of a specialisation written into the source, `shaders::source`), each on first use;
 /// shared by the `main` and `resume` pipelines.
@@ -180,19 +165,6 @@ pub(super) fn compile(
             cache,
         })
     })
-}
-
-/// An error with its causes, on one line: wgpu's `Display` says "Validation Error" and
-/// then the same causes again, indented over several lines, so only its first line is kept.
-fn error_chain(e: &dyn std::error::Error) -> String {
-    let shown = e.to_string();
-    let mut s = shown.lines().next().unwrap_or_default().to_string();
-    let mut source = e.source();
-    while let Some(cause) = source {
-        s.push_str(&format!(": {cause}"));
-        source = cause.source();
-    }
-    s
 }
 
 impl GpuRenderer {
@@ -411,7 +383,7 @@ impl GpuRenderer {
         tile_slots: u32,
     ) -> Result<Bound> {
         scoped(device, "binding the frame", || {
-            let globals_buf = upload::buffer_init(
+            let globals_buf = buffer_init(
                 device,
                 "globals",
                 bytemuck::bytes_of(globals),
@@ -679,33 +651,6 @@ impl GpuScene {
     }
 }
 
-/// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps.
-pub(crate) fn read_mapped<T>(
-    device: &wgpu::Device,
-    buffer: &wgpu::Buffer,
-    bytes: u64,
-    f: impl FnOnce(&[u8]) -> T,
-) -> Result<T> {
-    let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    // A lost device or a hung submission surfaces here as a poll error.
-    wait(device)?;
-    rx.recv()
-        .map_err(|_| Error::Gpu("readback was never completed".into()))?
-        .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
-    let out = {
-        let view = slice
-            .get_mapped_range()
-            .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
-        f(&view)
-    };
-    buffer.unmap();
-    Ok(out)
-}
-
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
 pub fn trace(
     device: &wgpu::Device,
@@ -966,14 +911,6 @@ fn encode_band(
             pass.dispatch_workgroups(groups[0], groups[1], 1);
         }
     }
-}
-
-/// Blocks until the GPU has finished everything submitted.
-fn wait(device: &wgpu::Device) -> Result<()> {
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map(|_| ())
-        .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
 }
 
 /// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;

@@ -7,9 +7,9 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 
-use super::render::{GpuScene, Modules, compile, read_mapped, scoped};
+use super::device::{buffer_init, read_mapped, scoped};
+use super::render::{GpuScene, Modules, compile};
 use super::specialization::Specialization;
-use super::upload::buffer_init;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
