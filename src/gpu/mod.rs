@@ -8,6 +8,7 @@
 pub mod context;
 mod cut;
 pub(crate) mod device;
+mod pipeline;
 pub mod render;
 mod resume;
 pub mod shaders;

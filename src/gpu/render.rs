@@ -8,7 +8,6 @@
 
 use std::collections::HashMap;
 use std::ops::Range;
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -17,8 +16,11 @@ use rayon::prelude::*;
 
 use super::cut::{Cut, PIXEL_BYTES};
 use super::device::{buffer_init, read_mapped, scoped, wait};
-use super::resume::{ResumePipelines, resume, resume_group_layout};
-use super::shaders;
+use super::pipeline::{
+    DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
+    resume_group_layout,
+};
+use super::resume::resume;
 use super::specialization::Specialization;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
@@ -49,7 +51,7 @@ pub struct GpuRenderer {
     /// The `resume` entry point's layouts and pipelines, shared with the uploaded scenes.
     resume: Arc<ResumePipelines>,
     modules: Arc<Modules>,
-    cache: Option<(wgpu::PipelineCache, PathBuf)>,
+    cache: Option<DiskCache>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
     compile_time: Mutex<Duration>,
     /// The device is a CPU (lavapipe): bands are kept small.
@@ -93,80 +95,6 @@ fn traversal_for() -> Result<u32> {
     }
 }
 
-/// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
-/// `~/.cache/gpurt`. `GPURT_CACHE_DIR=` (empty) turns the cache off.
-fn cache_dir() -> Option<PathBuf> {
-    if let Ok(d) = std::env::var("GPURT_CACHE_DIR") {
-        return (!d.is_empty()).then(|| PathBuf::from(d));
-    }
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
-    Some(base.join("gpurt"))
-}
-
-/// The shader modules made so far, one per length of `trace`'s ray stack (the only part
-/// of a specialisation written into the source, `shaders::source`), each on first use;
-/// shared by the `main` and `resume` pipelines.
-#[derive(Default)]
-pub(super) struct Modules(Mutex<HashMap<u32, wgpu::ShaderModule>>);
-
-impl Modules {
-    fn get(&self, device: &wgpu::Device, trace_stack: u32) -> Result<wgpu::ShaderModule> {
-        let mut modules = self.0.lock().expect("not poisoned");
-        if let Some(m) = modules.get(&trace_stack) {
-            return Ok(m.clone());
-        }
-        let module = scoped(device, "compiling the shader", || {
-            let desc = wgpu::ShaderModuleDescriptor {
-                label: Some("gpurt"),
-                source: wgpu::ShaderSource::Wgsl(shaders::source(trace_stack).into()),
-            };
-            // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
-            // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
-            // every index the shader follows (children, leaf ranges, materials, normal
-            // slots) in range, children after parents (so traversal ends), the tree depth
-            // within the stack and the ray depth within the ray stack (whose length,
-            // `SceneBuffers::trace_stack`, bounds the rays a trace holds). The checks cost
-            // lavapipe about a quarter of its tracing time.
-            unsafe {
-                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            }
-        })?;
-        modules.insert(trace_stack, module.clone());
-        Ok(module)
-    }
-}
-
-/// Compiles the shader's entry point `entry` for a specialisation.
-pub(super) fn compile(
-    device: &wgpu::Device,
-    layout: &wgpu::PipelineLayout,
-    modules: &Modules,
-    entry: &str,
-    spec: Specialization,
-    cache: Option<&wgpu::PipelineCache>,
-) -> Result<wgpu::ComputePipeline> {
-    let constants = spec.constants();
-    let module = &modules.get(device, spec.trace_stack)?;
-    scoped(device, "compiling the shader", || {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(layout),
-            module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                // Every traversal-stack entry is written before it is read, so the
-                // workgroup memory needs no zeroing (wgpu would otherwise add stores
-                // and a barrier to the start of every workgroup).
-                zero_initialize_workgroup_memory: false,
-            },
-            cache,
-        })
-    })
-}
-
 impl GpuRenderer {
     /// Sets up the layouts. Shader modules and pipelines are made on first use by `render` (or
     /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
@@ -174,39 +102,17 @@ impl GpuRenderer {
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
         let start = Instant::now();
         let software = device.adapter_info().device_type == wgpu::DeviceType::Cpu;
-        let cache_file = adapter_info
-            .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
-            .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)));
+        let cache_file = DiskCache::file(device, adapter_info);
         let layout = bind_group_layout(device);
         let resume_layout = resume_group_layout(device);
         let (pipeline_layout, resume_pipeline_layout, cache) =
             scoped(device, "compiling the shader", || {
-                let pipeline_layout =
-                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                        label: Some("gpurt"),
-                        bind_group_layouts: &[Some(&layout)],
-                        immediate_size: 0,
-                    });
-                let resume_pipeline_layout =
-                    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                        label: Some("gpurt resume"),
-                        bind_group_layouts: &[Some(&layout), Some(&resume_layout)],
-                        immediate_size: 0,
-                    });
-                let cache = cache_file.map(|file| {
-                    let data = std::fs::read(&file).ok();
-                    // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
-                    // with the same cache key; `fallback` makes wgpu ignore data it rejects.
-                    let cache = unsafe {
-                        device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
-                            label: Some("gpurt"),
-                            data: data.as_deref(),
-                            fallback: true,
-                        })
-                    };
-                    (cache, file)
-                });
-                (pipeline_layout, resume_pipeline_layout, cache)
+                let (main, resume) = pipeline_layouts(device, &layout, &resume_layout);
+                (
+                    main,
+                    resume,
+                    cache_file.map(|file| DiskCache::open(device, file)),
+                )
             })?;
         let modules = Arc::new(Modules::default());
         Ok(GpuRenderer {
@@ -357,15 +263,11 @@ impl GpuRenderer {
             &self.modules,
             "main",
             spec,
-            self.cache.as_ref().map(|(c, _)| c),
+            self.cache.as_ref().map(DiskCache::cache),
         )?;
         self.warm_up(device, queue, data, globals, &pipeline)?;
-        if let Some((cache, file)) = &self.cache
-            && let Some(data) = cache.get_data()
-        {
-            // Best effort: a cache that cannot be written only costs time next run.
-            let _ = std::fs::create_dir_all(file.parent().unwrap_or(file));
-            let _ = crate::atomic::write_atomic(file, &data);
+        if let Some(cache) = &self.cache {
+            cache.save();
         }
         *self.compile_time.lock().expect("not poisoned") += start.elapsed();
         pipelines.insert(spec, pipeline.clone());
@@ -841,57 +743,6 @@ fn submit_band(
         }
     }
     (enc, tiles.len() as u32)
-}
-
-/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes,
-/// primitives and triangle normals (rgba32uint texture arrays, split into layers as large
-/// as the device allows), the other scene arrays (read-only storage), the tile's output
-/// (read-write storage). Explicit, so that a binding the shader happens not to use is
-/// still accepted.
-fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let texels = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::ReadOnly,
-            format: super::upload::TEXEL_FORMAT,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-        count: None,
-    };
-    let mut entries = vec![
-        entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
-        wgpu::BindGroupLayoutEntry {
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: true,
-                min_binding_size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
-            },
-            ..entry(1, wgpu::BufferBindingType::Uniform)
-        },
-        texels(2),
-        texels(3),
-        texels(4),
-    ];
-    entries.extend((5..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
-    entries.push(entry(
-        8,
-        wgpu::BufferBindingType::Storage { read_only: false },
-    ));
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpurt"),
-        entries: &entries,
-    })
 }
 
 /// Encodes one compute pass with a dispatch per tile, each tile read from its slot of the
