@@ -11,11 +11,11 @@ pub(crate) mod device;
 mod pipeline;
 pub mod render;
 mod resume;
+mod scene;
 pub mod shaders;
 pub mod specialization;
 mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
-pub use render::{
-    GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_rows, trace_samples,
-};
+pub use render::{GpuRenderer, render_gpu, trace, trace_on_device, trace_rows, trace_samples};
+pub use scene::GpuScene;

@@ -15,12 +15,13 @@ use std::time::{Duration, Instant};
 use rayon::prelude::*;
 
 use super::cut::{Cut, PIXEL_BYTES};
-use super::device::{buffer_init, read_mapped, scoped, wait};
+use super::device::{read_mapped, scoped, wait};
 use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
 };
 use super::resume::resume;
+use super::scene::{Bound, GpuScene, bind};
 use super::specialization::Specialization;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
@@ -29,19 +30,6 @@ use crate::gpu_types::{
     GpuGlobals, GpuTile, PIXEL_CUT_SHORT, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
 };
 use crate::pack::SceneBuffers;
-
-/// What a frame binds besides the scene: its constants (a buffer rewritten when only
-/// the camera or the other constants change), the tiles, and a band's output and the
-/// buffer it is read back through (remade when the image size or the cut changes).
-pub(super) struct Bound {
-    pub(super) bind_group: wgpu::BindGroup,
-    pub(super) globals: wgpu::Buffer,
-    /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
-    pub(super) tile_buf: wgpu::Buffer,
-    pub(super) tile_stride: u32,
-    pub(super) output: wgpu::Buffer,
-    pub(super) readback: wgpu::Buffer,
-}
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
 /// per `Specialization`. Reusable across renders (and threads) on one device.
@@ -274,84 +262,6 @@ impl GpuRenderer {
         Ok(pipeline)
     }
 
-    /// Creates a frame's constants and tile slots, its band output and readback buffers, and the bind
-    /// group that joins them to the scene's arrays.
-    fn bind(
-        &self,
-        device: &wgpu::Device,
-        data: &SceneData,
-        globals: &GpuGlobals,
-        out_bytes: u64,
-        tile_slots: u32,
-    ) -> Result<Bound> {
-        scoped(device, "binding the frame", || {
-            let globals_buf = buffer_init(
-                device,
-                "globals",
-                bytemuck::bytes_of(globals),
-                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            );
-            let tile_stride = (size_of::<GpuTile>() as u32)
-                .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
-            let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("tiles"),
-                size: u64::from(tile_stride) * u64::from(tile_slots.max(1)),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let output = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("output"),
-                size: out_bytes,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let readback = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("readback"),
-                size: out_bytes,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let resources = [
-                globals_buf.as_entire_binding(),
-                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &tile_buf,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
-                }),
-                wgpu::BindingResource::TextureView(&data.nodes),
-                wgpu::BindingResource::TextureView(&data.prims),
-                wgpu::BindingResource::TextureView(&data.tri_normals),
-                data.planes.as_entire_binding(),
-                data.materials.as_entire_binding(),
-                data.lights.as_entire_binding(),
-                output.as_entire_binding(),
-            ];
-            let entries: Vec<wgpu::BindGroupEntry> = resources
-                .into_iter()
-                .enumerate()
-                .map(|(i, resource)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource,
-                })
-                .collect();
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("gpurt"),
-                layout: &self.layout,
-                entries: &entries,
-            });
-            Bound {
-                bind_group,
-                globals: globals_buf,
-                tile_buf,
-                tile_stride,
-                output,
-                readback,
-            }
-        })
-    }
-
     /// Traces the centre pixel of the frame `globals` once, one sample, on the scene's
     /// arrays `data`, so that drivers that compile at the first dispatch (lavapipe)
     /// compile now and the compile time is the whole cost of getting a pipeline ready.
@@ -365,7 +275,7 @@ impl GpuRenderer {
         globals: &GpuGlobals,
         pipeline: &wgpu::ComputePipeline,
     ) -> Result<()> {
-        let bound = self.bind(device, data, globals, PIXEL_BYTES, 1)?;
+        let bound = bind(device, &self.layout, data, globals, PIXEL_BYTES, 1)?;
         let tile = GpuTile {
             x: globals.width / 2,
             y: globals.height / 2,
@@ -436,8 +346,9 @@ impl GpuRenderer {
         let spec = self.spec(scene, globals);
         let data = self.upload_scene(device, queue, scene, globals.traversal)?;
         let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
-        let bound = self.bind(
+        let bound = bind(
             device,
+            &self.layout,
             &data,
             globals,
             cut.band_bytes(),
@@ -490,8 +401,9 @@ impl GpuRenderer {
                 cut.band_bytes(),
                 self.layer_rows,
             )?;
-            uploaded.bound = self.bind(
+            uploaded.bound = bind(
                 device,
+                &self.layout,
                 &uploaded.data,
                 globals,
                 cut.band_bytes(),
@@ -516,40 +428,6 @@ impl GpuRenderer {
     ) -> Result<(Film, u64)> {
         let uploaded = self.upload(device, queue, scene, globals)?;
         trace(device, queue, &uploaded, progress, cancel)
-    }
-}
-
-/// A scene on the device with the bindings and pipeline for one frame's settings.
-pub struct GpuScene {
-    pub(super) data: SceneData,
-    pub(super) bound: Bound,
-    pub(super) pipeline: wgpu::ComputePipeline,
-    pub(super) cut: Cut,
-    /// Device memory held by the scene's textures and buffers, in bytes.
-    pub(super) scene_bytes: u64,
-    pub(super) resume: Arc<ResumePipelines>,
-    pub(super) spec: Specialization,
-    pub(super) dispatch_budget: Option<Duration>,
-    /// The cut that dispatches over `dispatch_budget` made `trace_rows` switch to, kept
-    /// for the frames after (until `set_frame` changes the cut).
-    finer: Mutex<Option<Cut>>,
-}
-
-impl GpuScene {
-    /// Pixels a side of a tile and samples a pass of the dispatches traced now: the cut
-    /// made for the frame, or a finer one (`DISPATCH_BUDGET`).
-    pub fn dispatch_shape(&self) -> (u32, u32) {
-        let cut = self.tracing_cut();
-        (cut.tile_side, cut.pass_samples)
-    }
-
-    fn tracing_cut(&self) -> Cut {
-        self.finer.lock().expect("cut lock").unwrap_or(self.cut)
-    }
-
-    /// Device memory held by the scene and a band's output and readback buffers, in bytes.
-    pub fn device_bytes(&self) -> u64 {
-        self.scene_bytes + 2 * self.cut.band_bytes()
     }
 }
 

@@ -6,7 +6,7 @@ use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::device::{buffer_init, read_mapped, scoped};
-use super::render::GpuScene;
+use super::scene::GpuScene;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
