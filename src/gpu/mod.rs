@@ -14,8 +14,10 @@ mod resume;
 mod scene;
 pub mod shaders;
 pub mod specialization;
+mod trace;
 mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
-pub use render::{GpuRenderer, render_gpu, trace, trace_on_device, trace_rows, trace_samples};
+pub use render::{GpuRenderer, render_gpu};
 pub use scene::GpuScene;
+pub use trace::{trace, trace_on_device, trace_rows, trace_samples};
