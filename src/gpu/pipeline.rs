@@ -93,7 +93,7 @@ impl Modules {
                 source: wgpu::ShaderSource::Wgsl(shaders::source(trace_stack).into()),
             };
             // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
-            // undefined behaviour. `render` calls `SceneBuffers::check` first, which proves
+            // undefined behaviour. The renderer calls `SceneBuffers::check` first, which proves
             // every index the shader follows (children, leaf ranges, materials, normal
             // slots) in range, children after parents (so traversal ends), the tree depth
             // within the stack and the ray depth within the ray stack (whose length,

@@ -9,7 +9,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use super::cut::{Cut, PIXEL_BYTES};
+use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES};
 use super::device::{scoped, wait};
 use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
@@ -48,13 +48,6 @@ pub struct GpuRenderer {
     /// size (`GPURT_FAULT=out-of-memory`, `fault::AddressSpaceCap`); `None`: no cap.
     texture_margin: Option<u64>,
 }
-
-/// Time one dispatch may take on a GPU, an eighth of the shortest common driver watchdog
-/// (Windows' two seconds): the mean dispatch of a band is what is measured, and one tile
-/// may take several times the mean. A band whose dispatches took longer on average makes
-/// the rest of the frame, and the frames after it, cut finer (`Cut::finer`), to half the
-/// budget.
-pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 
 /// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
 /// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
