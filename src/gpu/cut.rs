@@ -1,8 +1,10 @@
 //! How a frame is cut into GPU work: tiles (one bounded dispatch each, in passes of
 //! samples), bands of full-width rows (one readback each), and a band's samples in
-//! submissions of bounded work.
+//! submissions of bounded work; and the time a dispatch may take (`DISPATCH_BUDGET`),
+//! past which the cut is made finer.
 
 use std::ops::Range;
+use std::time::Duration;
 
 use crate::gpu_types::GpuTile;
 
@@ -12,6 +14,13 @@ pub(super) const PIXEL_BYTES: u64 = 16;
 /// Largest output buffer a band of rows writes: far below the 128 MiB storage binding of
 /// lavapipe, large enough that a 4K frame at one sample takes two submissions.
 pub(super) const BAND_BYTES: u64 = 64 << 20;
+
+/// Time one dispatch may take on a GPU, an eighth of the shortest common driver watchdog
+/// (Windows' two seconds): the mean dispatch of a band is what is measured, and one tile
+/// may take several times the mean. A band whose dispatches took longer on average makes
+/// the rest of the frame, and the frames after it, cut finer (`Cut::finer`), to half the
+/// budget.
+pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 
 /// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
 /// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's

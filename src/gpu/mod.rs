@@ -1,19 +1,36 @@
 //! The GPU renderer: WGSL compute through wgpu on the same `SceneBuffers` the CPU
-//! reference traverses. `context` finds an adapter and a device, `shaders` assembles and
-//! validates the WGSL, `specialization` picks the pipeline a scene needs, `upload` puts a
-//! scene's arrays on the device, `cut` cuts a frame into bounded dispatches, `render`
-//! binds, dispatches band by band and reads back, and `resume` finishes the pixels whose
-//! work did not fit one invocation.
+//! reference traverses.
+//!
+//! Each module imports only modules listed before it here, so the arrows run one way:
+//! - `context` finds an adapter and opens a device;
+//! - `device` is the one place that calls wgpu's device and queue helpers (error scopes,
+//!   waiting, mapped readback, buffers made from bytes), for the viewer too;
+//! - `shaders` assembles and validates the WGSL; `specialization` picks the pipeline a
+//!   scene needs;
+//! - `cut` cuts a frame into bounded dispatches, bands and submissions;
+//! - `upload` puts a scene's arrays on the device;
+//! - `pipeline` owns the bind group layouts, the shader modules, the compiling of entry
+//!   points and the on-disk pipeline cache;
+//! - `scene` holds a scene's GPU state (`GpuScene`) and what a frame binds besides it;
+//! - `resume` finishes the pixels whose work did not fit one invocation;
+//! - `trace` is the dispatch loop: band by band, then the readback;
+//! - `renderer` (`GpuRenderer`) uploads scenes, moves them to other frames and compiles
+//!   and warms up the pipelines they need.
 
 pub mod context;
 mod cut;
-pub mod render;
+pub(crate) mod device;
+mod pipeline;
+mod renderer;
 mod resume;
+mod scene;
 pub mod shaders;
 pub mod specialization;
-pub(crate) mod upload;
+mod trace;
+mod upload;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
-pub use render::{
-    GpuRenderer, GpuScene, render_gpu, trace, trace_on_device, trace_rows, trace_samples,
-};
+pub use cut::DISPATCH_BUDGET;
+pub use renderer::{GpuRenderer, render_gpu};
+pub use scene::GpuScene;
+pub use trace::{trace, trace_on_device, trace_rows, trace_samples};

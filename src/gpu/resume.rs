@@ -2,50 +2,14 @@
 //! the `resume` entry point, which keeps each pixel's whole state in storage and goes
 //! on from where it stopped, one bounded dispatch after another.
 
-use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
 
-use super::render::{GpuScene, Modules, compile, read_mapped, scoped};
-use super::specialization::Specialization;
-use super::upload::buffer_init;
+use super::device::{buffer_init, read_mapped, scoped};
+use super::scene::GpuScene;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
-
-/// The `resume` entry point: its group 1 layout, its pipeline layout (groups 0 and 1),
-/// and its pipelines compiled so far, one per `Specialization`, each on first use (most
-/// renders never need one), shared by every scene a `GpuRenderer` uploads.
-pub(super) struct ResumePipelines {
-    pub(super) layout: wgpu::BindGroupLayout,
-    pub(super) pipeline_layout: wgpu::PipelineLayout,
-    pub(super) modules: Arc<Modules>,
-    pub(super) compiled: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
-}
-
-impl ResumePipelines {
-    pub(super) fn get(
-        &self,
-        device: &wgpu::Device,
-        spec: Specialization,
-    ) -> Result<wgpu::ComputePipeline> {
-        let mut compiled = self.compiled.lock().expect("not poisoned");
-        if let Some(p) = compiled.get(&spec) {
-            return Ok(p.clone());
-        }
-        let p = compile(
-            device,
-            &self.pipeline_layout,
-            &self.modules,
-            "resume",
-            spec,
-            None,
-        )?;
-        compiled.insert(spec, p.clone());
-        Ok(p)
-    }
-}
 
 /// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
 pub(super) const RESUME_CHUNK: usize = 16384;
@@ -155,23 +119,4 @@ pub(super) fn resume(
         })?;
     }
     Ok((rays, cut_short))
-}
-
-/// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of
-/// unfinished ones (read-write storage).
-pub(super) fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpurt resume"),
-        entries: &[entry(0, true), entry(1, false), entry(2, false)],
-    })
 }

@@ -2,7 +2,7 @@
 //! as texture arrays, which grow by layers past one texture's size; the small rest as
 //! storage buffers), checked first against the device's limits.
 
-use super::render::scoped;
+use super::device::{buffer_init, scoped};
 use crate::error::{Error, Result};
 use crate::fault::AddressSpaceCap;
 use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_WIDE};
@@ -79,31 +79,6 @@ pub(super) fn upload_scene(
             lights: storage("lights", non_empty(&scene.lights)),
         })
     })?
-}
-
-/// A buffer holding `contents`: `DeviceExt::create_buffer_init` without its panic. On a
-/// lost device wgpu hands back an invalid buffer that cannot be mapped, and its helper
-/// unwraps the mapping; here the copy is skipped, and the error scope around the call
-/// (`scoped`) reports the invalid buffer as an error naming what was being done.
-pub(crate) fn buffer_init(
-    device: &wgpu::Device,
-    label: &str,
-    contents: &[u8],
-    usage: wgpu::BufferUsages,
-) -> wgpu::Buffer {
-    let align = wgpu::COPY_BUFFER_ALIGNMENT;
-    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size: (contents.len() as u64).next_multiple_of(align).max(align),
-        usage,
-        mapped_at_creation: true,
-    });
-    // Every caller's contents are whole 4-byte words, as a mapped range must be.
-    if let Ok(mut view) = buffer.slice(..contents.len() as u64).get_mapped_range_mut() {
-        view.copy_from_slice(contents);
-    }
-    buffer.unmap();
-    buffer
 }
 
 /// Rows of `TEXTURE_WIDTH` texels that hold `bytes` (at least one).

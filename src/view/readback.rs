@@ -4,7 +4,7 @@
 use image::RgbImage;
 
 use crate::error::Result;
-use crate::gpu::render::read_mapped;
+use crate::gpu::device::read_mapped;
 
 /// A copy of an 8-bit RGBA or BGRA texture on its way to the host.
 pub struct TextureReadback {

@@ -25,7 +25,7 @@ use super::script::Event;
 use super::wireframe::Wireframe;
 use crate::error::{Error, Result};
 use crate::frame::{self, MAX_SPP, RenderOptions};
-use crate::gpu::render::scoped;
+use crate::gpu::device::scoped;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::{AOV_COLOR, GpuGlobals};
 use crate::pack::SceneBuffers;

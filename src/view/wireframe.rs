@@ -16,7 +16,7 @@ use image::RgbImage;
 
 use super::readback::TextureReadback;
 use crate::error::{Error, Result};
-use crate::gpu::render::scoped;
+use crate::gpu::device::{buffer_init, scoped};
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
@@ -294,7 +294,7 @@ impl Wireframe {
             } else {
                 points.iter().map(|p| p.to_array()).collect()
             };
-            let vertices = crate::gpu::upload::buffer_init(
+            let vertices = buffer_init(
                 device,
                 "wireframe vertices",
                 bytemuck::cast_slice(&flat),

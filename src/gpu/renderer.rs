@@ -1,0 +1,436 @@
+//! The GPU renderer: a device's layouts and the pipelines compiled so far, and the making
+//! of a scene's GPU state for a frame (`upload`), its moving to other frames
+//! (`set_frame`) and the compiling and warming up of the pipelines they need. What a
+//! frame's dispatches then do is `trace`'s; this module decides which pipeline, which
+//! walk of the BVH and which cut.
+
+use std::collections::HashMap;
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES};
+use super::device::{scoped, wait};
+use super::pipeline::{
+    DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
+    resume_group_layout,
+};
+use super::scene::{GpuScene, bind};
+use super::specialization::Specialization;
+use super::trace::{encode_band, trace};
+use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
+use crate::error::{Error, Result};
+use crate::film::Film;
+use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use crate::pack::SceneBuffers;
+
+/// The shader with its bind group layout, and the pipelines compiled from it so far, one
+/// per `Specialization`. Reusable across renders (and threads) on one device.
+pub struct GpuRenderer {
+    layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    /// The `resume` entry point's layouts and pipelines, shared with the uploaded scenes.
+    resume: Arc<ResumePipelines>,
+    modules: Arc<Modules>,
+    cache: Option<DiskCache>,
+    pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
+    compile_time: Mutex<Duration>,
+    /// The device is a CPU (lavapipe): bands are kept small.
+    software: bool,
+    /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
+    traversal: u32,
+    /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
+    layer_rows: u32,
+    /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
+    /// which have no watchdog.
+    dispatch_budget: Option<Duration>,
+    /// The address space each texture of a scene is allocated with, above the process's
+    /// size (`GPURT_FAULT=out-of-memory`, `fault::AddressSpaceCap`); `None`: no cap.
+    texture_margin: Option<u64>,
+}
+
+/// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
+/// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
+/// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
+/// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
+/// is 2 to 19% faster than single (docs/gpu.md has the figures). `GPURT_TRAVERSAL`
+/// (`single`, `pairs` or `wide`: `TRAVERSAL_NAMES`) overrides it, for measuring them on
+/// one adapter.
+fn traversal_for() -> Result<u32> {
+    match std::env::var("GPURT_TRAVERSAL").as_deref() {
+        Err(_) | Ok("") => Ok(TRAVERSAL_WIDE),
+        Ok(v) => match TRAVERSAL_NAMES.iter().position(|&n| n == v) {
+            Some(t) => Ok(t as u32),
+            None => Err(Error::Render(format!(
+                "GPURT_TRAVERSAL={v}: expected one of {}",
+                TRAVERSAL_NAMES.join(", ")
+            ))),
+        },
+    }
+}
+
+impl GpuRenderer {
+    /// Sets up the layouts. Shader modules and pipelines are made on first use by `render` (or
+    /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
+    /// `PIPELINE_CACHE` (pass `None` to skip the cache).
+    pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
+        let start = Instant::now();
+        let software = device.adapter_info().device_type == wgpu::DeviceType::Cpu;
+        let cache_file = DiskCache::file(device, adapter_info);
+        let layout = bind_group_layout(device);
+        let resume_layout = resume_group_layout(device);
+        let (pipeline_layout, resume_pipeline_layout, cache) =
+            scoped(device, "compiling the shader", || {
+                let (main, resume) = pipeline_layouts(device, &layout, &resume_layout);
+                (
+                    main,
+                    resume,
+                    cache_file.map(|file| DiskCache::open(device, file)),
+                )
+            })?;
+        let modules = Arc::new(Modules::default());
+        Ok(GpuRenderer {
+            resume: Arc::new(ResumePipelines {
+                layout: resume_layout,
+                pipeline_layout: resume_pipeline_layout,
+                modules: modules.clone(),
+                compiled: Mutex::new(HashMap::new()),
+            }),
+            layout,
+            pipeline_layout,
+            modules,
+            cache,
+            pipelines: Mutex::new(HashMap::new()),
+            compile_time: Mutex::new(start.elapsed()),
+            software,
+            traversal: traversal_for()?,
+            layer_rows: upload::layer_rows(device),
+            dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
+            texture_margin: None,
+        })
+    }
+
+    /// This renderer splitting the node and primitive textures into layers of `rows`
+    /// rows (a power of two, at most the device's), as a scene too large for one layer
+    /// is split: lets the tests check many layers on small scenes.
+    pub fn with_layer_rows(self, rows: u32) -> Self {
+        assert!(rows.is_power_of_two() && rows <= self.layer_rows);
+        GpuRenderer {
+            layer_rows: rows,
+            ..self
+        }
+    }
+
+    /// This renderer allocating each texture of a scene with the process's address space
+    /// capped `margin` bytes above its size (the out-of-memory fault, `fault.rs`): on a
+    /// software adapter, whose device memory is the process's own, a texture larger than
+    /// that cannot be allocated. Only the allocations run capped, not the copies into
+    /// them, which lavapipe compiles code for.
+    pub fn with_texture_margin(self, margin: u64) -> Self {
+        GpuRenderer {
+            texture_margin: Some(margin),
+            ..self
+        }
+    }
+
+    /// This renderer holding each dispatch to `budget` (instead of `DISPATCH_BUDGET` on
+    /// GPUs and none on software adapters): lets the tests make lavapipe refine its cut.
+    pub fn with_dispatch_budget(self, budget: Duration) -> Self {
+        GpuRenderer {
+            dispatch_budget: Some(budget),
+            ..self
+        }
+    }
+
+    /// The pipeline a frame of `scene` needs on this renderer.
+    fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
+        Specialization {
+            layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
+            ..Specialization::of(scene, globals)
+        }
+    }
+
+    /// How this renderer walks the BVH (`TRAVERSAL_*`), where a scene's tree allows
+    /// (see `traversal_for`). A CPU render meant to match this renderer's to the node must
+    /// use the walk `frame` gives for its scene.
+    pub fn traversal(&self) -> u32 {
+        self.traversal
+    }
+
+    /// This renderer walking the BVH as `traversal` says, whatever its adapter.
+    pub fn with_traversal(self, traversal: u32) -> Self {
+        GpuRenderer { traversal, ..self }
+    }
+
+    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`):
+    /// what its frames of `globals` trace.
+    pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
+        GpuGlobals {
+            traversal: scene.traversal_for(self.traversal),
+            ..*globals
+        }
+    }
+
+    /// Total time spent creating modules and compiling pipelines, first dispatches
+    /// included (lavapipe compiles there).
+    pub fn compile_time(&self) -> Duration {
+        *self.compile_time.lock().expect("not poisoned")
+    }
+
+    /// The scene's arrays on the device, laid out for the walk `traversal` as this
+    /// renderer's textures are (`layer_rows`, `texture_margin`).
+    fn upload_scene(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        traversal: u32,
+    ) -> Result<SceneData> {
+        upload_scene(
+            device,
+            queue,
+            scene,
+            traversal,
+            self.layer_rows,
+            self.texture_margin,
+        )
+    }
+
+    /// Compiles (once) the pipeline for a scene and render settings. The first time, the
+    /// scene is uploaded for the warm-up and let go; `upload` and `set_frame` compile on
+    /// the scene they already hold instead.
+    pub fn prepare(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<wgpu::ComputePipeline> {
+        let globals = &self.frame(scene, globals);
+        let spec = self.spec(scene, globals);
+        if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
+            return Ok(p.clone());
+        }
+        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
+        self.pipeline(device, queue, scene, &data, globals)
+    }
+
+    /// The pipeline for a scene and render settings, compiled the first time and warmed
+    /// up on `data`, the scene's arrays on the device.
+    fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        data: &SceneData,
+        globals: &GpuGlobals,
+    ) -> Result<wgpu::ComputePipeline> {
+        let spec = self.spec(scene, globals);
+        let mut pipelines = self.pipelines.lock().expect("not poisoned");
+        if let Some(p) = pipelines.get(&spec) {
+            return Ok(p.clone());
+        }
+        let start = Instant::now();
+        let pipeline = compile(
+            device,
+            &self.pipeline_layout,
+            &self.modules,
+            "main",
+            spec,
+            self.cache.as_ref().map(DiskCache::cache),
+        )?;
+        self.warm_up(device, queue, data, globals, &pipeline)?;
+        if let Some(cache) = &self.cache {
+            cache.save();
+        }
+        *self.compile_time.lock().expect("not poisoned") += start.elapsed();
+        pipelines.insert(spec, pipeline.clone());
+        Ok(pipeline)
+    }
+
+    /// Traces the centre pixel of the frame `globals` once, one sample, on the scene's
+    /// arrays `data`, so that drivers that compile at the first dispatch (lavapipe)
+    /// compile now and the compile time is the whole cost of getting a pipeline ready.
+    /// A real pixel with the frame's own constants compiles exactly what the frame's
+    /// dispatches will run, whatever the driver specialises on.
+    fn warm_up(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        data: &SceneData,
+        globals: &GpuGlobals,
+        pipeline: &wgpu::ComputePipeline,
+    ) -> Result<()> {
+        let bound = bind(device, &self.layout, data, globals, PIXEL_BYTES, 1)?;
+        let tile = GpuTile {
+            x: globals.width / 2,
+            y: globals.height / 2,
+            width: 1,
+            height: 1,
+            out_stride: 1,
+            sample_count: 1,
+            ..Default::default()
+        };
+        queue.write_buffer(&bound.tile_buf, 0, bytemuck::bytes_of(&tile));
+        scoped(device, "compiling the shader", || {
+            let mut enc = device.create_command_encoder(&Default::default());
+            encode_band(&mut enc, pipeline, &bound, &[tile]);
+            queue.submit([enc.finish()]);
+        })?;
+        wait(device)?;
+        Ok(())
+    }
+
+    /// How a frame of `globals`' size and samples is cut on this device. Software
+    /// adapters get small bands so that Ctrl-C and the progress bar respond within a
+    /// second, and one sample per pass: lavapipe ends every loop once an invocation has run
+    /// 65535 loop iterations in all, and one sample of an ordinary scene needs far fewer.
+    /// GPUs take up to 16 samples per pass, and a band is the most one submission should
+    /// hold.
+    fn cut(&self, device: &wgpu::Device, globals: &GpuGlobals) -> Cut {
+        let limits = device.limits();
+        let (pass_samples, band_samples) = if self.software {
+            (1, 1 << 18)
+        } else {
+            (16, 1 << 26)
+        };
+        Cut::new(
+            globals.width,
+            globals.height,
+            globals.spp,
+            pass_samples,
+            band_samples,
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size),
+            // Software adapters split a dispatch among their threads in fixed runs; a
+            // GPU's own scheduler balances, and neighbouring blocks share its caches.
+            self.software,
+        )
+    }
+
+    /// Uploads a scene for the frame described by `globals` and gets its pipeline ready.
+    /// The result can be traced any number of times (`trace`), each time giving the same
+    /// image, and moved to other frames of the same scene with `set_frame`.
+    pub fn upload(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<GpuScene> {
+        let globals = &self.frame(scene, globals);
+        let cut = self.cut(device, globals);
+        check_sizes(
+            device,
+            scene,
+            globals.traversal,
+            cut.band_bytes(),
+            self.layer_rows,
+        )?;
+        scene.check(globals)?;
+        let spec = self.spec(scene, globals);
+        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
+        let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
+        let bound = bind(
+            device,
+            &self.layout,
+            &data,
+            globals,
+            cut.band_bytes(),
+            cut.dispatches_per_submission(),
+        )?;
+        // The texture uploads are queued: finish them, so a failure surfaces here.
+        queue.submit([]);
+        wait(device)?;
+        Ok(GpuScene {
+            data,
+            bound,
+            pipeline,
+            cut,
+            scene_bytes: scene_bytes(scene, globals.traversal, self.layer_rows),
+            resume: self.resume.clone(),
+            spec,
+            dispatch_budget: self.dispatch_budget,
+            finer: Mutex::new(None),
+        })
+    }
+
+    /// Moves an uploaded scene to another frame of it (camera, size, samples, depth,
+    /// AOV): the scene's arrays stay where they are. A frame of the same size and
+    /// samples per pixel rewrites only the constants' buffer; another size remakes the
+    /// band's output buffers and the bind group; other settings may pick another
+    /// pipeline (compiled once).
+    pub fn set_frame(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        uploaded: &mut GpuScene,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+    ) -> Result<()> {
+        let globals = &self.frame(scene, globals);
+        scene.check(globals)?;
+        let spec = self.spec(scene, globals);
+        if spec != uploaded.spec {
+            uploaded.pipeline = self.pipeline(device, queue, scene, &uploaded.data, globals)?;
+            uploaded.spec = spec;
+        }
+        let cut = self.cut(device, globals);
+        if cut == uploaded.cut {
+            queue.write_buffer(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
+        } else {
+            check_sizes(
+                device,
+                scene,
+                globals.traversal,
+                cut.band_bytes(),
+                self.layer_rows,
+            )?;
+            uploaded.bound = bind(
+                device,
+                &self.layout,
+                &uploaded.data,
+                globals,
+                cut.band_bytes(),
+                cut.dispatches_per_submission(),
+            )?;
+            uploaded.cut = cut;
+            *uploaded.finer.lock().expect("cut lock") = None;
+        }
+        Ok(())
+    }
+
+    /// Renders the image described by `globals` on `device`. Returns the film and the
+    /// number of rays traced.
+    pub fn render(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        scene: &SceneBuffers,
+        globals: &GpuGlobals,
+        progress: &dyn Fn(u64),
+        cancel: &AtomicBool,
+    ) -> Result<(Film, u64)> {
+        let uploaded = self.upload(device, queue, scene, globals)?;
+        trace(device, queue, &uploaded, progress, cancel)
+    }
+}
+
+/// Convenience for one render: compiles the pipeline (no disk cache) and renders.
+pub fn render_gpu(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> Result<(Film, u64)> {
+    let r = GpuRenderer::new(device, None)?;
+    r.render(
+        device,
+        queue,
+        scene,
+        globals,
+        &|_| {},
+        &AtomicBool::new(false),
+    )
+}

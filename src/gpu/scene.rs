@@ -1,0 +1,141 @@
+//! A scene's state on the device: its arrays (`upload`), what a frame binds besides them
+//! (`Bound`), the pipeline its frame's settings need and how its frames are cut. The
+//! renderer makes it and moves it to other frames; the dispatch loop and `resume` trace
+//! it (the loop notes in it a finer cut when dispatches run long), so it sits below all
+//! three.
+
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use super::cut::Cut;
+use super::device::{buffer_init, scoped};
+use super::pipeline::ResumePipelines;
+use super::specialization::Specialization;
+use super::upload::SceneData;
+use crate::error::Result;
+use crate::gpu_types::{GpuGlobals, GpuTile};
+
+/// A scene on the device with the bindings and pipeline for one frame's settings.
+pub struct GpuScene {
+    pub(super) data: SceneData,
+    pub(super) bound: Bound,
+    pub(super) pipeline: wgpu::ComputePipeline,
+    pub(super) cut: Cut,
+    /// Device memory held by the scene's textures and buffers, in bytes.
+    pub(super) scene_bytes: u64,
+    pub(super) resume: Arc<ResumePipelines>,
+    pub(super) spec: Specialization,
+    pub(super) dispatch_budget: Option<Duration>,
+    /// The cut that dispatches over `dispatch_budget` made `trace_rows` switch to, kept
+    /// for the frames after (until `set_frame` changes the cut).
+    pub(super) finer: Mutex<Option<Cut>>,
+}
+
+impl GpuScene {
+    /// Pixels a side of a tile and samples a pass of the dispatches traced now: the cut
+    /// made for the frame, or a finer one (`DISPATCH_BUDGET`).
+    pub fn dispatch_shape(&self) -> (u32, u32) {
+        let cut = self.tracing_cut();
+        (cut.tile_side, cut.pass_samples)
+    }
+
+    pub(super) fn tracing_cut(&self) -> Cut {
+        self.finer.lock().expect("cut lock").unwrap_or(self.cut)
+    }
+
+    /// Device memory held by the scene and a band's output and readback buffers, in bytes.
+    pub fn device_bytes(&self) -> u64 {
+        self.scene_bytes + 2 * self.cut.band_bytes()
+    }
+}
+
+/// What a frame binds besides the scene: its constants (a buffer rewritten when only
+/// the camera or the other constants change), the tiles, and a band's output and the
+/// buffer it is read back through (remade when the image size or the cut changes).
+pub(super) struct Bound {
+    pub(super) bind_group: wgpu::BindGroup,
+    pub(super) globals: wgpu::Buffer,
+    /// One `GpuTile` per dispatch of a band, `tile_stride` bytes apart (dynamic offsets).
+    pub(super) tile_buf: wgpu::Buffer,
+    pub(super) tile_stride: u32,
+    pub(super) output: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
+}
+
+/// Creates a frame's constants and tile slots, its band output and readback buffers, and the bind
+/// group that joins them to the scene's arrays.
+pub(super) fn bind(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    data: &SceneData,
+    globals: &GpuGlobals,
+    out_bytes: u64,
+    tile_slots: u32,
+) -> Result<Bound> {
+    scoped(device, "binding the frame", || {
+        let globals_buf = buffer_init(
+            device,
+            "globals",
+            bytemuck::bytes_of(globals),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        );
+        let tile_stride = (size_of::<GpuTile>() as u32)
+            .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
+        let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("tiles"),
+            size: u64::from(tile_stride) * u64::from(tile_slots.max(1)),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let output = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("output"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: out_bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let resources = [
+            globals_buf.as_entire_binding(),
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &tile_buf,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
+            }),
+            wgpu::BindingResource::TextureView(&data.nodes),
+            wgpu::BindingResource::TextureView(&data.prims),
+            wgpu::BindingResource::TextureView(&data.tri_normals),
+            data.planes.as_entire_binding(),
+            data.materials.as_entire_binding(),
+            data.lights.as_entire_binding(),
+            output.as_entire_binding(),
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = resources
+            .into_iter()
+            .enumerate()
+            .map(|(i, resource)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource,
+            })
+            .collect();
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("gpurt"),
+            layout,
+            entries: &entries,
+        });
+        Bound {
+            bind_group,
+            globals: globals_buf,
+            tile_buf,
+            tile_stride,
+            output,
+            readback,
+        }
+    })
+}

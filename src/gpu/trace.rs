@@ -1,0 +1,278 @@
+//! The dispatch loop: tiled dispatch and readback of an uploaded scene.
+//!
+//! A frame is cut (`Cut`) into tiles, one bounded dispatch each, so that no dispatch runs
+//! long enough to trip a driver watchdog, and the tiles into bands of rows, one submission
+//! and one readback each, so that the host does not wait on the GPU per tile. On a GPU,
+//! bands whose dispatches took longer than `DISPATCH_BUDGET` make the rest cut finer.
+//! Pixels whose work does not fit one invocation are finished by `resume`.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::cut::{Cut, PIXEL_BYTES};
+use super::device::{read_mapped, scoped, wait};
+use super::resume::resume;
+use super::scene::{Bound, GpuScene};
+use crate::error::{Error, Result};
+use crate::film::{Accumulator, Film};
+use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT};
+
+/// Traces an uploaded scene's image. Returns the film and the number of rays traced.
+pub fn trace(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<(Film, u64)> {
+    let mut accum = Accumulator::new(scene.cut.width, scene.cut.height);
+    let rays = trace_samples(
+        device,
+        queue,
+        scene,
+        0..scene.cut.spp,
+        &mut accum,
+        progress,
+        cancel,
+    )?;
+    Ok((accum.into_film(), rays))
+}
+
+/// Traces samples `samples` of every pixel of an uploaded scene and adds them to
+/// `accum`, which must hold samples `0..samples.start` of the same frame (progressive
+/// rendering). Returns the rays traced.
+pub fn trace_samples(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
+    let rows = 0..scene.cut.height;
+    trace_rows(device, queue, scene, rows, samples, accum, progress, cancel)
+}
+
+/// `trace_samples` for the image rows `rows` only (a shard of the image): the other
+/// rows of `accum` stay as they are.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_rows(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
+    let cut = scene.cut;
+    accum.check(cut.width, cut.height, cut.spp, &samples)?;
+    let (mut rays, mut cut_short) = (0u64, 0u64);
+    // Pixels whose work did not fit one invocation, finished by `resume`.
+    let mut unfinished = Vec::new();
+    // The bands, clipped to `rows`.
+    let bands = cut.bands().filter_map(|(y0, n)| {
+        let (lo, hi) = (y0.max(rows.start), (y0 + n).min(rows.end));
+        (lo < hi).then(|| (lo, hi - lo))
+    });
+    let mut tracing = scene.tracing_cut();
+    let all = u64::from(samples.end - samples.start).max(1);
+    for (y0, rows) in bands {
+        let pixels = u64::from(cut.width) * u64::from(rows);
+        let bytes = pixels * PIXEL_BYTES;
+        // Progress is in pixels: a submission of part of the samples reports its share.
+        let mut reported = 0;
+        for run in cut.submissions(&samples) {
+            if cancel.load(Ordering::Relaxed) {
+                return Err(Error::Interrupted);
+            }
+            let last = run.end == samples.end;
+            let start = Instant::now();
+            let dispatches = scoped(device, "tracing a band", || {
+                let first = run.start == samples.start;
+                let (mut enc, dispatches) =
+                    submit_band(device, queue, scene, &tracing, y0, rows, &run, first);
+                if last {
+                    let (output, readback) = (&scene.bound.output, &scene.bound.readback);
+                    enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
+                }
+                queue.submit([enc.finish()]);
+                dispatches
+            })?;
+            if last {
+                let (band_rays, band_cut) =
+                    read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+                rays += band_rays;
+                unfinished.extend(band_cut);
+            } else {
+                // One submission at a time, so that Ctrl-C is seen within one.
+                wait(device)?;
+            }
+            if let Some(budget) = scene.dispatch_budget {
+                // The time includes the band's readback after its last submission: the
+                // mean dispatch is overestimated, on the safe side.
+                let mean = start.elapsed().as_secs_f64() / f64::from(dispatches.max(1));
+                if mean > budget.as_secs_f64() {
+                    tracing = tracing.finer(2.0 * mean / budget.as_secs_f64());
+                    *scene.finer.lock().expect("cut lock") = Some(tracing);
+                }
+            }
+            let done = pixels * u64::from(run.end - samples.start) / all;
+            progress(done - reported);
+            reported = done;
+        }
+    }
+    if !unfinished.is_empty() {
+        let (more_rays, cut) = resume(
+            device,
+            queue,
+            scene,
+            &unfinished,
+            &samples,
+            &mut accum.sums,
+            cancel,
+        )?;
+        rays += more_rays;
+        cut_short += cut;
+    }
+    if cut_short > 0 {
+        return Err(Error::Gpu(format!(
+            "{cut_short} of {} pixels could not finish on {}: the driver ended a shader loop \
+             before its end (lavapipe stops every loop once one invocation has run 65535 \
+             loop iterations, and a single ray of these pixels needs more, crossing too \
+             many surfaces); render with --backend cpu",
+            u64::from(cut.width) * u64::from(cut.height),
+            device.adapter_info().name
+        )));
+    }
+    accum.samples = samples.end;
+    Ok(rays)
+}
+
+/// Traces an uploaded scene's image and waits for the GPU, reading nothing back: the
+/// GPU's own time for a frame, as a viewer that displays on the device would see it.
+pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
+    let cut = scene.tracing_cut();
+    for (y0, rows) in cut.bands() {
+        for run in cut.submissions(&(0..cut.spp)) {
+            scoped(device, "tracing a band", || {
+                let first = run.start == 0;
+                let (enc, _) = submit_band(device, queue, scene, &cut, y0, rows, &run, first);
+                queue.submit([enc.finish()]);
+            })?;
+        }
+    }
+    wait(device)
+}
+
+/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
+/// their dispatches, after the clearing of the band's output when `clear` (the first
+/// samples of the band: each pass adds to what the passes before left). A finer cut than
+/// the one the tile buffer was made for has more tiles than slots: all but the last
+/// buffer-full are submitted here. Returns the encoder of the last, and the dispatches.
+#[allow(clippy::too_many_arguments)]
+fn submit_band(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    cut: &Cut,
+    y0: u32,
+    rows: u32,
+    samples: &Range<u32>,
+    clear: bool,
+) -> (wgpu::CommandEncoder, u32) {
+    let tiles = cut.tiles(y0, rows, samples);
+    let stride = scene.bound.tile_stride as usize;
+    let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
+    let mut enc = device.create_command_encoder(&Default::default());
+    if clear {
+        enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
+    }
+    // `tile_buf` holds the dispatches of a submission of the frame's own cut (`bind`).
+    let slots = scene.cut.dispatches_per_submission().max(1) as usize;
+    let mut groups = tiles.chunks(slots).peekable();
+    while let Some(group) = groups.next() {
+        let mut bytes = vec![0u8; group.len() * stride];
+        for (chunk, tile) in bytes.chunks_mut(stride).zip(group) {
+            chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
+        }
+        // Queue order: this write lands after the submissions before it have run.
+        queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
+        encode_band(&mut enc, &scene.pipeline, &scene.bound, group);
+        if groups.peek().is_some() {
+            queue.submit([enc.finish()]);
+            enc = device.create_command_encoder(&Default::default());
+        }
+    }
+    (enc, tiles.len() as u32)
+}
+
+/// Encodes one compute pass with a dispatch per tile, each tile read from its slot of the
+/// tile buffer (written beforehand, in the same order).
+pub(super) fn encode_band(
+    enc: &mut wgpu::CommandEncoder,
+    pipeline: &wgpu::ComputePipeline,
+    bound: &Bound,
+    tiles: &[GpuTile],
+) {
+    {
+        let mut pass = enc.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        for (i, tile) in tiles.iter().enumerate() {
+            pass.set_bind_group(0, &bound.bind_group, &[i as u32 * bound.tile_stride]);
+            let groups = tile.workgroups();
+            pass.dispatch_workgroups(groups[0], groups[1], 1);
+        }
+    }
+}
+
+/// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;
+/// returns its ray count and the pixels (x | y << 16) whose work was cut short, which are
+/// left to `resume` (neither their sums nor their rays are counted).
+fn read_band(
+    device: &wgpu::Device,
+    readback: &wgpu::Buffer,
+    bytes: u64,
+    y0: u32,
+    sums: &mut Film,
+) -> Result<(u64, Vec<u32>)> {
+    let width = sums.width as usize;
+    // In parallel: a 4K band is 133 MB, and one core takes longer to add it up than the
+    // GPU took to trace it.
+    const CHUNK: usize = 1 << 14;
+    read_mapped(device, readback, bytes, |view| {
+        let px: &[[u32; 4]] = bytemuck::cast_slice(view);
+        let start = y0 as usize * width;
+        sums.pixels[start..start + px.len()]
+            .par_chunks_mut(CHUNK)
+            .zip(px.par_chunks(CHUNK))
+            .enumerate()
+            .map(|(k, (out, px))| {
+                let (mut rays, mut cut) = (0u64, Vec::new());
+                for (i, (out, p)) in out.iter_mut().zip(px).enumerate() {
+                    if p[3] & PIXEL_CUT_SHORT != 0 {
+                        let j = start + k * CHUNK + i;
+                        cut.push((j % width) as u32 | ((j / width) as u32) << 16);
+                    } else {
+                        for c in 0..3 {
+                            out[c] += f32::from_bits(p[c]);
+                        }
+                        rays += u64::from(p[3]);
+                    }
+                }
+                (rays, cut)
+            })
+            .reduce(
+                || (0, Vec::new()),
+                |(rays, mut cut), (more, more_cut)| {
+                    cut.extend(more_cut);
+                    (rays + more, cut)
+                },
+            )
+    })
+}
