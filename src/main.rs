@@ -246,8 +246,8 @@ struct RenderArgs {
     /// for one scene the I-th of N bands of rows, written with its manifest into the
     /// directory -o names, for `gpurt merge`. `/N` takes I from SLURM_ARRAY_TASK_ID or
     /// JOB_COMPLETION_INDEX (a Slurm job array, a Kubernetes Indexed Job).
-    #[arg(long, value_name = "I/N", value_parser = gpurt::batch::Shard::parse)]
-    shard: Option<gpurt::batch::Shard>,
+    #[arg(long, value_name = "I/N", value_parser = gpurt::shard::Shard::parse)]
+    shard: Option<gpurt::shard::Shard>,
     /// How one image is split between shards: bands of rows, or runs of samples (each
     /// shard then stores one image per sample, spp/N of them).
     #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
@@ -487,7 +487,7 @@ fn one_backend_no_wireframe(args: &RenderArgs, what: &str) -> bool {
 
 /// `gpurt SCENE --shard I/N -o DIR`: this process's band of rows of one image, with its
 /// manifest, into DIR.
-fn render_shard(args: &RenderArgs, shard: gpurt::batch::Shard) -> gpurt::Result<ExitCode> {
+fn render_shard(args: &RenderArgs, shard: gpurt::shard::Shard) -> gpurt::Result<ExitCode> {
     use gpurt::shard::{self, Manifest};
     let [scene] = &args.scenes[..] else {
         eprintln!("gpurt: --shard splits one scene's image, or a batch with --out-dir");
