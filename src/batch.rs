@@ -7,11 +7,9 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use glam::Vec3;
-
 use crate::error::{Error, Result};
 use crate::film::Format;
-use crate::frame::{self, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
 use crate::run;
 use crate::scene::Camera;
@@ -52,16 +50,11 @@ pub fn outputs(scenes: &[PathBuf], dir: &Path, format: Format) -> Result<Vec<Pat
         .collect()
 }
 
-/// How every scene of a batch is rendered; the size and camera default to each scene's.
-#[derive(Clone, Debug)]
+/// How every scene of a batch is rendered: each scene's own camera and size unless
+/// `overrides` sets them.
+#[derive(Clone, Debug, Default)]
 pub struct BatchOptions {
-    pub width: Option<u32>,
-    pub height: Option<u32>,
-    pub spp: u32,
-    pub max_depth: u32,
-    pub ambient: Option<Vec3>,
-    pub aov: u32,
-    pub seed: u32,
+    pub overrides: Overrides,
     /// A `v` block that replaces every scene's camera.
     pub view: Option<PathBuf>,
 }
@@ -115,21 +108,12 @@ fn render_one(
     session: &mut Option<GpuSession>,
     cancel: &AtomicBool,
 ) -> Result<(u64, Vec<String>)> {
-    let options = |camera: &Camera| {
-        let defaults = RenderOptions::for_camera(camera);
-        RenderOptions {
-            width: opts.width.unwrap_or(defaults.width),
-            height: opts.height.unwrap_or(defaults.height),
-            spp: opts.spp,
-            max_depth: opts.max_depth,
-            ambient: opts.ambient,
-            aov: opts.aov,
-            seed: opts.seed,
-        }
-    };
+    let options =
+        |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&opts.overrides);
     let prepared = run::prepare(scene, opts.view.as_deref(), |c| options(c).samples())?;
     let buffers = Arc::new(prepared.buffers);
-    let frame = frame::globals(&buffers, &options(&buffers.camera));
+    let options = options(&buffers.camera);
+    let frame = frame::globals(&buffers, &options);
     let mut cpu;
     let renderer: &mut dyn Renderer = match (gpu, session.as_mut()) {
         (Some(_), Some(s)) => {
@@ -143,7 +127,7 @@ fn render_one(
         }
     };
     let rendered = run::render_frame(renderer, &frame, &|_| {}, cancel)?;
-    rendered.film.save_aov(out, opts.aov)?;
+    rendered.film.save_aov(out, options.aov)?;
     Ok((rendered.rays, prepared.warnings))
 }
 

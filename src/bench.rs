@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use crate::bvh;
 use crate::error::Result;
-use crate::frame::{self, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
@@ -150,13 +150,15 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         let name = name.split('.').next().unwrap_or_default().to_string();
         for &(width, height) in &config.sizes {
             for &spp in &config.spps {
-                let with_camera = |camera: &Camera| RenderOptions {
-                    width,
-                    height,
-                    spp,
-                    max_depth: config.depth,
-                    ..RenderOptions::for_camera(camera)
+                let overrides = Overrides {
+                    width: Some(width),
+                    height: Some(height),
+                    spp: Some(spp),
+                    max_depth: Some(config.depth),
+                    ..Overrides::default()
                 };
+                let with_camera =
+                    |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&overrides);
                 let wanted = |b: &run::Prepared| {
                     let samples = with_camera(&b.buffers.camera).samples();
                     b.buffers.bvh_quality == bvh::Quality::for_work(b.buffers.prims.len(), samples)

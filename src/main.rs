@@ -12,7 +12,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::compare::{self, Thresholds};
 use gpurt::frame::{
-    self, DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, RenderOptions,
+    self, DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, Overrides,
+    RenderOptions,
 };
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::run::{self, Prepared};
@@ -460,15 +461,21 @@ fn cancel_on_signals() -> Arc<AtomicBool> {
 /// The frame the render options ask for, seen from `camera` (its resolution unless
 /// --width/--height).
 fn render_options(args: &RenderArgs, camera: &gpurt::scene::Camera) -> RenderOptions {
-    let defaults = RenderOptions::for_camera(camera);
-    RenderOptions {
-        width: args.width.unwrap_or(defaults.width),
-        height: args.height.unwrap_or(defaults.height),
-        spp: args.spp,
-        max_depth: args.depth,
-        ambient: args.ambient,
-        aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
-        seed: args.seed,
+    RenderOptions::for_camera(camera).with_overrides(&args.overrides())
+}
+
+impl RenderArgs {
+    /// What the flags set over a scene's camera and the defaults.
+    fn overrides(&self) -> Overrides {
+        Overrides {
+            width: self.width,
+            height: self.height,
+            spp: Some(self.spp),
+            max_depth: Some(self.depth),
+            ambient: self.ambient,
+            aov: Some(self.aov.code().unwrap_or(gt::AOV_COLOR)),
+            seed: Some(self.seed),
+        }
     }
 }
 
@@ -623,13 +630,7 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         &scenes,
         &outputs,
         &BatchOptions {
-            width: args.width,
-            height: args.height,
-            spp: args.spp,
-            max_depth: args.depth,
-            ambient: args.ambient,
-            aov: args.aov.code().unwrap_or(gt::AOV_COLOR),
-            seed: args.seed,
+            overrides: args.overrides(),
             view: args.view.clone(),
         },
         found.gpu,

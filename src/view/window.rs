@@ -24,10 +24,10 @@ use super::readback::TextureReadback;
 use super::script::Event;
 use super::wireframe::Wireframe;
 use crate::error::{Error, Result};
-use crate::frame::{self, MAX_SPP, RenderOptions};
+use crate::frame::{self, MAX_SPP, Overrides, RenderOptions};
 use crate::gpu::render::scoped;
 use crate::gpu::{self, GpuContext};
-use crate::gpu_types::{AOV_COLOR, GpuGlobals};
+use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
 use crate::session::{CpuRenderer, GpuSession, Renderer};
 use crate::{film, outln};
@@ -181,15 +181,13 @@ impl App {
     /// The frame the current view traces.
     fn globals(&self) -> GpuGlobals {
         let c = &self.camera.camera;
-        let opts = RenderOptions {
-            width: c.width,
-            height: c.height,
-            spp: self.spp(),
-            max_depth: self.opts.depth,
+        let opts = RenderOptions::for_camera(c).with_overrides(&Overrides {
+            spp: Some(self.spp()),
+            max_depth: Some(self.opts.depth),
             ambient: self.opts.ambient,
-            aov: AOV_COLOR,
-            seed: self.opts.seed,
-        };
+            seed: Some(self.opts.seed),
+            ..Overrides::default()
+        });
         frame::globals_from(&self.buffers, c, &opts)
     }
 
