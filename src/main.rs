@@ -17,7 +17,7 @@ use gpurt::frame::{
 };
 use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::run::{self, Prepared};
-use gpurt::session::{CpuRenderer, GpuSession, Renderer};
+use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Probe, Renderer};
 use gpurt::view::wireframe::{self, Wireframe};
 use gpurt::{Error, out, outln};
 use gpurt::{agreement, atomic, film};
@@ -93,8 +93,12 @@ enum Command {
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
         frames: u32,
         /// Which backends to time.
-        #[arg(long, value_enum, default_value_t = BenchBackend::Both)]
-        backend: BenchBackend,
+        #[arg(long, default_value = "both", value_parser = backends(&[
+            (Backend::Gpu, None),
+            (Backend::Cpu, None),
+            (Backend::Both, None),
+        ]))]
+        backend: Backend,
         /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
         #[arg(long)]
         adapter: Option<String>,
@@ -126,8 +130,12 @@ struct ViewArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
-    #[arg(long, value_enum, default_value_t = ViewBackend::Auto)]
-    backend: ViewBackend,
+    #[arg(long, default_value = "auto", value_parser = backends(&[
+        (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
+        (Backend::Gpu, Some("WGSL compute through wgpu, on any adapter")),
+        (Backend::Cpu, Some("The CPU reference renderer")),
+    ]))]
+    backend: Backend,
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
     #[arg(long)]
     adapter: Option<String>,
@@ -170,38 +178,6 @@ impl ImageFormat {
             ImageFormat::Exr => film::Format::Exr,
         }
     }
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BenchBackend {
-    Gpu,
-    Cpu,
-    Both,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum ViewBackend {
-    /// The GPU when there is a hardware adapter, else the CPU.
-    Auto,
-    /// WGSL compute through wgpu, on any adapter.
-    Gpu,
-    /// The CPU reference renderer.
-    Cpu,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum Backend {
-    /// The GPU when there is a hardware adapter, else the CPU (faster than a software
-    /// rasteriser such as lavapipe on the same cores); `-v` says which and why.
-    Auto,
-    /// WGSL compute through wgpu, on any adapter, software ones included; falls back to
-    /// the CPU when no adapter exists.
-    Gpu,
-    /// The CPU reference renderer.
-    Cpu,
-    /// Both, reporting how much their images differ; the GPU image is written if they
-    /// agree, otherwise nothing is and the exit code is 1.
-    Both,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -280,7 +256,21 @@ struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     seed: u32,
     /// Which renderer traces the rays.
-    #[arg(long, value_enum, default_value_t = Backend::Auto)]
+    #[arg(long, default_value = "auto", value_parser = backends(&[
+        (Backend::Auto, Some(
+            "The GPU when there is a hardware adapter, else the CPU (faster than a software \
+             rasteriser such as lavapipe on the same cores); `-v` says which and why"
+        )),
+        (Backend::Gpu, Some(
+            "WGSL compute through wgpu, on any adapter, software ones included; falls back to \
+             the CPU when no adapter exists"
+        )),
+        (Backend::Cpu, Some("The CPU reference renderer")),
+        (Backend::Both, Some(
+            "Both, reporting how much their images differ; the GPU image is written if they \
+             agree, otherwise nothing is and the exit code is 1"
+        )),
+    ]))]
     backend: Backend,
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
     #[arg(long)]
@@ -334,9 +324,21 @@ fn parse_limit(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Whether an adapter was asked for by name (`--adapter` or `GPURT_ADAPTER`).
-fn adapter_named(args: &RenderArgs) -> bool {
-    args.adapter.is_some() || std::env::var("GPURT_ADAPTER").is_ok_and(|v| !v.is_empty())
+/// `--backend`'s parser for a command: the backends it accepts, in order, each with the
+/// line `--help` shows for it.
+fn backends(
+    accepted: &[(Backend, Option<&'static str>)],
+) -> impl clap::builder::TypedValueParser<Value = Backend> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let values = accepted.iter().map(|&(backend, help)| {
+        let value = PossibleValue::new(backend.name());
+        match help {
+            Some(help) => value.help(help),
+            None => value,
+        }
+    });
+    PossibleValuesParser::new(values)
+        .map(|name| Backend::from_name(&name).expect("a backend's name"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -377,8 +379,7 @@ fn main() -> ExitCode {
             spps: spp,
             depth,
             frames,
-            cpu: backend != BenchBackend::Gpu,
-            gpu: backend != BenchBackend::Cpu,
+            backend,
             adapter,
         })
         .map(|()| ExitCode::SUCCESS),
@@ -400,7 +401,7 @@ fn main() -> ExitCode {
 }
 
 fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
-    use gpurt::view::window::{self, Backend as Tracing, ViewOptions};
+    use gpurt::view::window::{self, ViewOptions};
     if let Some(shot) = &args.screenshot {
         film::Format::from_path(shot)?;
         atomic::check_writable(shot)?;
@@ -433,11 +434,7 @@ fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             depth: args.depth,
             ambient: args.ambient,
             seed: args.seed,
-            backend: match args.backend {
-                ViewBackend::Auto => Tracing::Auto,
-                ViewBackend::Gpu => Tracing::Gpu,
-                ViewBackend::Cpu => Tracing::Cpu,
-            },
+            backend: args.backend,
             adapter: args.adapter,
             script,
             screenshot: args.screenshot,
@@ -530,7 +527,7 @@ fn render_shard(args: &RenderArgs, shard: gpurt::shard::Shard) -> gpurt::Result<
     let buffers = Arc::new(buffers);
     let opts = render_options(args, &buffers.camera);
     let globals = frame::globals(&buffers, &opts);
-    let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
+    let found = session::choose(args.backend, args.adapter.as_deref(), Missing::Cpu)?;
     let backend = if found.gpu.is_some() { "gpu" } else { "cpu" };
     let mut renderer: Box<dyn Renderer> = match found.gpu {
         Some(ctx) => Box::new(GpuSession::new(ctx, buffers.clone())?),
@@ -614,12 +611,8 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         atomic::check_writable(out)?;
     }
     let cancel = cancel_on_signals();
-    let found = find_gpu(args.backend, args.adapter.as_deref(), adapter_named(args))?;
-    if let Some((note, warn)) = &found.note
-        && (*warn || args.verbose || args.stats)
-    {
-        eprintln!("{note}");
-    }
+    let found = session::choose(args.backend, args.adapter.as_deref(), Missing::Cpu)?;
+    print_note(&found, args.verbose || args.stats);
     let bar = ProgressBar::new(scenes.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
@@ -666,70 +659,14 @@ fn render_batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     })
 }
 
-/// What the adapter search found for a backend: the device to render on, if any, and a
-/// line about the choice, printed always when it is a warning, else with `-v` or `--stats`.
-struct Found {
-    gpu: Option<gpurt::gpu::GpuContext>,
-    note: Option<(String, bool)>,
-}
-
-/// The adapter search, running while the scene is read. Dropped without `join` (the
-/// scene failed to read), it still waits for the search to end: a process that exits while
-/// another thread is inside the Vulkan driver's start-up can die in the driver (NVIDIA's
-/// did: a bad `--view` file exited on a signal instead of with status 2).
-struct Probe(Option<std::thread::JoinHandle<gpurt::Result<Found>>>);
-
-impl Probe {
-    fn join(mut self) -> gpurt::Result<Found> {
-        let search = self.0.take().expect("joined once");
-        search.join().expect("the adapter search does not panic")
+/// Prints the line about the choice of backend: always when it is a warning, else when
+/// `verbose`.
+fn print_note(found: &session::Found, verbose: bool) {
+    if let Some(note) = &found.note
+        && (note.warning || verbose)
+    {
+        eprintln!("{}", note.text);
     }
-}
-
-impl Drop for Probe {
-    fn drop(&mut self) {
-        if let Some(search) = self.0.take() {
-            let _ = search.join();
-        }
-    }
-}
-
-fn find_gpu(backend: Backend, filter: Option<&str>, named: bool) -> gpurt::Result<Found> {
-    let (gpu, note) = match backend {
-        Backend::Cpu => (None, None),
-        Backend::Both => (Some(gpurt::gpu::open(filter)?), None),
-        Backend::Gpu => match gpurt::gpu::open(filter) {
-            Ok(ctx) => (Some(ctx), None),
-            // An adapter asked for by name that is missing is an error, not a fallback.
-            Err(Error::NoAdapter(why)) if !named => (
-                None,
-                Some((
-                    format!("gpurt: no GPU adapter{why}; rendering on the CPU"),
-                    true,
-                )),
-            ),
-            Err(e) => return Err(e),
-        },
-        Backend::Auto => match gpurt::gpu::choose(filter)? {
-            gpurt::gpu::Choice::Gpu(ctx) => {
-                let ctx = *ctx;
-                let why = if named {
-                    "the adapter named"
-                } else {
-                    "a hardware adapter"
-                };
-                (Some(ctx), Some((format!("backend     gpu: {why}"), false)))
-            }
-            gpurt::gpu::Choice::Cpu(why) => (
-                None,
-                Some((
-                    format!("backend     cpu: {why} (--backend gpu forces the GPU path)"),
-                    false,
-                )),
-            ),
-        },
-    };
-    Ok(Found { gpu, note })
 }
 
 fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
@@ -849,12 +786,8 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     // Looking for an adapter (and opening its device) takes 50 ms or more: it runs while
     // the scene is read and its BVH built.
     let wireframe_only = args.aov == Aov::Wireframe;
-    let probe = (!wireframe_only && args.backend != Backend::Cpu).then(|| {
-        let (backend, filter, named) = (args.backend, args.adapter.clone(), adapter_named(&args));
-        Probe(Some(std::thread::spawn(move || {
-            find_gpu(backend, filter.as_deref(), named)
-        })))
-    });
+    let probe = (!wireframe_only && args.backend != Backend::Cpu)
+        .then(|| Probe::start(args.backend, args.adapter.clone(), Missing::Cpu));
     let Prepared {
         buffers,
         warnings,
@@ -883,16 +816,12 @@ fn render_command(args: RenderArgs) -> gpurt::Result<ExitCode> {
     if !wireframe_only {
         let found = match probe {
             Some(probe) => probe.join()?,
-            None => Found {
+            None => session::Found {
                 gpu: None,
                 note: None,
             },
         };
-        if let Some((note, warn)) = &found.note
-            && (*warn || args.verbose || args.stats)
-        {
-            eprintln!("{note}");
-        }
+        print_note(&found, args.verbose || args.stats);
         match found.gpu {
             Some(ctx) => {
                 device = Some(ctx.clone());

@@ -29,17 +29,8 @@ use crate::gpu::render::scoped;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
-use crate::session::{CpuRenderer, GpuSession, Renderer};
+use crate::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
 use crate::{film, outln};
-
-/// Which renderer traces the viewer's image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// The GPU on a hardware adapter, else the CPU (`gpu::choose`).
-    Auto,
-    Gpu,
-    Cpu,
-}
 
 /// What `gpurt view` was asked for.
 #[derive(Clone, Debug)]
@@ -54,6 +45,7 @@ pub struct ViewOptions {
     pub depth: u32,
     pub ambient: Option<Vec3>,
     pub seed: u32,
+    /// Which renderer traces the image (`Both`: the GPU).
     pub backend: Backend,
     pub adapter: Option<String>,
     /// Events to replay, and where to write the window's image once they are done
@@ -266,16 +258,12 @@ impl App {
         // so a window sharing the tracer's would wait for each band of rays before drawing
         // a frame (a second or more at 800x600 on lavapipe), and a moving camera's
         // wireframe would stall with it.
-        let filter = self.opts.adapter.as_deref();
-        let tracer_device = match self.opts.backend {
-            Backend::Gpu => Some(gpu::open(filter)?),
-            Backend::Cpu => None,
-            Backend::Auto => match gpu::choose(filter)? {
-                gpu::Choice::Gpu(ctx) => Some(*ctx),
-                gpu::Choice::Cpu(_) => None,
-            },
-        };
-        let renderer: Box<dyn Renderer + Send> = match tracer_device {
+        let found = session::choose(
+            self.opts.backend,
+            self.opts.adapter.as_deref(),
+            Missing::Error,
+        )?;
+        let renderer: Box<dyn Renderer + Send> = match found.gpu {
             Some(ctx) => Box::new(GpuSession::new(ctx, self.buffers.clone())?),
             None => Box::new(CpuRenderer::new(self.buffers.clone())),
         };
