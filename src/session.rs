@@ -365,3 +365,29 @@ impl Drop for Probe {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backends_are_named_as_the_command_line_names_them() {
+        for b in Backend::ALL {
+            assert_eq!(Backend::from_name(b.name()), Some(b));
+        }
+        let names: Vec<&str> = Backend::ALL.iter().map(|b| b.name()).collect();
+        assert_eq!(names, ["auto", "gpu", "cpu", "both"]);
+        assert_eq!(Backend::from_name("GPU"), None);
+    }
+
+    #[test]
+    fn the_cpu_backend_opens_no_device_and_says_nothing() {
+        let found = choose(Backend::Cpu, None, Missing::Error).unwrap();
+        assert!(found.gpu.is_none());
+        assert_eq!(found.note, None);
+        let found = Probe::start(Backend::Cpu, Some("any".into()), Missing::Cpu)
+            .join()
+            .unwrap();
+        assert!(found.gpu.is_none() && found.note.is_none());
+    }
+}

@@ -358,3 +358,51 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     };
     Ok((dim(w)?, dim(h)?))
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::*;
+
+    #[test]
+    fn the_arguments_are_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    /// Each command takes the backends it can use, and no other.
+    #[test]
+    fn each_command_accepts_its_own_backends() {
+        let backend = |args: &[&str]| -> Result<Backend, clap::Error> {
+            let cli = Cli::try_parse_from(args)?;
+            Ok(match cli.command {
+                Some(Command::View(v)) => v.backend,
+                Some(Command::Bench(b)) => b.backend,
+                _ => cli.render.backend,
+            })
+        };
+        for (args, accepted) in [
+            (&["gpurt", "s.nff"][..], &["auto", "gpu", "cpu", "both"][..]),
+            (&["gpurt", "view", "s.nff"], &["auto", "gpu", "cpu"]),
+            (&["gpurt", "bench", "s.nff"], &["gpu", "cpu", "both"]),
+        ] {
+            for b in Backend::ALL {
+                let mut with = args.to_vec();
+                with.extend(["--backend", b.name()]);
+                match backend(&with) {
+                    Ok(got) => {
+                        assert!(accepted.contains(&b.name()), "{with:?}");
+                        assert_eq!(got, b);
+                    }
+                    Err(e) => assert!(!accepted.contains(&b.name()), "{with:?}: {e}"),
+                }
+            }
+        }
+        assert_eq!(backend(&["gpurt", "s.nff"]).unwrap(), Backend::Auto);
+        assert_eq!(backend(&["gpurt", "view", "s.nff"]).unwrap(), Backend::Auto);
+        assert_eq!(
+            backend(&["gpurt", "bench", "s.nff"]).unwrap(),
+            Backend::Both
+        );
+    }
+}
