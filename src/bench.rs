@@ -21,13 +21,14 @@ use std::time::{Duration, Instant};
 
 use crate::bvh;
 use crate::error::Result;
-use crate::frame::{self, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
 use crate::pack;
 use crate::run;
 use crate::scene::Camera;
+use crate::session::{self, Backend, Missing};
 
 /// What to measure.
 pub struct BenchConfig {
@@ -37,10 +38,9 @@ pub struct BenchConfig {
     pub depth: u32,
     /// Timed GPU frames per pass (after one warm-up frame).
     pub frames: u32,
-    /// Render on the CPU too.
-    pub cpu: bool,
-    /// Render on the GPU (needs an adapter).
-    pub gpu: bool,
+    /// Which backends to time: `Gpu` needs an adapter, `Both` times both, `Auto` the one
+    /// `session::choose` picks.
+    pub backend: Backend,
     pub adapter: Option<String>,
 }
 
@@ -108,13 +108,12 @@ fn median(mut times: Vec<Duration>) -> Duration {
 
 /// Runs the benchmark, printing each row as it is measured (header first) to stdout.
 pub fn run(config: &BenchConfig) -> Result<()> {
-    let ctx = if config.gpu {
-        let ctx = gpu::open(config.adapter.as_deref())?;
+    let ctx = session::choose(config.backend, config.adapter.as_deref(), Missing::Error)?.gpu;
+    if let Some(ctx) = &ctx {
         eprintln!("adapter     {}", ctx.describe());
-        Some(ctx)
-    } else {
-        None
-    };
+    }
+    // The CPU is timed beside the GPU, or in its place.
+    let time_cpu = config.backend == Backend::Both || ctx.is_none();
     let renderer = match &ctx {
         Some(c) => Some(GpuRenderer::new(&c.device, None)?),
         None => None,
@@ -132,7 +131,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
             TRAVERSAL_NAMES.join("|")
         );
     }
-    if config.cpu {
+    if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
     outln!(
@@ -150,13 +149,15 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         let name = name.split('.').next().unwrap_or_default().to_string();
         for &(width, height) in &config.sizes {
             for &spp in &config.spps {
-                let with_camera = |camera: &Camera| RenderOptions {
-                    width,
-                    height,
-                    spp,
-                    max_depth: config.depth,
-                    ..RenderOptions::for_camera(camera)
+                let overrides = Overrides {
+                    width: Some(width),
+                    height: Some(height),
+                    spp: Some(spp),
+                    max_depth: Some(config.depth),
+                    ..Overrides::default()
                 };
+                let with_camera =
+                    |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&overrides);
                 let wanted = |b: &run::Prepared| {
                     let samples = with_camera(&b.buffers.camera).samples();
                     b.buffers.bvh_quality == bvh::Quality::for_work(b.buffers.prims.len(), samples)
@@ -179,8 +180,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
                     _ => None,
                 };
-                let cpu = config
-                    .cpu
+                let cpu = time_cpu
                     .then(|| cpu_row(&prepared.buffers, &globals))
                     .transpose()?;
                 if let (Some(g), Some(c)) = (&gpu, &cpu)

@@ -51,6 +51,35 @@ impl RenderOptions {
             seed: 0,
         }
     }
+
+    /// These options with whatever `o` sets in their place: the one place where a
+    /// caller's settings (the command line's, a batch's, the viewer's) meet a scene's
+    /// camera and the defaults, as in `RenderOptions::for_camera(camera).with_overrides(o)`.
+    pub fn with_overrides(self, o: &Overrides) -> Self {
+        RenderOptions {
+            width: o.width.unwrap_or(self.width),
+            height: o.height.unwrap_or(self.height),
+            spp: o.spp.unwrap_or(self.spp),
+            max_depth: o.max_depth.unwrap_or(self.max_depth),
+            ambient: o.ambient.or(self.ambient),
+            aov: o.aov.unwrap_or(self.aov),
+            seed: o.seed.unwrap_or(self.seed),
+        }
+    }
+}
+
+/// What a caller sets over a scene's camera and the defaults (`--width`, `--height`,
+/// `--spp`, `--depth`, `--ambient`, `--aov`, `--seed`); `None` keeps the scene's value or
+/// the default. A new width or height keeps the camera's vertical angle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub ambient: Option<Vec3>,
+    pub aov: Option<u32>,
+    pub seed: Option<u32>,
 }
 
 /// Per-render constants: the camera basis of shading.md and the options.
@@ -126,5 +155,41 @@ mod tests {
         assert!(g.cam_forward.dot(g.cam_right).abs() < 1e-6);
         assert!(g.cam_up.z > 0.9, "up stays up");
         assert!((b.epsilon - EPSILON_REL * scene.bounds().extent().length()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn overrides_replace_only_what_they_set() {
+        let defaults = RenderOptions {
+            width: 40,
+            height: 30,
+            spp: 1,
+            max_depth: 5,
+            ambient: None,
+            aov: AOV_COLOR,
+            seed: 0,
+        };
+        assert_eq!(
+            defaults.clone().with_overrides(&Overrides::default()),
+            defaults
+        );
+        let o = Overrides {
+            height: Some(7),
+            spp: Some(9),
+            ambient: Some(Vec3::splat(0.5)),
+            seed: Some(3),
+            ..Overrides::default()
+        };
+        let got = defaults.clone().with_overrides(&o);
+        assert_eq!(
+            got,
+            RenderOptions {
+                width: 40,
+                height: 7,
+                spp: 9,
+                ambient: Some(Vec3::splat(0.5)),
+                seed: 3,
+                ..defaults
+            }
+        );
     }
 }

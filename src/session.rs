@@ -3,13 +3,17 @@
 //! wanted: samples `0..k` and then `k..n` into one `Accumulator` give the image of `0..n`,
 //! to the bit on the CPU and within the GPU-vs-CPU limits on the GPU. `docs/api.md` has
 //! an example.
+//!
+//! Which of the two traces is chosen here too, once for every command (`Backend`,
+//! `choose`, and `Probe`, which runs the choice while the scene is read).
 
 use std::ops::Range;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
+use std::thread::JoinHandle;
 use std::time::Duration;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
 use crate::gpu::{self, GpuContext, GpuScene};
@@ -213,5 +217,177 @@ impl GpuSession {
             }
         }
         Ok(())
+    }
+}
+
+/// Which renderer traces a command's rays (`--backend`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// The GPU when there is a hardware adapter (or the one named), else the CPU, which is
+    /// faster than a software rasteriser such as lavapipe on the same cores (`gpu::choose`).
+    Auto,
+    /// WGSL compute through wgpu, on any adapter, software ones included.
+    Gpu,
+    /// The CPU reference renderer.
+    Cpu,
+    /// Both, the GPU's image compared with the CPU's (a command that traces once traces
+    /// on the GPU).
+    Both,
+}
+
+impl Backend {
+    /// Every backend, in the order `--help` lists them.
+    pub const ALL: [Backend; 4] = [Backend::Auto, Backend::Gpu, Backend::Cpu, Backend::Both];
+
+    /// The name `--backend` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Auto => "auto",
+            Backend::Gpu => "gpu",
+            Backend::Cpu => "cpu",
+            Backend::Both => "both",
+        }
+    }
+
+    /// The backend called `name`.
+    pub fn from_name(name: &str) -> Option<Backend> {
+        Backend::ALL.into_iter().find(|b| b.name() == name)
+    }
+}
+
+/// What `Backend::Gpu` does when no adapter exists and none was asked for by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Missing {
+    /// Renders on the CPU, with a warning: a render, a batch or a shard gets its image.
+    Cpu,
+    /// Fails: `bench` times the backends it is told to, and the viewer's window needs an
+    /// adapter anyway.
+    Error,
+}
+
+/// What the adapter search found for a backend: the device to render on, if any, and a
+/// line about the choice.
+pub struct Found {
+    pub gpu: Option<GpuContext>,
+    pub note: Option<Note>,
+}
+
+/// A line about the choice of backend: the command line prints it always when it is a
+/// warning, else with `-v` or `--stats`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Note {
+    pub text: String,
+    pub warning: bool,
+}
+
+/// Whether an adapter was asked for by name (`--adapter` or `GPURT_ADAPTER`).
+fn adapter_named(adapter: Option<&str>) -> bool {
+    adapter.is_some() || std::env::var("GPURT_ADAPTER").is_ok_and(|v| !v.is_empty())
+}
+
+/// The one choice between the GPU and the CPU: opens the device `backend` renders on,
+/// on the adapter whose name contains `adapter` (else `GPURT_ADAPTER`'s) when one is
+/// named. `Cpu` opens none; `Both` needs an adapter; `Gpu` too, but for `missing`;
+/// `Auto` takes a hardware adapter or the one named, else the CPU (`gpu::choose`), and
+/// says which and why in the note.
+pub fn choose(backend: Backend, adapter: Option<&str>, missing: Missing) -> Result<Found> {
+    let named = adapter_named(adapter);
+    let (gpu, note) = match backend {
+        Backend::Cpu => (None, None),
+        Backend::Both => (Some(gpu::open(adapter)?), None),
+        Backend::Gpu => match gpu::open(adapter) {
+            Ok(ctx) => (Some(ctx), None),
+            // An adapter asked for by name that is missing is an error, not a fallback.
+            Err(Error::NoAdapter(why)) if !named && missing == Missing::Cpu => (
+                None,
+                Some(Note {
+                    text: format!("gpurt: no GPU adapter{why}; rendering on the CPU"),
+                    warning: true,
+                }),
+            ),
+            Err(e) => return Err(e),
+        },
+        Backend::Auto => match gpu::choose(adapter)? {
+            gpu::Choice::Gpu(ctx) => {
+                let ctx = *ctx;
+                let why = if named {
+                    "the adapter named"
+                } else {
+                    "a hardware adapter"
+                };
+                let text = format!("backend     gpu: {why}");
+                (
+                    Some(ctx),
+                    Some(Note {
+                        text,
+                        warning: false,
+                    }),
+                )
+            }
+            gpu::Choice::Cpu(why) => (
+                None,
+                Some(Note {
+                    text: format!("backend     cpu: {why} (--backend gpu forces the GPU path)"),
+                    warning: false,
+                }),
+            ),
+        },
+    };
+    Ok(Found { gpu, note })
+}
+
+/// `choose` on a thread of its own: looking for an adapter (and opening its device) takes
+/// 50 ms or more, so it runs while the scene is read and its BVH built. Dropped without
+/// `join` (the scene failed to read), it still waits for the search to end: a process
+/// that exits while another thread is inside the Vulkan driver's start-up can die in the
+/// driver (NVIDIA's did: a bad `--view` file exited on a signal instead of with status 2).
+pub struct Probe(Option<JoinHandle<Result<Found>>>);
+
+impl Probe {
+    /// Starts `choose(backend, adapter, missing)`.
+    pub fn start(backend: Backend, adapter: Option<String>, missing: Missing) -> Probe {
+        Probe(Some(std::thread::spawn(move || {
+            choose(backend, adapter.as_deref(), missing)
+        })))
+    }
+
+    /// What the search found.
+    pub fn join(mut self) -> Result<Found> {
+        let search = self.0.take().expect("joined once");
+        search.join().expect("the adapter search does not panic")
+    }
+}
+
+impl Drop for Probe {
+    fn drop(&mut self) {
+        if let Some(search) = self.0.take() {
+            let _ = search.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backends_are_named_as_the_command_line_names_them() {
+        for b in Backend::ALL {
+            assert_eq!(Backend::from_name(b.name()), Some(b));
+        }
+        let names: Vec<&str> = Backend::ALL.iter().map(|b| b.name()).collect();
+        assert_eq!(names, ["auto", "gpu", "cpu", "both"]);
+        assert_eq!(Backend::from_name("GPU"), None);
+    }
+
+    #[test]
+    fn the_cpu_backend_opens_no_device_and_says_nothing() {
+        let found = choose(Backend::Cpu, None, Missing::Error).unwrap();
+        assert!(found.gpu.is_none());
+        assert_eq!(found.note, None);
+        let found = Probe::start(Backend::Cpu, Some("any".into()), Missing::Cpu)
+            .join()
+            .unwrap();
+        assert!(found.gpu.is_none() && found.note.is_none());
     }
 }

@@ -8,6 +8,9 @@
 //! samples, RGB, little-endian f32, row by row) and `shard-I-of-N.json` (the manifest),
 //! each written atomically, the manifest last: a shard without its manifest does not
 //! exist, and a retried shard never leaves a torn file.
+//!
+//! `Shard` (`I/N`, parsed here) is also what a batch run as a job array takes its share
+//! of scenes by (`batch`).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -15,9 +18,71 @@ use std::path::{Path, PathBuf};
 use serde_json::{Value, json};
 
 use crate::atomic;
-use crate::batch::Shard;
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
+
+/// This process's share, `I/N`: of a batch run as a job array, scenes `index`,
+/// `index + count`, `index + 2 count`, ... of the list every task is given (`take`); of
+/// one image, the `index`-th band of rows or run of samples (`rows`, `samples`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    /// Parses `I/N`, or `/N` with `I` from `SLURM_ARRAY_TASK_ID` (a Slurm job array) or
+    /// `JOB_COMPLETION_INDEX` (a Kubernetes Indexed Job).
+    pub fn parse(s: &str) -> std::result::Result<Shard, String> {
+        Self::parse_with(s, |k| std::env::var(k).ok())
+    }
+
+    fn parse_with(
+        s: &str,
+        env: impl Fn(&str) -> Option<String>,
+    ) -> std::result::Result<Shard, String> {
+        let (i, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("'{s}': expected I/N (or /N inside a job array)"))?;
+        let count: u32 = match n.trim().parse() {
+            Ok(n) if n >= 1 => n,
+            _ => return Err(format!("'{s}': N must be a whole number, 1 or more")),
+        };
+        let (index, from) = if i.trim().is_empty() {
+            let var = ["SLURM_ARRAY_TASK_ID", "JOB_COMPLETION_INDEX"]
+                .into_iter()
+                .find_map(|k| env(k).map(|v| (v, k)));
+            let (v, k) = var.ok_or_else(|| {
+                format!(
+                    "'{s}' takes its index from SLURM_ARRAY_TASK_ID or JOB_COMPLETION_INDEX, \
+                     and neither is set"
+                )
+            })?;
+            let from = format!("{k}={}", v.trim());
+            (v, from)
+        } else {
+            (i.to_string(), format!("'{s}'"))
+        };
+        match index.trim().parse::<u32>() {
+            Ok(index) if index < count => Ok(Shard { index, count }),
+            _ => Err(format!(
+                "{from}: the shard index must be 0 to {} (with N = {count}; a Slurm array \
+                 for N shards is --array=0-{})",
+                count - 1,
+                count - 1
+            )),
+        }
+    }
+
+    /// This shard's items.
+    pub fn take<'a, T>(&self, items: &'a [T]) -> Vec<&'a T> {
+        items
+            .iter()
+            .skip(self.index as usize)
+            .step_by(self.count as usize)
+            .collect()
+    }
+}
 
 const FORMAT: &str = "gpurt-shard/1";
 
@@ -309,6 +374,42 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shards_split_a_batch_and_take_their_index_from_the_job_array() {
+        let none = |_: &str| None;
+        let s = Shard::parse_with("1/3", none).unwrap();
+        assert_eq!(s.take(&[0, 1, 2, 3, 4, 5, 6]), [&1, &4]);
+        // Every item lands in exactly one shard.
+        let mut all: Vec<i32> = (0..3)
+            .flat_map(|i| Shard { index: i, count: 3 }.take(&[0, 1, 2, 3, 4, 5, 6]))
+            .copied()
+            .collect();
+        all.sort();
+        assert_eq!(all, [0, 1, 2, 3, 4, 5, 6]);
+        let slurm = |k: &str| (k == "SLURM_ARRAY_TASK_ID").then(|| "2".to_string());
+        assert_eq!(
+            Shard::parse_with("/4", slurm).unwrap(),
+            Shard { index: 2, count: 4 }
+        );
+        let k8s = |k: &str| (k == "JOB_COMPLETION_INDEX").then(|| "0".to_string());
+        assert_eq!(
+            Shard::parse_with("/2", k8s).unwrap(),
+            Shard { index: 0, count: 2 }
+        );
+        for (bad, want) in [
+            ("3/3", "the shard index must be 0 to 2"),
+            ("x/3", "the shard index must be 0 to 2"),
+            ("1/0", "N must be a whole number"),
+            ("2", "expected I/N"),
+            ("/3", "neither is set"),
+        ] {
+            let e = Shard::parse_with(bad, none).unwrap_err();
+            assert!(e.contains(want), "{bad}: {e}");
+        }
+        let e = Shard::parse_with("/2", |_| Some("5".into())).unwrap_err();
+        assert!(e.contains("SLURM_ARRAY_TASK_ID=5"), "{e}");
+    }
 
     #[test]
     fn the_bands_of_n_shards_cover_every_row_once() {

@@ -1,45 +1,33 @@
-//! The viewer's window: winit for the window and its input, a wgpu surface to show the
-//! ray-traced image (written straight into the surface texture) and the wireframe (drawn
-//! over it by `Wireframe::encode`). Input becomes `camera::Input` and `controls::Action`
-//! here and nowhere else; a moved camera starts a new view on the `progressive::Tracer`.
+//! The viewer's window: its life and its events (winit), and what it shows. Input becomes
+//! `controls::Action`s (`input`) and acts here on the camera and the mode; a moved camera
+//! or a new size starts a new view on the `progressive::Tracer`, whose passes come back as
+//! events and are drawn, with or without the wireframe, into the window's `surface`.
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::Vec3;
-use image::RgbImage;
 use winit::application::ApplicationHandler;
-use winit::dpi::{PhysicalPosition, PhysicalSize};
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::dpi::PhysicalSize;
+use winit::event::WindowEvent;
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
-use winit::keyboard::{Key as WinitKey, NamedKey};
 use winit::window::{Window, WindowId};
 
-use super::camera::{DragMode, Input, OrbitCamera};
-use super::controls::{Action, Mode, key_action};
+use super::camera::OrbitCamera;
+use super::controls::{Action, Mode};
+use super::input::Pointer;
 use super::progressive::{Job, Pass, Tracer};
-use super::readback::TextureReadback;
 use super::script::Event;
-use super::wireframe::Wireframe;
+use super::stats::Stats;
+use super::surface::{Drawn, Surface};
 use crate::error::{Error, Result};
-use crate::frame::{self, MAX_SPP, RenderOptions};
-use crate::gpu::device::scoped;
-use crate::gpu::{self, GpuContext};
-use crate::gpu_types::{AOV_COLOR, GpuGlobals};
+use crate::frame::{self, MAX_SPP, Overrides, RenderOptions};
+use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
-use crate::session::{CpuRenderer, GpuSession, Renderer};
+use crate::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
 use crate::{film, outln};
-
-/// Which renderer traces the viewer's image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Backend {
-    /// The GPU on a hardware adapter, else the CPU (`gpu::choose`).
-    Auto,
-    Gpu,
-    Cpu,
-}
 
 /// What `gpurt view` was asked for.
 #[derive(Clone, Debug)]
@@ -54,6 +42,7 @@ pub struct ViewOptions {
     pub depth: u32,
     pub ambient: Option<Vec3>,
     pub seed: u32,
+    /// Which renderer traces the image (`Both`: the GPU).
     pub backend: Backend,
     pub adapter: Option<String>,
     /// Events to replay, and where to write the window's image once they are done
@@ -74,7 +63,8 @@ pub fn run(buffers: SceneBuffers, opts: ViewOptions) -> Result<()> {
     let mut app = App::new(buffers, opts, event_loop.create_proxy());
     event_loop.run_app(&mut app).map_err(no_display)?;
     if app.opts.stats {
-        app.stats.print(&app);
+        let c = &app.camera.camera;
+        app.stats.print((c.width, c.height), app.mode);
     }
     app.result
 }
@@ -96,27 +86,12 @@ fn no_display(e: impl std::fmt::Display) -> Error {
 /// What exists once the window does.
 struct Live {
     window: Arc<Window>,
-    surface: wgpu::Surface<'static>,
-    config: wgpu::SurfaceConfiguration,
-    /// The surface format without sRGB encoding: the image's bytes are shown as they are,
-    /// as the PNG of the same view stores them.
-    view_format: wgpu::TextureFormat,
-    ctx: GpuContext,
-    wireframe: Wireframe,
+    surface: Surface,
     tracer: Tracer,
     /// The adapter (or CPU) that traces.
     tracing_on: String,
     /// The title shown, set again only when it changes.
     title: String,
-}
-
-/// The pointer, for drags.
-#[derive(Default)]
-struct Pointer {
-    at: Option<PhysicalPosition<f64>>,
-    orbiting: bool,
-    panning: bool,
-    shift: bool,
 }
 
 struct App {
@@ -181,15 +156,13 @@ impl App {
     /// The frame the current view traces.
     fn globals(&self) -> GpuGlobals {
         let c = &self.camera.camera;
-        let opts = RenderOptions {
-            width: c.width,
-            height: c.height,
-            spp: self.spp(),
-            max_depth: self.opts.depth,
+        let opts = RenderOptions::for_camera(c).with_overrides(&Overrides {
+            spp: Some(self.spp()),
+            max_depth: Some(self.opts.depth),
             ambient: self.opts.ambient,
-            aov: AOV_COLOR,
-            seed: self.opts.seed,
-        };
+            seed: Some(self.opts.seed),
+            ..Overrides::default()
+        });
         frame::globals_from(&self.buffers, c, &opts)
     }
 
@@ -206,78 +179,22 @@ impl App {
             .with_title(format!("gpurt view - {}", self.opts.name))
             .with_inner_size(PhysicalSize::new(c.width, c.height));
         let window = Arc::new(event_loop.create_window(attributes).map_err(no_display)?);
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| Error::Gpu(format!("cannot draw into the window: {e}")))?;
-        let ctx = gpu::open_on(&instance, self.opts.adapter.as_deref(), Some(&surface))?;
-        let caps = surface.get_capabilities(&ctx.adapter);
-        // 8-bit formats only: the image's bytes go into the surface texture unchanged.
-        let format = caps
-            .formats
-            .iter()
-            .copied()
-            .find(|f| {
-                matches!(
-                    f.remove_srgb_suffix(),
-                    wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
-                )
-            })
-            .ok_or_else(|| {
-                Error::Gpu(format!(
-                    "the window offers no 8-bit RGBA or BGRA format (only {:?})",
-                    caps.formats
-                ))
-            })?;
-        let mut usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST;
-        if caps.usages.contains(wgpu::TextureUsages::COPY_SRC) {
-            usage |= wgpu::TextureUsages::COPY_SRC;
-        }
-        if !caps.usages.contains(usage) {
-            return Err(Error::Gpu(format!(
-                "the window's surface cannot be copied into (it allows {:?})",
-                caps.usages
-            )));
-        }
-        if self.opts.screenshot.is_some() && !usage.contains(wgpu::TextureUsages::COPY_SRC) {
-            return Err(Error::Gpu(
-                "the window's surface cannot be read back for --screenshot".into(),
-            ));
-        }
-        let view_format = format.remove_srgb_suffix();
-        let size = window.inner_size();
-        let config = wgpu::SurfaceConfiguration {
-            usage,
-            format,
-            width: size.width.max(1),
-            height: size.height.max(1),
-            present_mode: wgpu::PresentMode::AutoVsync,
-            desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes[0],
-            color_space: wgpu::SurfaceColorSpace::Auto,
-            view_formats: if view_format == format {
-                vec![]
-            } else {
-                vec![view_format]
-            },
-        };
-        surface.configure(&ctx.device, &config);
-        let wireframe = Wireframe::new(&ctx.device, &self.buffers, view_format)?;
+        let surface = Surface::new(
+            &window,
+            self.opts.adapter.as_deref(),
+            self.opts.screenshot.is_some(),
+            &self.buffers,
+        )?;
         // The tracer gets a device of its own: one device runs its submissions in order,
         // so a window sharing the tracer's would wait for each band of rays before drawing
         // a frame (a second or more at 800x600 on lavapipe), and a moving camera's
         // wireframe would stall with it.
-        let filter = self.opts.adapter.as_deref();
-        let tracer_device = match self.opts.backend {
-            Backend::Gpu => Some(gpu::open(filter)?),
-            Backend::Cpu => None,
-            Backend::Auto => match gpu::choose(filter)? {
-                gpu::Choice::Gpu(ctx) => Some(*ctx),
-                gpu::Choice::Cpu(_) => None,
-            },
-        };
-        let renderer: Box<dyn Renderer + Send> = match tracer_device {
+        let found = session::choose(
+            self.opts.backend,
+            self.opts.adapter.as_deref(),
+            Missing::Error,
+        )?;
+        let renderer: Box<dyn Renderer + Send> = match found.gpu {
             Some(ctx) => Box::new(GpuSession::new(ctx, self.buffers.clone())?),
             None => Box::new(CpuRenderer::new(self.buffers.clone())),
         };
@@ -287,20 +204,16 @@ impl App {
             // The loop is gone only when the window has closed.
             let _ = proxy.send_event(pass);
         });
-        self.stats.adapter = ctx.describe();
-        self.stats.tracing_on = tracing_on.clone();
+        self.stats.devices(surface.describe(), tracing_on.clone());
+        let (w, h) = surface.size();
         self.live = Some(Live {
             window,
             surface,
-            config,
-            view_format,
-            ctx,
-            wireframe,
             tracer,
             tracing_on,
             title: String::new(),
         });
-        self.resize(size);
+        self.resize(PhysicalSize::new(w, h));
         Ok(())
     }
 
@@ -308,11 +221,7 @@ impl App {
     fn resize(&mut self, size: PhysicalSize<u32>) {
         let Some(live) = &mut self.live else { return };
         let (w, h) = (size.width.max(1), size.height.max(1));
-        if (live.config.width, live.config.height) != (w, h) {
-            live.config.width = w;
-            live.config.height = h;
-            live.surface.configure(&live.ctx.device, &live.config);
-        }
+        live.surface.resize((w, h));
         self.camera.camera.width = w;
         self.camera.camera.height = h;
         self.restart();
@@ -394,22 +303,6 @@ impl App {
         }
     }
 
-    fn pointer_moved(&mut self, at: PhysicalPosition<f64>, event_loop: &ActiveEventLoop) {
-        let last = self.pointer.at.replace(at);
-        let Some(last) = last else { return };
-        let (dx, dy) = ((at.x - last.x) as f32, (at.y - last.y) as f32);
-        let mode = if self.pointer.panning || (self.pointer.orbiting && self.pointer.shift) {
-            DragMode::Pan
-        } else if self.pointer.orbiting {
-            DragMode::Orbit
-        } else {
-            return;
-        };
-        if dx != 0.0 || dy != 0.0 {
-            self.act(Action::Camera(Input::Drag { mode, dx, dy }), event_loop);
-        }
-    }
-
     /// Replays the script up to its next wait; when it is over, asks for the screenshot
     /// once the view has its samples.
     fn step_script(&mut self, event_loop: &ActiveEventLoop) {
@@ -444,65 +337,25 @@ impl App {
         let Some(live) = &mut self.live else {
             return Ok(());
         };
-        let start = Instant::now();
-        let frame = match live.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(f)
-            | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-            wgpu::CurrentSurfaceTexture::Timeout | wgpu::CurrentSurfaceTexture::Occluded => {
-                live.window.request_redraw();
-                return Ok(());
-            }
-            wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                live.surface.configure(&live.ctx.device, &live.config);
-                live.window.request_redraw();
-                return Ok(());
-            }
-            wgpu::CurrentSurfaceTexture::Validation => {
-                return Err(Error::Gpu("the window's surface texture is invalid".into()));
-            }
-        };
-        let (w, h) = (live.config.width, live.config.height);
         let traced = self
             .latest
             .as_ref()
-            .is_some_and(|p| self.mode.traces() && p.image.dimensions() == (w, h));
+            .is_some_and(|p| self.mode.traces() && p.image.dimensions() == live.surface.size());
         let lines = self.mode != Mode::RayTraced || !traced;
-        let (device, queue) = (&live.ctx.device, &live.ctx.queue);
-        let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
-            format: Some(live.view_format),
-            ..Default::default()
-        });
-        let shot = scoped(device, "drawing the window", || {
-            let mut enc = device.create_command_encoder(&Default::default());
-            if traced {
-                queue.write_texture(
-                    frame.texture.as_image_copy(),
-                    &self.latest_bytes,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(4 * w),
-                        rows_per_image: Some(h),
-                    },
-                    frame.texture.size(),
-                );
-            } else {
-                clear(&mut enc, &target);
-            }
-            if lines {
-                live.wireframe.encode(queue, &mut enc, &target, &globals);
-            }
-            let shot = self
-                .shoot
-                .then(|| TextureReadback::encode(device, &mut enc, &frame.texture));
-            queue.submit([enc.finish()]);
-            shot
-        })?;
-        if let Some(shot) = shot {
-            let img = shot.read(device, live.view_format)?;
+        let screenshot = self.shoot.then(|| {
             let path = self.opts.screenshot.as_ref().expect("shoot needs a path");
-            film::save_rgb8(&img, path)?;
+            path.as_path()
+        });
+        let start = Instant::now();
+        let drawn = live.surface.draw(
+            traced.then_some(self.latest_bytes.as_slice()),
+            lines.then_some(&globals),
+            screenshot,
+        )?;
+        if let Drawn::Later = drawn {
+            live.window.request_redraw();
+            return Ok(());
         }
-        queue.present(frame);
         self.stats
             .frame(start.elapsed(), traced, self.latest.as_ref());
         if live.title != title {
@@ -547,7 +400,7 @@ impl ApplicationHandler<Result<Pass>> for App {
             Ok(pass) if pass.view == self.view => {
                 self.stats.pass(&pass, self.view_start);
                 if let Some(live) = &self.live {
-                    self.latest_bytes = surface_bytes(&pass.image, live.view_format);
+                    self.latest_bytes = live.surface.bytes(&pass.image);
                 }
                 self.latest = Some(pass);
                 self.save_if_ready();
@@ -572,169 +425,16 @@ impl ApplicationHandler<Result<Pass>> for App {
                     event_loop.exit();
                 }
             }
-            WindowEvent::ModifiersChanged(m) => self.pointer.shift = m.state().shift_key(),
-            WindowEvent::MouseInput { state, button, .. } => {
-                let down = state == ElementState::Pressed;
-                match button {
-                    MouseButton::Left => self.pointer.orbiting = down,
-                    MouseButton::Middle | MouseButton::Right => self.pointer.panning = down,
-                    _ => {}
-                }
-            }
-            WindowEvent::CursorMoved { position, .. } => self.pointer_moved(position, event_loop),
-            WindowEvent::CursorLeft { .. } => self.pointer.at = None,
-            WindowEvent::MouseWheel { delta, .. } => {
-                let notches = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y,
-                    // Touchpads report pixels; about 40 make a notch.
-                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
-                };
-                if notches != 0.0 {
-                    self.act(Action::Camera(Input::Wheel(notches)), event_loop);
-                }
-            }
-            WindowEvent::KeyboardInput { event, .. } if event.state == ElementState::Pressed => {
-                let name = match &event.logical_key {
-                    WinitKey::Character(c) => Some(c.as_str()),
-                    WinitKey::Named(NamedKey::Escape) => Some("escape"),
-                    _ => None,
-                };
-                if let Some(action) = name.and_then(key_action) {
+            event => {
+                if let Some(action) = self.pointer.action(&event) {
                     self.act(action, event_loop);
                 }
             }
-            _ => {}
         }
     }
 
     fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
         self.step_script(event_loop);
         event_loop.set_control_flow(ControlFlow::Wait);
-    }
-}
-
-/// Clears the target to black (the background of the wireframe alone).
-fn clear(enc: &mut wgpu::CommandEncoder, target: &wgpu::TextureView) {
-    enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("clear"),
-        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-            view: target,
-            depth_slice: None,
-            resolve_target: None,
-            ops: wgpu::Operations {
-                load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                store: wgpu::StoreOp::Store,
-            },
-        })],
-        depth_stencil_attachment: None,
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
-}
-
-/// An image's pixels in the byte order of a surface format (RGBA or BGRA), opaque.
-fn surface_bytes(img: &RgbImage, format: wgpu::TextureFormat) -> Vec<u8> {
-    let bgra = format == wgpu::TextureFormat::Bgra8Unorm;
-    img.pixels()
-        .flat_map(|p| {
-            let [r, g, b] = p.0;
-            if bgra { [b, g, r, 255] } else { [r, g, b, 255] }
-        })
-        .collect()
-}
-
-/// What `--stats` prints on exit: how soon the first pictures came, how long frames take
-/// to draw, and how fast the last view converged.
-struct Stats {
-    launch: Instant,
-    adapter: String,
-    tracing_on: String,
-    first_frame: Option<Duration>,
-    first_image: Option<(Duration, u32)>,
-    draw_times: Vec<Duration>,
-    first_present: Option<Instant>,
-    last_present: Option<Instant>,
-    /// The newest pass shown and how long its view had been traced by then.
-    last_pass: Option<(u32, u64, Duration, Duration)>,
-}
-
-impl Stats {
-    fn new(launch: Instant) -> Self {
-        Stats {
-            launch,
-            adapter: String::new(),
-            tracing_on: String::new(),
-            first_frame: None,
-            first_image: None,
-            draw_times: Vec::new(),
-            first_present: None,
-            last_present: None,
-            last_pass: None,
-        }
-    }
-
-    fn frame(&mut self, took: Duration, traced: bool, latest: Option<&Pass>) {
-        let now = Instant::now();
-        self.first_frame.get_or_insert(now - self.launch);
-        if traced && let Some(p) = latest {
-            self.first_image
-                .get_or_insert((now - self.launch, p.samples));
-        }
-        self.first_present.get_or_insert(now);
-        self.last_present = Some(now);
-        self.draw_times.push(took);
-    }
-
-    fn pass(&mut self, pass: &Pass, view_start: Instant) {
-        self.last_pass = Some((
-            pass.samples,
-            pass.rays,
-            pass.trace_time,
-            view_start.elapsed(),
-        ));
-    }
-
-    fn print(&self, app: &App) {
-        let c = &app.camera.camera;
-        eprintln!(
-            "viewer      {}x{}, {} mode",
-            c.width,
-            c.height,
-            app.mode.name()
-        );
-        eprintln!("display     {}", self.adapter);
-        eprintln!("tracing     {}", self.tracing_on);
-        if let Some(t) = self.first_frame {
-            eprintln!("first frame {:.3} s after launch", t.as_secs_f64());
-        }
-        if let Some((t, spp)) = self.first_image {
-            eprintln!(
-                "first image {:.3} s after launch ({spp} spp)",
-                t.as_secs_f64()
-            );
-        }
-        let mut times = self.draw_times.clone();
-        times.sort();
-        if let (Some(first), Some(last)) = (self.first_present, self.last_present)
-            && times.len() > 1
-        {
-            let span = (last - first).as_secs_f64().max(1e-9);
-            eprintln!(
-                "frames      {} shown, {:.1} per second; drawing one takes {:.2} ms (median)",
-                times.len(),
-                (times.len() - 1) as f64 / span,
-                times[times.len() / 2].as_secs_f64() * 1e3
-            );
-        }
-        if let Some((spp, rays, trace, wall)) = self.last_pass {
-            eprintln!(
-                "last view   {spp} spp in {:.3} s: {:.2} spp/s, {:.2} Mrays/s ({:.2} tracing alone)",
-                wall.as_secs_f64(),
-                f64::from(spp) / wall.as_secs_f64().max(1e-9),
-                rays as f64 / wall.as_secs_f64().max(1e-9) / 1e6,
-                rays as f64 / trace.as_secs_f64().max(1e-9) / 1e6
-            );
-        }
     }
 }

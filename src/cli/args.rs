@@ -1,0 +1,408 @@
+//! The command line's arguments: the clap definitions of every command and their value
+//! parsers. What each command does is in its own module; this one only says what it
+//! accepts (the flags, their limits and defaults, and the `--help` text).
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use glam::Vec3;
+use gpurt::film;
+use gpurt::frame::{
+    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, Overrides, RenderOptions,
+};
+use gpurt::gpu_types::{self as gt, MAX_DEPTH};
+use gpurt::scene::Camera;
+use gpurt::session::Backend;
+
+#[derive(Parser)]
+#[command(
+    name = "gpurt",
+    version,
+    about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes",
+    args_conflicts_with_subcommands = true
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Print what a scene holds: camera, bounds, primitive counts, lights, materials, warnings.
+    Info {
+        scene: PathBuf,
+        /// One JSON object instead of text.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Compare two images: max/mean difference, PSNR, pixels over 2/255, FLIP mean.
+    /// Exits 1 when they differ beyond the limits (by default the GPU-vs-CPU ones: at most
+    /// 0.5% of pixels over 2/255, FLIP mean 0.01, no bias of 0.5/255), 2 on bad input.
+    Diff(DiffArgs),
+    /// Assemble an image from the shards `gpurt SCENE --shard I/N -o DIR` wrote into DIR,
+    /// after checking that all N are there and belong to one render.
+    Merge {
+        dir: PathBuf,
+        /// The image to write; the format follows the extension.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Open a window on a scene: ray traced progressively, with a wireframe preview that
+    /// shares the ray tracer's camera. Without a display, says so and exits 2.
+    #[command(after_help = gpurt::view::controls::key_help())]
+    View(ViewArgs),
+    /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
+    /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args)]
+pub struct DiffArgs {
+    pub a: PathBuf,
+    pub b: PathBuf,
+    /// Write a heat map (A | B | magnified difference) here.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Largest acceptable FLIP mean (default 0.01).
+    #[arg(long, value_parser = parse_limit)]
+    pub max_flip: Option<f64>,
+    /// Largest acceptable fraction of pixels differing by more than 2/255 (default 0.005).
+    #[arg(long, value_parser = parse_limit)]
+    pub max_bad: Option<f64>,
+}
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scenes to render.
+    #[arg(required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Image sizes, WxH, comma-separated.
+    #[arg(long, default_value = "1920x1080", value_delimiter = ',', value_parser = parse_size)]
+    pub sizes: Vec<(u32, u32)>,
+    /// Samples per pixel, comma-separated.
+    #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: Vec<u32>,
+    /// Maximum ray depth.
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    pub depth: u32,
+    /// Timed GPU frames per pass; the median is reported.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub frames: u32,
+    /// Which backends to time.
+    #[arg(long, default_value = "both", value_parser = backends(&[
+        (Backend::Gpu, None),
+        (Backend::Cpu, None),
+        (Backend::Both, None),
+    ]))]
+    pub backend: Backend,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
+}
+
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// Scene to view (as for rendering).
+    pub scene: PathBuf,
+    /// Window width (default: the scene's resolution).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub width: Option<u32>,
+    /// Window height.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub height: Option<u32>,
+    /// Stop accumulating after this many samples per pixel (default: the most a frame may
+    /// have, MAX_SPP).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: Option<u32>,
+    /// Maximum ray depth, the eye ray counting as 1.
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    pub depth: u32,
+    #[arg(long, value_parser = parse_colour, help = format!(
+        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
+    ))]
+    pub ambient: Option<Vec3>,
+    /// Seed of the sample hash.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
+    #[arg(long, default_value = "auto", value_parser = backends(&[
+        (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
+        (Backend::Gpu, Some("WGSL compute through wgpu, on any adapter")),
+        (Backend::Cpu, Some("The CPU reference renderer")),
+    ]))]
+    pub backend: Backend,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Start from this file's NFF `v` block instead of the scene's camera.
+    #[arg(long, value_name = "FILE")]
+    pub view: Option<PathBuf>,
+    /// Replay the input events in this file (drag, pan, wheel, key, wait; see
+    /// docs/viewer.md).
+    #[arg(long, value_name = "EVENTS")]
+    pub script: Option<PathBuf>,
+    /// After the script (and, with --spp, once the view has its samples), write what the
+    /// window shows to this file and exit.
+    #[arg(long, value_name = "OUT.png", requires = "script")]
+    pub screenshot: Option<PathBuf>,
+    /// On exit, print the time to the first picture, frame times and tracing rates.
+    #[arg(long)]
+    pub stats: bool,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ShardBy {
+    Tiles,
+    Samples,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ImageFormat {
+    Png,
+    Ppm,
+    Bmp,
+    Exr,
+}
+
+impl ImageFormat {
+    pub fn format(self) -> film::Format {
+        match self {
+            ImageFormat::Png => film::Format::Png,
+            ImageFormat::Ppm => film::Format::Ppm,
+            ImageFormat::Bmp => film::Format::Bmp,
+            ImageFormat::Exr => film::Format::Exr,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Aov {
+    Color,
+    Normal,
+    Depth,
+    Cost,
+    /// The wireframe alone (drawn by the GPU), as `gpurt view` shows it.
+    Wireframe,
+}
+
+impl Aov {
+    /// The shader's AOV; the wireframe traces no rays.
+    pub fn code(self) -> Option<u32> {
+        match self {
+            Aov::Color => Some(gt::AOV_COLOR),
+            Aov::Normal => Some(gt::AOV_NORMAL),
+            Aov::Depth => Some(gt::AOV_DEPTH),
+            Aov::Cost => Some(gt::AOV_COST),
+            Aov::Wireframe => None,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Overlay {
+    /// The scene's edges, projected from the ray tracer's camera.
+    Wireframe,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl or .obj, optionally .gz.
+    /// One at a time, or any number with --out-dir.
+    #[arg(value_name = "SCENE")]
+    pub scenes: Vec<PathBuf>,
+    /// Render every scene given into this directory, each image named after its scene,
+    /// on one device; a scene that fails is reported and skipped (exit 2 at the end).
+    #[arg(long, value_name = "DIR", conflicts_with = "output")]
+    pub out_dir: Option<PathBuf>,
+    /// Do this process's share: with --out-dir every N-th scene from the I-th (0-based);
+    /// for one scene the I-th of N bands of rows, written with its manifest into the
+    /// directory -o names, for `gpurt merge`. `/N` takes I from SLURM_ARRAY_TASK_ID or
+    /// JOB_COMPLETION_INDEX (a Slurm job array, a Kubernetes Indexed Job).
+    #[arg(long, value_name = "I/N", value_parser = gpurt::shard::Shard::parse)]
+    pub shard: Option<gpurt::shard::Shard>,
+    /// How one image is split between shards: bands of rows, or runs of samples (each
+    /// shard then stores one image per sample, spp/N of them).
+    #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
+    pub shard_by: ShardBy,
+    /// Image format of the images --out-dir writes.
+    #[arg(long, value_enum, default_value_t = ImageFormat::Png, requires = "out_dir")]
+    pub format: ImageFormat,
+    /// Output image; the format follows the extension (png, ppm, bmp, exr).
+    /// Default: the scene's name with .png, in the current directory.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Image width (overrides the scene's resolution; the vertical angle stays).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub width: Option<u32>,
+    /// Image height.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
+    pub height: Option<u32>,
+    /// Maximum ray depth, the eye ray counting as 1.
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    pub depth: u32,
+    /// Samples per pixel (stratified and jittered).
+    #[arg(long, default_value_t = DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: u32,
+    #[arg(long, value_parser = parse_colour, help = format!(
+        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
+    ))]
+    pub ambient: Option<Vec3>,
+    /// Seed of the sample hash.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Which renderer traces the rays.
+    #[arg(long, default_value = "auto", value_parser = backends(&[
+        (Backend::Auto, Some(
+            "The GPU when there is a hardware adapter, else the CPU (faster than a software \
+             rasteriser such as lavapipe on the same cores); `-v` says which and why"
+        )),
+        (Backend::Gpu, Some(
+            "WGSL compute through wgpu, on any adapter, software ones included; falls back to \
+             the CPU when no adapter exists"
+        )),
+        (Backend::Cpu, Some("The CPU reference renderer")),
+        (Backend::Both, Some(
+            "Both, reporting how much their images differ; the GPU image is written if they \
+             agree, otherwise nothing is and the exit code is 1"
+        )),
+    ]))]
+    pub backend: Backend,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Say which adapter renders.
+    #[arg(short, long)]
+    pub verbose: bool,
+    /// Debug output instead of shaded colour.
+    #[arg(long, value_enum, default_value_t = Aov::Color)]
+    pub aov: Aov,
+    /// Draw this over the image (on the GPU; lavapipe will do).
+    #[arg(long, value_enum)]
+    pub overlay: Option<Overlay>,
+    /// Take the camera from this file's NFF `v` block (as `gpurt view` prints it with C)
+    /// instead of the scene's.
+    #[arg(long, value_name = "FILE")]
+    pub view: Option<PathBuf>,
+    /// Print timings, rays traced, Mrays/s and peak memory.
+    #[arg(long)]
+    pub stats: bool,
+}
+
+impl RenderArgs {
+    /// What the flags set over a scene's camera and the defaults.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            width: self.width,
+            height: self.height,
+            spp: Some(self.spp),
+            max_depth: Some(self.depth),
+            ambient: self.ambient,
+            aov: Some(self.aov.code().unwrap_or(gt::AOV_COLOR)),
+            seed: Some(self.seed),
+        }
+    }
+
+    /// The frame the flags ask for, seen from `camera` (its resolution unless
+    /// --width/--height).
+    pub fn options(&self, camera: &Camera) -> RenderOptions {
+        RenderOptions::for_camera(camera).with_overrides(&self.overrides())
+    }
+}
+
+fn parse_colour(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [g] if g.is_finite() && g >= 0.0 => Ok(Vec3::splat(g)),
+        [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
+        _ => Err("expected one non-negative number or three separated by commas".into()),
+    }
+}
+
+/// A threshold: a finite number, not negative (NaN would make every comparison pass).
+fn parse_limit(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("'{s}': expected a finite number, 0 or more")),
+    }
+}
+
+/// `--backend`'s parser for a command: the backends it accepts, in order, each with the
+/// line `--help` shows for it.
+fn backends(
+    accepted: &[(Backend, Option<&'static str>)],
+) -> impl clap::builder::TypedValueParser<Value = Backend> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    let values = accepted.iter().map(|&(backend, help)| {
+        let value = PossibleValue::new(backend.name());
+        match help {
+            Some(help) => value.help(help),
+            None => value,
+        }
+    });
+    PossibleValuesParser::new(values)
+        .map(|name| Backend::from_name(&name).expect("a backend's name"))
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once('x')
+        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT"))?;
+    let dim = |d: &str| match d.trim().parse::<u32>() {
+        Ok(v) if (1..=MAX_IMAGE_SIDE).contains(&v) => Ok(v),
+        _ => Err(format!("'{s}': each side must be 1 to {MAX_IMAGE_SIDE}")),
+    };
+    Ok((dim(w)?, dim(h)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    use super::*;
+
+    #[test]
+    fn the_arguments_are_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    /// Each command takes the backends it can use, and no other.
+    #[test]
+    fn each_command_accepts_its_own_backends() {
+        let backend = |args: &[&str]| -> Result<Backend, clap::Error> {
+            let cli = Cli::try_parse_from(args)?;
+            Ok(match cli.command {
+                Some(Command::View(v)) => v.backend,
+                Some(Command::Bench(b)) => b.backend,
+                _ => cli.render.backend,
+            })
+        };
+        for (args, accepted) in [
+            (&["gpurt", "s.nff"][..], &["auto", "gpu", "cpu", "both"][..]),
+            (&["gpurt", "view", "s.nff"], &["auto", "gpu", "cpu"]),
+            (&["gpurt", "bench", "s.nff"], &["gpu", "cpu", "both"]),
+        ] {
+            for b in Backend::ALL {
+                let mut with = args.to_vec();
+                with.extend(["--backend", b.name()]);
+                match backend(&with) {
+                    Ok(got) => {
+                        assert!(accepted.contains(&b.name()), "{with:?}");
+                        assert_eq!(got, b);
+                    }
+                    Err(e) => assert!(!accepted.contains(&b.name()), "{with:?}: {e}"),
+                }
+            }
+        }
+        assert_eq!(backend(&["gpurt", "s.nff"]).unwrap(), Backend::Auto);
+        assert_eq!(backend(&["gpurt", "view", "s.nff"]).unwrap(), Backend::Auto);
+        assert_eq!(
+            backend(&["gpurt", "bench", "s.nff"]).unwrap(),
+            Backend::Both
+        );
+    }
+}

@@ -1,0 +1,52 @@
+//! The `gpurt` command line, one module per group of commands: `args` (what every
+//! command accepts), `render` (one scene), `farm` (many scenes, shards of one image, and
+//! their merge), `tools` (info, diff, view, bench). Each calls the library and prints;
+//! what they share (signals, the note about the backend, the readers' warnings) is here.
+
+pub mod args;
+pub mod farm;
+pub mod render;
+pub mod tools;
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use gpurt::session::Found;
+
+/// Mesa's Vulkan device-select layer connects to a Wayland display to choose a default
+/// GPU, and on a headless machine prints "error: XDG_RUNTIME_DIR is invalid or not set"
+/// twice although nothing failed. gpurt chooses its adapter itself (`gpu::open`), so the
+/// layer is turned off unless the user set `NODEVICE_SELECT` either way.
+pub fn quiet_device_select() {
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        // SAFETY: called first thing in `main`, before any other thread exists.
+        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
+/// A flag that Ctrl-C (SIGINT), SIGTERM or SIGHUP sets: the render stops and nothing is
+/// written. One that comes during a save lets the save finish (it is atomic), so no
+/// temporary file is ever left behind.
+pub fn cancel_on_signals() -> Arc<AtomicBool> {
+    let cancel = Arc::new(AtomicBool::new(false));
+    let flag = cancel.clone();
+    let _ = ctrlc::set_handler(move || flag.store(true, Ordering::Relaxed));
+    cancel
+}
+
+/// Prints the line about the choice of backend: always when it is a warning, else when
+/// `verbose`.
+pub fn print_note(found: &Found, verbose: bool) {
+    if let Some(note) = &found.note
+        && (note.warning || verbose)
+    {
+        eprintln!("{}", note.text);
+    }
+}
+
+/// Prints the readers' warnings about a scene.
+pub fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("gpurt: warning: {w}");
+    }
+}

@@ -1,0 +1,113 @@
+//! The commands around rendering: `gpurt info` (what a scene holds), `gpurt diff` (two
+//! images compared under the GPU-vs-CPU limits), `gpurt view` (the window) and `gpurt
+//! bench` (frame times and ray rates).
+
+use std::path::Path;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use gpurt::bench::{self, BenchConfig};
+use gpurt::compare::{self, Thresholds};
+use gpurt::run::{self, Prepared};
+use gpurt::view::window::{self, ViewOptions};
+use gpurt::{atomic, film, out, outln};
+
+use super::args::{BenchArgs, DiffArgs, ViewArgs};
+use super::print_warnings;
+
+/// `gpurt info SCENE [--json]`.
+pub fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
+    let s = gpurt::scene::load(path)?;
+    if json {
+        outln!("{}", gpurt::info::to_json(&s));
+    } else {
+        out!("{}", gpurt::info::to_text(&s));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `gpurt diff A B`: exits 1 when the images differ beyond the limits.
+pub fn diff(args: DiffArgs) -> gpurt::Result<ExitCode> {
+    let ia = film::load_rgb8(&args.a)?;
+    let ib = film::load_rgb8(&args.b)?;
+    let stats = compare::diff(&ia, &ib, Thresholds::GPU_VS_CPU.tolerance_255)?;
+    outln!("{stats}");
+    if let Some(out) = &args.output {
+        film::save_rgb8(&compare::heat_map(&ia, &ib)?, out)?;
+        outln!("heat map written to {}", out.display());
+    }
+    // The project's GPU-vs-CPU limits unless loosened or tightened by the flags: a diff in
+    // CI must fail on visibly different images without being told how.
+    let limits = Thresholds {
+        max_flip_mean: args
+            .max_flip
+            .unwrap_or(Thresholds::GPU_VS_CPU.max_flip_mean),
+        max_frac_over: args.max_bad.unwrap_or(Thresholds::GPU_VS_CPU.max_frac_over),
+        ..Thresholds::GPU_VS_CPU
+    };
+    Ok(match limits.check(&stats) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(why) => {
+            outln!("{why}");
+            ExitCode::from(1)
+        }
+    })
+}
+
+/// `gpurt view SCENE`: runs until the window is closed (or the script's screenshot is
+/// written).
+pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
+    if let Some(shot) = &args.screenshot {
+        film::Format::from_path(shot)?;
+        atomic::check_writable(shot)?;
+    }
+    let script = args
+        .script
+        .as_deref()
+        .map(gpurt::view::script::load)
+        .transpose()?;
+    let Prepared {
+        buffers, warnings, ..
+    } = run::prepare(&args.scene, args.view.as_deref(), |camera| {
+        // Quick to the first image: the build that suits one frame at the window's size.
+        let (w, h) = (
+            args.width.unwrap_or(camera.width),
+            args.height.unwrap_or(camera.height),
+        );
+        u64::from(w) * u64::from(h)
+    })?;
+    print_warnings(&warnings);
+    window::run(
+        buffers,
+        ViewOptions {
+            name: args.scene.display().to_string(),
+            width: args.width,
+            height: args.height,
+            spp: args.spp,
+            depth: args.depth,
+            ambient: args.ambient,
+            seed: args.seed,
+            backend: args.backend,
+            adapter: args.adapter,
+            script,
+            screenshot: args.screenshot,
+            stats: args.stats,
+            launch,
+        },
+    )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `gpurt bench SCENE...`.
+pub fn bench(args: BenchArgs) -> gpurt::Result<ExitCode> {
+    bench::run(&BenchConfig {
+        scenes: args.scenes,
+        sizes: args.sizes,
+        spps: args.spp,
+        depth: args.depth,
+        frames: args.frames,
+        backend: args.backend,
+        adapter: args.adapter,
+    })?;
+    Ok(ExitCode::SUCCESS)
+}
