@@ -9,6 +9,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
+use crate::limits::MAX_DEPTH;
+
 /// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
 pub const PRIM_TRIANGLE: u32 = 1;
@@ -283,9 +285,8 @@ pub const TRAVERSAL_STACK: usize = 64;
 /// row alignment of texture uploads.
 pub const TEXTURE_WIDTH: u32 = 4096;
 
-/// The deepest ray (the eye ray counting as 1), and the pending-ray stack it bounds (see
-/// the stack sizes above).
-pub const MAX_DEPTH: u32 = 16;
+/// The pending-ray stack, as long as the deepest ray (`limits::MAX_DEPTH`, the eye ray
+/// counting as 1) needs (see the stack sizes above).
 pub const RAY_STACK: usize = MAX_DEPTH as usize;
 
 const _: () = {

@@ -11,10 +11,11 @@ use std::time::{Duration, Instant};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::compare::{self, Thresholds};
-use gpurt::frame::{
-    self, DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, RenderOptions,
+use gpurt::frame::{self, RenderOptions};
+use gpurt::gpu_types as gt;
+use gpurt::limits::{
+    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP,
 };
-use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::run::{self, Prepared};
 use gpurt::session::{CpuRenderer, GpuSession, Renderer};
 use gpurt::view::wireframe::{self, Wireframe};

@@ -8,8 +8,8 @@ use glam::Vec3;
 use crate::bvh::{self, FlatBvh};
 use crate::cpu::wide::{self, WideNode};
 use crate::error::{Error, Result};
-use crate::frame::RenderOptions;
 use crate::gpu_types::*;
+use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
 use crate::scene::{self, Bounded, Bounds, Camera, Light, Scene};
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
@@ -57,9 +57,11 @@ fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
-/// Flattens a scene for one frame of the default options (`RenderOptions::for_camera`).
+/// Flattens a scene for one frame of the camera's own resolution at `DEFAULT_SPP` samples
+/// per pixel (the default options, `RenderOptions::for_camera`).
 pub fn pack(scene: Scene) -> Result<SceneBuffers> {
-    let samples = RenderOptions::for_camera(&scene.camera).samples();
+    let c = &scene.camera;
+    let samples = u64::from(c.width) * u64::from(c.height) * u64::from(DEFAULT_SPP);
     pack_for(scene, samples)
 }
 

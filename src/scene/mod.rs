@@ -17,6 +17,7 @@ use glam::Vec3;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::limits::{HELD_BYTES, MAX_FILE_BYTES};
 
 /// Index into `Scene::materials`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -365,9 +366,6 @@ impl FileKind {
     }
 }
 
-/// Upper bound on a decompressed file: guards against gzip bombs.
-pub const MAX_FILE_BYTES: u64 = 4 << 30;
-
 /// Reads a file whole, decompressing it when it starts with the gzip magic bytes.
 pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     use std::io::Read;
@@ -397,13 +395,6 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     }
     decompress(raw, path, MAX_FILE_BYTES)
 }
-
-/// Decompressed bytes `decompress` holds before it knows the whole size: past this, it
-/// counts the rest without keeping it, and decompresses again into a buffer of the exact
-/// size only if the whole is within the limit. A gzip bomb then costs at most this (and
-/// the doubling of a growing buffer) on its way to being refused, instead of the limit;
-/// files up to this size (every shared scene) are decompressed once.
-pub const HELD_BYTES: u64 = 64 << 20;
 
 /// `raw` as `read_file` returns it for a file at `path`: decompressed when it starts with
 /// the gzip magic bytes (every member, as gzip does), unchanged otherwise. A file that

@@ -12,15 +12,7 @@ use super::mesh::{self, MeshTransform};
 use super::triangulate::triangulate;
 use super::{BoxPrim, Cone, FileKind, Light, Material, MaterialId, Plane, Scene, Sphere, Triangle};
 use crate::error::{Error, Result};
-use crate::frame::MAX_IMAGE_SIDE;
-
-/// Largest light, ambient and background colour component; larger ones are held to it with
-/// a warning. Material colours, Kd, Ks and T are held to [0, 1]. Within these ranges every
-/// pixel stays finite: shading.md sums a bounded number of bounded terms.
-pub const MAX_LIGHT: f32 = 1e6;
-/// Largest Phong exponent; a negative one (which would make highlights infinite) is held
-/// to 0, a larger one to this.
-pub const MAX_SHINE: f32 = 1e6;
+use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_IMAGE_SIDE, MAX_LIGHT, MAX_SHINE};
 
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
@@ -477,10 +469,12 @@ impl Parser<'_> {
         let (nu, nut) = self.lx.count("area light samples along u")?;
         let (nv, nvt) = self.lx.count("area light samples along v")?;
         for (n, t) in [(nu, nut), (nv, nvt)] {
-            if n == 0 || n > 64 {
+            if n == 0 || n > MAX_AREA_LIGHT_SAMPLES {
                 return Err(self.lx.error_at(
                     &t,
-                    format!("expected area light samples between 1 and 64, found {n}"),
+                    format!(
+                        "expected area light samples between 1 and {MAX_AREA_LIGHT_SAMPLES}, found {n}"
+                    ),
                 ));
             }
         }

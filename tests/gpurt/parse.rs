@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3, Vec3};
 use gpurt::Error;
+use gpurt::limits;
 use gpurt::scene::{
     self, BoxPrim, Light, Material, MaterialId, Plane, Scene, Triangle, nff, obj, stl,
     triangulate::triangulate,
@@ -1579,7 +1580,7 @@ fn decompress_is_what_read_file_does_and_honours_its_limit() {
     let read = scene::read_file(&path).unwrap();
     assert_eq!(read, [src.as_bytes(), b"# second member\n"].concat());
     assert_eq!(
-        scene::decompress(gz.clone(), &path, scene::MAX_FILE_BYTES).unwrap(),
+        scene::decompress(gz.clone(), &path, limits::MAX_FILE_BYTES).unwrap(),
         read
     );
     let plain = src.clone().into_bytes();
@@ -1599,9 +1600,9 @@ fn decompress_is_what_read_file_does_and_honours_its_limit() {
     assert!(scene::decompress(bomb, &path, 64 << 10).is_err());
     // Past HELD_BYTES the size is counted first, then the whole decompressed again:
     // the same bytes, to the last one, and still refused one byte past the limit.
-    let held = scene::HELD_BYTES as usize;
+    let held = limits::HELD_BYTES as usize;
     let big = [gzip(&vec![0; held]), gzip(b"# tail\n")].concat();
-    let out = scene::decompress(big.clone(), &path, scene::MAX_FILE_BYTES).unwrap();
+    let out = scene::decompress(big.clone(), &path, limits::MAX_FILE_BYTES).unwrap();
     assert_eq!(out.len(), held + 7);
     assert!(out.ends_with(b"\0# tail\n") && out[..held].iter().all(|&b| b == 0));
     let e = scene::decompress(big, &path, held as u64 + 6).unwrap_err();
