@@ -177,7 +177,7 @@ fn peak_memory_stays_within_its_documented_bound() {
     let dir = crate::common::workdir("peak-memory");
     for name in ["balls-6.nff.gz", "mount-9.nff.gz"] {
         let path = root.join("spd").join(name);
-        let bytes = scene::read_file(&path).expect("reads").len() as f64;
+        let bytes = scene::io::read_file(&path).expect("reads").len() as f64;
         let (w, h) = (320, 240);
         let out = crate::common::gpurt(
             &[
