@@ -168,7 +168,7 @@ fn nearer_first(a: ptr<function, vec2<u32>>, b: ptr<function, vec2<u32>>) {
 // its box is not on hand to test again, so a popped leaf may be tested past the nearest
 // hit. The pushes are branch-free: each writes the top slot and keeps it only when its
 // lane was reached, so a node writes up to two slots past those it keeps
-// (`wide::gpu_nodes` checks that the stack holds them). `cost` counts the boxes tested.
+// (`bvh::wide::gpu_nodes` checks that the stack holds them). `cost` counts the boxes tested.
 fn next_leaf_wide(
     walk: ptr<function, Walk>,
     ray: Ray,

@@ -88,7 +88,7 @@ impl GpuNode {
     }
 }
 
-/// A node of the four-wide BVH the `TRAVERSAL_WIDE` walk reads (`cpu::wide` collapses the
+/// A node of the four-wide BVH the `TRAVERSAL_WIDE` walk reads (`bvh::wide` collapses the
 /// binary tree into it), 112 bytes, seven texels: the four children's boxes by axis
 /// (`lo[axis]` holds that coordinate of the four boxes), and where each child leads,
 /// as a traversal-stack entry: a wide node's index, `WIDE_LEAF | first << 2 | (count - 1)`

@@ -5,8 +5,8 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
+use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
-use crate::cpu::wide::{self, WideNode};
 use crate::error::{Error, Result};
 use crate::gpu_types::*;
 use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
@@ -205,7 +205,7 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
-    /// `nodes` collapsed eight wide (`cpu::wide`), built the first time it is asked for:
+    /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first time it is asked for:
     /// `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::wide::WideNode;
+use crate::bvh::wide::WideNode;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
 
@@ -24,8 +24,8 @@ pub struct Bindings<'a> {
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
-    /// The eight-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
-    /// walks `nodes` as the shader does (`GpuGlobals::traversal`).
+    /// The eight-wide tree (`bvh::wide`) the CPU walks (`wide.rs`) instead of `nodes` when
+    /// given; `None` walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
     /// is `TRAVERSAL_WIDE` and `wide` is `None`.

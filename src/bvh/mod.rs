@@ -1,4 +1,5 @@
-//! BVH construction and flattening.
+//! BVH construction and flattening: the binary tree here, collapsed into the wide trees
+//! the walks that test several boxes at once read in `wide`.
 //!
 //! `obvhs` builds a binary BVH (PLOC, then reinsertion and SAH leaf collapsing) over the
 //! bounds of every bounded primitive; this module flattens it into the depth-first
@@ -10,6 +11,8 @@
 //! builds each group, which bounds the builder's memory. The traversal stack has a fixed
 //! size (`TRAVERSAL_STACK`); a tree deeper than that is rebuilt with a median split, whose
 //! depth is at most log2(n) + 1 and so always fits.
+
+pub mod wide;
 
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
