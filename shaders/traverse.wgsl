@@ -181,7 +181,7 @@ fn next_leaf_wide(
     loop {
         let e = (*walk).node;
         if ((e & WIDE_LEAF) != 0u) {
-            return vec2<u32>((e & ~WIDE_LEAF) >> 2u, (e & 3u) + 1u);
+            return vec2<u32>((e & ~WIDE_LEAF) >> WIDE_FIRST_SHIFT, (e & WIDE_COUNT_MASK) + 1u);
         }
         let n = load_wide_node(e);
         *cost += 4u;

@@ -205,8 +205,8 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
-    /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first time it is asked for:
-    /// `nodes` must not change after that.
+    /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first
+    /// time it is asked for: `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))
     }

@@ -17,7 +17,7 @@ pub mod wide;
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
 
-use crate::gpu_types::{GpuNode, TRAVERSAL_STACK};
+use crate::gpu_types::{GpuNode, NODE_AXIS_SHIFT, TRAVERSAL_STACK};
 use crate::scene::Bounds;
 
 /// Most primitives a leaf may hold.
@@ -224,7 +224,7 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
             if swap {
                 std::mem::swap(&mut c0, &mut c1);
             }
-            node.count_axis = axis << 16;
+            node.count_axis = axis << NODE_AXIS_SHIFT;
             out.nodes.push(node);
             stack.push((c1, Some(here), depth + 1));
             stack.push((c0, None, depth + 1));
@@ -283,7 +283,7 @@ fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
         out.order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
             centre(a)[axis].total_cmp(&centre(b)[axis])
         });
-        node.count_axis = (axis as u32) << 16;
+        node.count_axis = (axis as u32) << NODE_AXIS_SHIFT;
         out.nodes.push(node);
         stack.push((mid, hi, Some(here), depth + 1));
         stack.push((lo, mid, None, depth + 1));

@@ -13,7 +13,9 @@
 
 use glam::Vec4;
 
-use crate::gpu_types::{GpuNode, GpuWideNode, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF};
+use crate::gpu_types::{
+    GpuNode, GpuWideNode, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
+};
 
 /// Children of a wide node.
 pub const WIDTH: usize = 8;
@@ -157,7 +159,7 @@ pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
             node.entry[lane] = match c.count() {
                 0 => wide,
                 count @ 1..=4 if c.offset < (1 << 29) - 1 => {
-                    WIDE_LEAF | c.offset << 2 | (count - 1)
+                    WIDE_LEAF | c.offset << WIDE_FIRST_SHIFT | (count - 1)
                 }
                 _ => return None,
             };
@@ -187,6 +189,7 @@ pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
 mod tests {
     use super::*;
     use crate::bvh::{self, Quality};
+    use crate::gpu_types::WIDE_COUNT_MASK;
     use glam::Vec3;
     use obvhs::aabb::Aabb;
 
@@ -238,7 +241,10 @@ mod tests {
                         let child = if e == WIDE_EMPTY {
                             Child::Empty
                         } else if e & WIDE_LEAF != 0 {
-                            Child::Leaf((e & !WIDE_LEAF) >> 2, (e & 3) + 1)
+                            Child::Leaf(
+                                (e & !WIDE_LEAF) >> WIDE_FIRST_SHIFT,
+                                (e & WIDE_COUNT_MASK) + 1,
+                            )
                         } else {
                             Child::Inner(e as usize)
                         };

@@ -7,13 +7,6 @@ use crate::bvh::wide::WideNode;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
 
-/// "No hit" distance: the largest f32, since WGSL has no infinity literal.
-pub const NO_HIT: f32 = f32::MAX;
-/// Set in `Hit::prim` when the hit is a plane (index into `planes`).
-pub const PLANE_FLAG: u32 = 0x8000_0000;
-/// `Hit::prim` when nothing was hit.
-pub const NO_PRIM: u32 = 0xffff_ffff;
-
 /// The read-only bindings, as the shader sees them.
 #[derive(Clone, Copy)]
 pub struct Bindings<'a> {

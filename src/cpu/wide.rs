@@ -13,9 +13,8 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec4};
 
-use super::intersect::SLAB_WIDEN;
 use crate::bvh::wide::{EMPTY, Lanes, WIDTH, WideNode};
-use crate::gpu_types::TRAVERSAL_STACK;
+use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
 
 /// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
 /// ray enters its box.
