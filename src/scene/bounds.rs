@@ -1,7 +1,7 @@
 //! Axis-aligned bounds, each bounded primitive's `bounds()`, and the scene's bounded
 //! primitives in the one order the BVH, the packed buffers and the tests share. Planes are
-//! infinite and have none. Apart from the model because only the tree and the packing
-//! (and the automatic camera of a bare mesh) need them.
+//! infinite and have none. Apart from the model because they are geometry worked out from
+//! it, not data a reader fills in.
 
 use glam::Vec3;
 

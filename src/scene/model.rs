@@ -1,7 +1,8 @@
 //! The scene's data model: plain data that the readers produce and `pack` consumes (the
 //! scene, its camera, lights, materials and primitives, and a mesh file's triangles). Kept
-//! apart from the readers so that every reader, and everything below them, shares one
-//! definition and none of them depends on another.
+//! apart from the readers so that every reader, and everything that reads a scene, shares
+//! one definition without depending on a reader (`Mesh` in `mesh.rs` once made `mesh` and
+//! `obj` import each other).
 //!
 //! Primitives carry a `MaterialId` that indexes `Scene::materials` directly, so the same
 //! index is used on the GPU.
