@@ -377,8 +377,22 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::{RenderOptions, globals};
+    use crate::limits::DEFAULT_DEPTH;
     use crate::scene::nff;
+
+    /// The render constants `check` compares with the buffers, as `frame::globals` sets
+    /// them for the default options.
+    fn globals(b: &SceneBuffers) -> GpuGlobals {
+        GpuGlobals {
+            max_depth: DEFAULT_DEPTH,
+            spp: DEFAULT_SPP,
+            n_nodes: b.nodes.len() as u32,
+            n_planes: b.planes.len() as u32,
+            n_lights: b.lights.len() as u32,
+            traversal: TRAVERSAL_SINGLE,
+            ..GpuGlobals::default()
+        }
+    }
 
     fn balls() -> Scene {
         let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 8 8
@@ -392,9 +406,8 @@ mod tests {
 
     #[test]
     fn packed_scene_passes_its_checks_and_corruption_is_caught() {
-        let scene = balls();
-        let b = pack(scene.clone()).unwrap();
-        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
+        let b = pack(balls()).unwrap();
+        let g = globals(&b);
         b.check(&g).unwrap();
         let inner = b.nodes.iter().position(|n| n.count() == 0).unwrap();
 
