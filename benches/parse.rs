@@ -28,7 +28,7 @@ fn parse(c: &mut Criterion) {
             eprintln!("skipping {name}: {} not found", path.display());
             continue;
         }
-        let bytes = scene::read_file(&path).expect("shared scene reads");
+        let bytes = scene::io::read_file(&path).expect("shared scene reads");
         g.throughput(Throughput::Bytes(bytes.len() as u64));
         g.bench_function(BenchmarkId::new("nff::parse", name), |b| {
             b.iter(|| scene::nff::parse(black_box(&bytes), name, &dir).expect("scene parses"))

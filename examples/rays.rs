@@ -25,7 +25,7 @@ use glam::Vec3;
 use gpurt::cpu::main::camera_ray;
 use gpurt::cpu::shade::offset_origin;
 use gpurt::cpu::traverse::{closest_hit, transmission};
-use gpurt::cpu::types::{Bindings, NO_HIT, NO_PRIM, Ray};
+use gpurt::cpu::types::{Bindings, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
 use rayon::prelude::*;

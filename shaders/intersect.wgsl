@@ -108,9 +108,8 @@ fn slabs(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>) ->
     return vec2<f32>(near, far);
 }
 
-// Relative widening of the far end, 2^-16 (see SLAB_WIDEN in the CPU twin): rays grazing a
-// box face, and boxes whose near face lies exactly at a hit, overlap on both renderers.
-const SLAB_WIDEN: f32 = 1.0000152587890625;
+// The far end is widened by SLAB_WIDEN, 2^-16 (src/gpu_types.rs): rays grazing a box
+// face, and boxes whose near face lies exactly at a hit, overlap on both renderers.
 
 // Where the ray enters and leaves the box, clamped to [tmin, tmax]: (near, far).
 fn slab(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> vec2<f32> {
@@ -173,7 +172,7 @@ fn sign_of(c: f32) -> f32 {
 // v normalised, or zero where that is undefined: no length, or one whose square overflows.
 fn unit_or_zero(v: vec3<f32>) -> vec3<f32> {
     let l2 = dot(v, v);
-    return select(vec3<f32>(0.0), normalize(v), l2 > 0.0 && l2 <= 3.40282347e38);
+    return select(vec3<f32>(0.0), normalize(v), l2 > 0.0 && l2 <= F32_MAX);
 }
 
 // Zero where the normal is undefined (a hit point rounded onto a sphere's centre or a

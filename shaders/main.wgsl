@@ -123,8 +123,8 @@ fn resume(
         return;
     }
     let g = globals;
-    let px = resume_pixels[i] & 0xffffu;
-    let py = resume_pixels[i] >> 16u;
+    let px = resume_pixels[i] & RESUME_X_MASK;
+    let py = resume_pixels[i] >> RESUME_Y_SHIFT;
     var st: PixelState;
     if (tile.sample_start == 0u) {
         st.sum = vec3<f32>(0.0);

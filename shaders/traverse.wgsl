@@ -168,7 +168,7 @@ fn nearer_first(a: ptr<function, vec2<u32>>, b: ptr<function, vec2<u32>>) {
 // its box is not on hand to test again, so a popped leaf may be tested past the nearest
 // hit. The pushes are branch-free: each writes the top slot and keeps it only when its
 // lane was reached, so a node writes up to two slots past those it keeps
-// (`wide::gpu_nodes` checks that the stack holds them). `cost` counts the boxes tested.
+// (`bvh::wide::gpu_nodes` checks that the stack holds them). `cost` counts the boxes tested.
 fn next_leaf_wide(
     walk: ptr<function, Walk>,
     ray: Ray,
@@ -181,7 +181,7 @@ fn next_leaf_wide(
     loop {
         let e = (*walk).node;
         if ((e & WIDE_LEAF) != 0u) {
-            return vec2<u32>((e & ~WIDE_LEAF) >> 2u, (e & 3u) + 1u);
+            return vec2<u32>((e & ~WIDE_LEAF) >> WIDE_FIRST_SHIFT, (e & WIDE_COUNT_MASK) + 1u);
         }
         let n = load_wide_node(e);
         *cost += 4u;

@@ -1,6 +1,11 @@
 // types.wgsl: the structs shared with Rust (mirrors src/gpu_types.rs; keep in sync, the
 // layout test compares both through naga's reflection), the bindings, and the counter-based
 // hash both renderers draw samples from (CPU twin: src/cpu/types.rs).
+//
+// The constants shared with Rust (PRIM_*, LIGHT_*, AOV_*, PHASE_*, NO_HIT, PLANE_FLAG,
+// NO_PRIM, WIDE_LEAF, TRAVERSAL_STACK, RAY_STACK, ...) are not written here: each is
+// defined once in src/gpu_types.rs and declared in the generated header before this file
+// (src/gpu/shaders.rs).
 
 struct Prim {
     p0: vec3<f32>,
@@ -108,8 +113,6 @@ struct PixelOut {
     rays: u32,
 }
 
-const PIXEL_CUT_SHORT: u32 = 0x80000000u;
-
 // Set when a loop ends without reaching its own exit: the driver stopped it (lavapipe
 // ends every loop once an invocation has run 65535 loop iterations in all). Each loop
 // checks after itself; the pixel is then reported, never written darker in silence.
@@ -120,7 +123,6 @@ var<private> cut_short: bool;
 // RESUME_BUDGET. Lavapipe's limit counts the iterations of all eight invocations of a
 // SIMD batch together, so eight budgets plus one traversal must stay under 65535.
 var<private> work: u32;
-const RESUME_BUDGET: u32 = 2048u;
 
 // A pixel whose work continues across dispatches (`resume` in main.wgsl): its samples so
 // far, the sample under way with its pending rays, and the hit whose lights are being
@@ -146,52 +148,14 @@ struct PixelState {
     stack: array<Pending, RAY_STACK>,
 }
 
-const PHASE_SAMPLE: u32 = 0u;
-const PHASE_RAY: u32 = 1u;
-const PHASE_LIGHT: u32 = 2u;
-const PHASE_DONE: u32 = 3u;
-
-// The pixels to resume (x | y << 16), their states, and how many are still unfinished
+// The pixels to resume (x | y << RESUME_Y_SHIFT), their states, and how many are still unfinished
 // after this dispatch. Bound only for `resume`.
 @group(1) @binding(0) var<storage, read> resume_pixels: array<u32>;
 @group(1) @binding(1) var<storage, read_write> resume_state: array<PixelState>;
 @group(1) @binding(2) var<storage, read_write> resume_pending: atomic<u32>;
 
-const PRIM_SPHERE: u32 = 0u;
-const PRIM_TRIANGLE: u32 = 1u;
-const PRIM_CONE: u32 = 2u;
-const PRIM_BOX: u32 = 3u;
-const PRIM_KIND_SHIFT: u32 = 28u;
-const PRIM_MATERIAL_MASK: u32 = 0x0fffffffu;
-
-const LIGHT_POINT: u32 = 0u;
-const LIGHT_DIRECTIONAL: u32 = 1u;
-const LIGHT_AREA: u32 = 2u;
-
-const AOV_COLOR: u32 = 0u;
-const AOV_NORMAL: u32 = 1u;
-const AOV_DEPTH: u32 = 2u;
-const AOV_COST: u32 = 3u;
-
-const TRAVERSAL_STACK: u32 = 64u;
-// GpuWideNode::entry: a leaf's flag, and a lane without a child.
-const WIDE_LEAF: u32 = 0x80000000u;
-const WIDE_EMPTY: u32 = 0xffffffffu;
-// Texels a row of node_texels and prim_texels (src/gpu_types.rs: TEXTURE_WIDTH).
-const TEXTURE_WIDTH: u32 = 4096u;
-// A workgroup of main.wgsl covers WORKGROUP_SIDE x WORKGROUP_SIDE pixels with
-// WORKGROUP_INVOCATIONS invocations (src/gpu_types.rs).
-const WORKGROUP_SIDE: u32 = 8u;
-const WORKGROUP_INVOCATIONS: u32 = 64u;
-const RAY_STACK: u32 = 16u;
-
-// "No hit": the largest f32 (WGSL has no infinity literal; the CPU uses the same value).
-const NO_HIT: f32 = 3.40282347e+38;
-const PLANE_FLAG: u32 = 0x80000000u;
-const NO_PRIM: u32 = 0xffffffffu;
-
 // Specialisation: the host compiles one pipeline per combination the scene needs
-// (src/gpu/render.rs, `Specialization`). Each flag only removes code the scene cannot
+// (src/gpu/specialization.rs, `Specialization`). Each flag only removes code the scene cannot
 // reach, and the CPU twin keeps every branch. It matters on lavapipe, which executes both
 // sides of every `if` under a lane mask: a sphere test used to pay for the triangle, cone
 // and box tests beside it.
@@ -212,14 +176,14 @@ override LENS: bool = true;
 // More than one sample per pixel.
 override MULTISAMPLE: bool = true;
 // globals.aov, as a constant.
-override AOV: u32 = 0u;
+override AOV: u32 = AOV_COLOR;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
 // globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.
 override WIDE: bool = false;
 // Entries of each invocation's slice of traversal_stack: what the scene's walk needs, at
 // most TRAVERSAL_STACK (src/gpu/specialization.rs).
-override STACK: u32 = 64u;
+override STACK: u32 = TRAVERSAL_STACK;
 // log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
 override LAYER_SHIFT: u32 = 25u;
 
@@ -329,11 +293,11 @@ fn load_prim_tag(i: u32) -> u32 {
 }
 
 fn node_count(n: Node) -> u32 {
-    return n.count_axis & 0xffffu;
+    return n.count_axis & NODE_COUNT_MASK;
 }
 
 fn node_axis(n: Node) -> u32 {
-    return n.count_axis >> 16u;
+    return n.count_axis >> NODE_AXIS_SHIFT;
 }
 
 // PCG hash (Jarzynski & Olano 2020); u32 arithmetic wraps, as on the CPU.

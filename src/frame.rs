@@ -1,23 +1,13 @@
 //! A frame of a packed scene: the render options (size, samples, depth, ambient, AOV,
-//! seed), their defaults and limits, and the `GpuGlobals` both renderers read, built from
-//! the scene's camera and the options.
+//! seed), and the `GpuGlobals` both renderers read, built from the scene's camera and the
+//! options. Their defaults and limits are in `limits`.
 
 use glam::Vec3;
 
 use crate::gpu_types::*;
+use crate::limits::{DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP};
 use crate::pack::SceneBuffers;
 use crate::scene::Camera;
-
-/// Samples per pixel when none are asked for.
-pub const DEFAULT_SPP: u32 = 1;
-/// Most samples per pixel a frame may ask for.
-pub const MAX_SPP: u32 = 4096;
-/// Maximum ray depth when none is asked for (the eye ray counts as 1); at most `MAX_DEPTH`.
-pub const DEFAULT_DEPTH: u32 = 5;
-/// Ambient light when neither the scene (`am`) nor the caller sets one (shading.md).
-pub const DEFAULT_AMBIENT: f32 = 0.1;
-/// Largest image side, from a scene's `resolution` or from the caller.
-pub const MAX_IMAGE_SIDE: u32 = 16384;
 
 /// How to render: everything that is not the scene.
 #[derive(Clone, Debug, PartialEq)]

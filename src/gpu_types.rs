@@ -3,11 +3,17 @@
 //! naga's reflection of the shader). All are `#[repr(C)]` + `Pod`, so `pack` can hand the
 //! vectors to wgpu as bytes, and the CPU reference renderer reads the very same values.
 //!
+//! And every constant the shader shares with Rust, defined only here: `WGSL_CONSTANTS`
+//! lists them, and `gpu::shaders::source` declares each in the header of the generated
+//! shader source, so no WGSL file writes one (the layout test checks both).
+//!
 //! Every `Vec3` is followed by a 4-byte scalar, which gives the WGSL `vec3<f32>` its
 //! 16-byte alignment without hidden padding.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
+
+use crate::limits::MAX_DEPTH;
 
 /// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
@@ -73,25 +79,30 @@ pub struct GpuNode {
     pub min: Vec3,
     pub offset: u32,
     pub max: Vec3,
-    /// `count | axis << 16`.
+    /// `count | axis << NODE_AXIS_SHIFT`.
     pub count_axis: u32,
 }
 
+/// Where `GpuNode::count_axis` holds the split axis; the count is the bits below.
+pub const NODE_AXIS_SHIFT: u32 = 16;
+pub const NODE_COUNT_MASK: u32 = (1 << NODE_AXIS_SHIFT) - 1;
+
 impl GpuNode {
     pub fn count(&self) -> u32 {
-        self.count_axis & 0xffff
+        self.count_axis & NODE_COUNT_MASK
     }
     pub fn axis(&self) -> u32 {
-        self.count_axis >> 16
+        self.count_axis >> NODE_AXIS_SHIFT
     }
 }
 
-/// A node of the four-wide BVH the `TRAVERSAL_WIDE` walk reads (`cpu::wide` collapses the
+/// A node of the four-wide BVH the `TRAVERSAL_WIDE` walk reads (`bvh::wide` collapses the
 /// binary tree into it), 112 bytes, seven texels: the four children's boxes by axis
 /// (`lo[axis]` holds that coordinate of the four boxes), and where each child leads,
-/// as a traversal-stack entry: a wide node's index, `WIDE_LEAF | first << 2 | (count - 1)`
-/// for a leaf of `count` (at most `MAX_LEAF_PRIMS`) primitives from `prims[first]`, or
-/// `WIDE_EMPTY` for a lane without a child (whose box is empty: lo above hi).
+/// as a traversal-stack entry: a wide node's index,
+/// `WIDE_LEAF | first << WIDE_FIRST_SHIFT | (count - 1)` for a leaf of `count` (at most
+/// `MAX_LEAF_PRIMS`) primitives from `prims[first]`, or `WIDE_EMPTY` for a lane without a
+/// child (whose box is empty: lo above hi).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuWideNode {
@@ -104,6 +115,10 @@ pub struct GpuWideNode {
 pub const WIDE_LEAF: u32 = 1 << 31;
 /// `GpuWideNode::entry` of a lane without a child.
 pub const WIDE_EMPTY: u32 = u32::MAX;
+/// Where a leaf's `GpuWideNode::entry` holds its first primitive; `count - 1` is the bits
+/// below.
+pub const WIDE_FIRST_SHIFT: u32 = 2;
+pub const WIDE_COUNT_MASK: u32 = (1 << WIDE_FIRST_SHIFT) - 1;
 
 /// An infinite plane `dot(normal, p) = d`; tested outside the BVH.
 #[repr(C)]
@@ -258,8 +273,24 @@ pub struct GpuPixelState {
     pub stack: [[u32; 12]; RAY_STACK],
 }
 
+/// `GpuPixelState::phase` of a pixel about to start its next sample.
+pub const PHASE_SAMPLE: u32 = 0;
+/// `GpuPixelState::phase` of a pixel tracing the pending rays of its sample.
+pub const PHASE_RAY: u32 = 1;
+/// `GpuPixelState::phase` of a pixel sampling the lights of a hit.
+pub const PHASE_LIGHT: u32 = 2;
 /// `GpuPixelState::phase` of a finished pixel.
 pub const PHASE_DONE: u32 = 3;
+
+/// Loop iterations after which `resume` (main.wgsl) suspends a pixel until the next
+/// dispatch. Lavapipe ends every loop once an invocation has run 65535 loop iterations,
+/// and counts the iterations of all eight invocations of a SIMD batch together, so eight
+/// budgets plus one traversal must stay under 65535.
+pub const RESUME_BUDGET: u32 = 2048;
+
+/// A pixel to resume, as `resume_pixels` (main.wgsl) holds it: `x | y << RESUME_Y_SHIFT`.
+pub const RESUME_Y_SHIFT: u32 = 16;
+pub const RESUME_X_MASK: u32 = (1 << RESUME_Y_SHIFT) - 1;
 
 /// Bit of `PixelOut::rays` set when a pixel's work was cut short: the driver ended one of
 /// the shader's loops before it finished (lavapipe ends every loop once one invocation
@@ -283,10 +314,80 @@ pub const TRAVERSAL_STACK: usize = 64;
 /// row alignment of texture uploads.
 pub const TEXTURE_WIDTH: u32 = 4096;
 
-/// The deepest ray (the eye ray counting as 1), and the pending-ray stack it bounds (see
-/// the stack sizes above).
-pub const MAX_DEPTH: u32 = 16;
+/// The pending-ray stack, as long as the deepest ray (`limits::MAX_DEPTH`, the eye ray
+/// counting as 1) needs (see the stack sizes above).
 pub const RAY_STACK: usize = MAX_DEPTH as usize;
+
+/// "No hit" distance: the largest f32, since WGSL has no infinity literal.
+pub const NO_HIT: f32 = f32::MAX;
+/// The largest finite f32, which WGSL has no name for (`unit_or_zero` in intersect.wgsl
+/// tells a finite squared length from one that overflowed with it).
+pub const F32_MAX: f32 = f32::MAX;
+/// Set in `Hit::prim` when the hit is a plane (index into `planes`).
+pub const PLANE_FLAG: u32 = 0x8000_0000;
+/// `Hit::prim` when nothing was hit.
+pub const NO_PRIM: u32 = 0xffff_ffff;
+
+/// Relative widening of the far end in `overlaps` (intersect.wgsl, `cpu::intersect`):
+/// 2^-16, far more than the rounding of the slab distances on either renderer (Vulkan lets
+/// a GPU divide 2.5 ulp off; depths agree to about 1e-6). Rays grazing a box face, and
+/// boxes whose near face lies exactly at a hit, are common with flat axis-aligned faces
+/// (the gears); they now count as overlapping on both renderers instead of depending on
+/// the last bits of arithmetic.
+pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
+
+/// The value of a constant shared with WGSL, of the WGSL type it is declared with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum WgslValue {
+    U32(u32),
+    F32(f32),
+}
+
+/// Every constant shared with WGSL, by its name there (the same as here): the header of
+/// the generated shader source declares each (`gpu::shaders::source`), and no WGSL file
+/// writes one itself (`tests/gpurt/layout.rs`).
+pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
+    use WgslValue::{F32, U32};
+    &[
+        ("PRIM_SPHERE", U32(PRIM_SPHERE)),
+        ("PRIM_TRIANGLE", U32(PRIM_TRIANGLE)),
+        ("PRIM_CONE", U32(PRIM_CONE)),
+        ("PRIM_BOX", U32(PRIM_BOX)),
+        ("PRIM_KIND_SHIFT", U32(PRIM_KIND_SHIFT)),
+        ("PRIM_MATERIAL_MASK", U32(PRIM_MATERIAL_MASK)),
+        ("NODE_AXIS_SHIFT", U32(NODE_AXIS_SHIFT)),
+        ("NODE_COUNT_MASK", U32(NODE_COUNT_MASK)),
+        ("WIDE_LEAF", U32(WIDE_LEAF)),
+        ("WIDE_EMPTY", U32(WIDE_EMPTY)),
+        ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
+        ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
+        ("LIGHT_POINT", U32(LIGHT_POINT)),
+        ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
+        ("LIGHT_AREA", U32(LIGHT_AREA)),
+        ("AOV_COLOR", U32(AOV_COLOR)),
+        ("AOV_NORMAL", U32(AOV_NORMAL)),
+        ("AOV_DEPTH", U32(AOV_DEPTH)),
+        ("AOV_COST", U32(AOV_COST)),
+        ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
+        ("PHASE_RAY", U32(PHASE_RAY)),
+        ("PHASE_LIGHT", U32(PHASE_LIGHT)),
+        ("PHASE_DONE", U32(PHASE_DONE)),
+        ("RESUME_BUDGET", U32(RESUME_BUDGET)),
+        ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
+        ("RESUME_X_MASK", U32(RESUME_X_MASK)),
+        ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
+        ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
+        ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
+        ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
+        ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
+        ("RAY_STACK", U32(RAY_STACK as u32)),
+        ("NO_HIT", F32(NO_HIT)),
+        ("F32_MAX", F32(F32_MAX)),
+        ("PLANE_FLAG", U32(PLANE_FLAG)),
+        ("NO_PRIM", U32(NO_PRIM)),
+        ("SLAB_WIDEN", F32(SLAB_WIDEN)),
+    ]
+};
 
 const _: () = {
     assert!(size_of::<GpuPrim>() == 48);

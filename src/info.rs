@@ -4,7 +4,7 @@
 use glam::Vec3;
 use serde_json::{Value, json};
 
-use crate::frame::DEFAULT_AMBIENT;
+use crate::limits::DEFAULT_AMBIENT;
 use crate::scene::{Light, Scene};
 
 /// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the

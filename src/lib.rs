@@ -20,6 +20,7 @@ pub mod frame;
 pub mod gpu;
 pub mod gpu_types;
 pub mod info;
+pub mod limits;
 pub mod pack;
 pub mod run;
 pub mod scene;

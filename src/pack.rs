@@ -5,11 +5,11 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
+use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
-use crate::cpu::wide::{self, WideNode};
 use crate::error::{Error, Result};
-use crate::frame::RenderOptions;
 use crate::gpu_types::*;
+use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
 use crate::scene::{self, Bounded, Bounds, Camera, Light, Scene};
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
@@ -57,9 +57,11 @@ fn kind_tag(kind: u32, material: u32) -> u32 {
     kind << PRIM_KIND_SHIFT | material
 }
 
-/// Flattens a scene for one frame of the default options (`RenderOptions::for_camera`).
+/// Flattens a scene for one frame of the camera's own resolution at `DEFAULT_SPP` samples
+/// per pixel (the default options, `RenderOptions::for_camera`).
 pub fn pack(scene: Scene) -> Result<SceneBuffers> {
-    let samples = RenderOptions::for_camera(&scene.camera).samples();
+    let c = &scene.camera;
+    let samples = u64::from(c.width) * u64::from(c.height) * u64::from(DEFAULT_SPP);
     pack_for(scene, samples)
 }
 
@@ -203,8 +205,8 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
-    /// `nodes` collapsed eight wide (`cpu::wide`), built the first time it is asked for:
-    /// `nodes` must not change after that.
+    /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first
+    /// time it is asked for: `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))
     }
@@ -375,8 +377,22 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::{RenderOptions, globals};
+    use crate::limits::DEFAULT_DEPTH;
     use crate::scene::nff;
+
+    /// The render constants `check` compares with the buffers, as `frame::globals` sets
+    /// them for the default options.
+    fn globals(b: &SceneBuffers) -> GpuGlobals {
+        GpuGlobals {
+            max_depth: DEFAULT_DEPTH,
+            spp: DEFAULT_SPP,
+            n_nodes: b.nodes.len() as u32,
+            n_planes: b.planes.len() as u32,
+            n_lights: b.lights.len() as u32,
+            traversal: TRAVERSAL_SINGLE,
+            ..GpuGlobals::default()
+        }
+    }
 
     fn balls() -> Scene {
         let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 8 8
@@ -390,9 +406,8 @@ mod tests {
 
     #[test]
     fn packed_scene_passes_its_checks_and_corruption_is_caught() {
-        let scene = balls();
-        let b = pack(scene.clone()).unwrap();
-        let g = globals(&b, &RenderOptions::for_camera(&scene.camera));
+        let b = pack(balls()).unwrap();
+        let g = globals(&b);
         b.check(&g).unwrap();
         let inner = b.nodes.iter().position(|n| n.count() == 0).unwrap();
 

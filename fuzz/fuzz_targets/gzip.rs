@@ -1,4 +1,4 @@
-//! The gzip layer the loader reads every file through (`scene::decompress`, as `read_file`
+//! The gzip layer the loader reads every file through (`scene::io::decompress`, as `read_file`
 //! calls it) must return Ok or Err on any bytes, never panic, hang or allocate past its
 //! limit; what it returns is parsed as NFF, as `load` would.
 #![no_main]
@@ -12,7 +12,7 @@ const LIMIT: u64 = 1 << 20;
 
 fuzz_target!(|data: &[u8]| {
     let gzipped = data.starts_with(&[0x1f, 0x8b]);
-    match gpurt::scene::decompress(data.to_vec(), Path::new("fuzz.nff.gz"), LIMIT) {
+    match gpurt::scene::io::decompress(data.to_vec(), Path::new("fuzz.nff.gz"), LIMIT) {
         Ok(bytes) => {
             assert!(bytes.len() as u64 <= LIMIT, "output past the limit");
             if !gzipped {

@@ -7,10 +7,11 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::film;
-use gpurt::frame::{
-    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_IMAGE_SIDE, MAX_SPP, Overrides, RenderOptions,
+use gpurt::frame::{Overrides, RenderOptions};
+use gpurt::gpu_types as gt;
+use gpurt::limits::{
+    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP,
 };
-use gpurt::gpu_types::{self as gt, MAX_DEPTH};
 use gpurt::scene::Camera;
 use gpurt::session::Backend;
 

@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Vec2, Vec3, Vec4};
 
-use super::types::{NO_HIT, Ray};
+use super::types::Ray;
 use crate::gpu_types::*;
 
 /// Replaces zero direction components so slab tests never compute 0 * inf.
@@ -162,13 +162,6 @@ pub fn slabs(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3) -> Vec2 {
     }
 }
 
-/// Relative widening of the far end in `overlaps`: 2^-16, far more than the rounding of
-/// the slab distances on either renderer (Vulkan lets a GPU divide 2.5 ulp off; depths
-/// agree to about 1e-6). Rays grazing a box face, and boxes whose near face lies exactly at
-/// a hit, are common with flat axis-aligned faces (the gears); they now count as
-/// overlapping on both renderers instead of depending on the last bits of arithmetic.
-pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
-
 /// Where the ray enters and leaves the box, clamped to `[tmin, tmax]`: `(near, far)`.
 ///
 /// The hottest code of the CPU renderer. Its minima and maxima are plain comparisons, not
@@ -241,7 +234,7 @@ pub fn intersect_plane(pl: &GpuPlane, ray: &Ray) -> f32 {
 /// overflows (`normalize` would give NaN or zero components).
 pub fn unit_or_zero(v: Vec3) -> Vec3 {
     let l2 = v.dot(v);
-    if l2 > 0.0 && l2 <= f32::MAX {
+    if l2 > 0.0 && l2 <= F32_MAX {
         v.normalize()
     } else {
         Vec3::ZERO

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 
 use super::shade::{surface, trace};
 use super::traverse::closest_hit;
-use super::types::{Bindings, NO_HIT, NO_PRIM, Ray, RayCounts, rand, rng_seed};
+use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 
 /// Camera ray through image point `(x, y)` (pixels, y down), shading.md's convention.

@@ -4,7 +4,7 @@
 //!
 //! One module per WGSL file, same function names, same order of operations:
 //! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
-//! the same tree four children at a time, which finds the same hits.
+//! the same tree eight children at a time, which finds the same hits.
 
 pub mod intersect;
 pub mod main;

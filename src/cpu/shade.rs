@@ -5,7 +5,7 @@ use glam::Vec3;
 
 use super::intersect;
 use super::traverse::{closest_hit, transmission};
-use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray, RayCounts, rand};
+use super::types::{Bindings, Hit, Ray, RayCounts, rand};
 use crate::gpu_types::*;
 
 /// A ray waiting to be traced, with the product of the Ks / T factors on its path.

@@ -3,11 +3,11 @@
 
 use glam::{Vec3, Vec4};
 
-use super::intersect::SLAB_WIDEN;
-use super::types::{Bindings, Hit, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
+use super::types::{Bindings, Hit, Ray};
 use super::{intersect, wide};
 use crate::gpu_types::{
-    GpuNode, GpuWideNode, TRAVERSAL_SINGLE, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_LEAF,
+    GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
+    TRAVERSAL_STACK, WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
@@ -173,7 +173,10 @@ impl Walk {
         loop {
             let e = self.node;
             if e & WIDE_LEAF != 0 {
-                return ((e & !WIDE_LEAF) >> 2, (e & 3) + 1);
+                return (
+                    (e & !WIDE_LEAF) >> WIDE_FIRST_SHIFT,
+                    (e & WIDE_COUNT_MASK) + 1,
+                );
             }
             let n = &wide[e as usize];
             *cost += 4;

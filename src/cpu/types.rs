@@ -3,16 +3,9 @@
 
 use glam::Vec3;
 
-use super::wide::WideNode;
+use crate::bvh::wide::WideNode;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
-
-/// "No hit" distance: the largest f32, since WGSL has no infinity literal.
-pub const NO_HIT: f32 = f32::MAX;
-/// Set in `Hit::prim` when the hit is a plane (index into `planes`).
-pub const PLANE_FLAG: u32 = 0x8000_0000;
-/// `Hit::prim` when nothing was hit.
-pub const NO_PRIM: u32 = 0xffff_ffff;
 
 /// The read-only bindings, as the shader sees them.
 #[derive(Clone, Copy)]
@@ -24,8 +17,8 @@ pub struct Bindings<'a> {
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
-    /// The eight-wide tree the CPU walks instead of `nodes` when given (`wide.rs`); `None`
-    /// walks `nodes` as the shader does (`GpuGlobals::traversal`).
+    /// The eight-wide tree (`bvh::wide`) the CPU walks (`wide.rs`) instead of `nodes` when
+    /// given; `None` walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
     /// is `TRAVERSAL_WIDE` and `wide` is `None`.

@@ -3,7 +3,9 @@
 
 use glam::Vec3;
 
-use super::{Camera, Light, Material, MaterialId, Plane, Scene, Triangle};
+use super::model::{
+    Camera, Light, Material, MaterialId, Plane, Scene, Triangle, nff_default_camera,
+};
 use crate::error::{Error, Result};
 
 /// STL files come from CAD tools, which are z-up; OBJ files are mostly y-up.
@@ -18,7 +20,7 @@ pub fn up_axis_for(name: &str) -> Vec3 {
 }
 
 pub fn scene_for_mesh(name: &str, mut tris: Vec<Triangle>) -> Result<Scene> {
-    let mut scene = Scene::new(name, super::nff_default_camera());
+    let mut scene = Scene::new(name, nff_default_camera());
     scene.triangles.append(&mut tris);
     let b = scene.bounds();
     if b.is_empty() {

@@ -2,16 +2,12 @@
 
 use glam::{Mat3, Vec3};
 
-use super::{FileKind, Triangle, obj, stl};
+use super::io::FileKind;
+use super::model::{Mesh, Triangle, unit};
+use super::{obj, stl};
 use crate::error::Result;
 
 /// Parses a mesh file's bytes (already decompressed) into triangles with material 0.
-/// A mesh file's triangles and what was dropped from it, as `FILE:LINE:COL: message`.
-pub struct Mesh {
-    pub triangles: Vec<Triangle>,
-    pub warnings: Vec<String>,
-}
-
 pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
     match kind {
         FileKind::Stl => Ok(Mesh {
@@ -63,7 +59,7 @@ impl MeshTransform {
             t.v = t.v.map(|p| m * p + self.translate);
             // A normal the transform leaves without a direction makes the triangle flat.
             t.n = t.n.take().and_then(|n| {
-                let unit = |v| super::unit(nm * v);
+                let unit = |v| unit(nm * v);
                 let [a, b, c] = *n;
                 Some(Box::new([unit(a)?, unit(b)?, unit(c)?]))
             });

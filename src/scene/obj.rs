@@ -9,9 +9,8 @@
 use glam::Vec3;
 
 use super::lex::{Lexer, Token, parse_f32};
-use super::mesh::Mesh;
+use super::model::{MaterialId, Mesh, Triangle, unit};
 use super::triangulate::triangulate;
-use super::{MaterialId, Triangle};
 use crate::error::Result;
 
 /// One face corner: 0-based position and normal indices (not yet checked against the
@@ -112,7 +111,7 @@ pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
                         ),
                     ));
                 };
-                poly_n.push(super::unit(n).unwrap_or(Vec3::ZERO));
+                poly_n.push(unit(n).unwrap_or(Vec3::ZERO));
             }
         }
         // Shading normals only when every corner has a usable one; otherwise flat.

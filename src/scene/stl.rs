@@ -10,7 +10,7 @@
 use glam::Vec3;
 
 use super::lex::Lexer;
-use super::{MaterialId, Triangle};
+use super::model::{MaterialId, Triangle, unit};
 use crate::error::{Error, Result};
 
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
@@ -44,7 +44,7 @@ fn starts_with_solid(b: &[u8]) -> bool {
 }
 
 fn facet_normal(n: Vec3) -> Option<Box<[Vec3; 3]>> {
-    super::unit(n).map(|n| Box::new([n; 3]))
+    unit(n).map(|n| Box::new([n; 3]))
 }
 
 fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {

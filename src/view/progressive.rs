@@ -277,7 +277,7 @@ mod tests {
         assert_eq!(s.next(), Some(9..10), "clipped to the frame");
         s.record(9..10, Duration::ZERO);
         assert_eq!((s.next(), s.done()), (None, 10));
-        let mut s = Schedule::new(crate::frame::MAX_SPP);
+        let mut s = Schedule::new(crate::limits::MAX_SPP);
         for _ in 0..20 {
             let r = s.next().unwrap();
             s.record(r, Duration::ZERO);
@@ -365,7 +365,7 @@ mod tests {
         let g = frame::globals(
             &buffers,
             &RenderOptions {
-                spp: crate::frame::MAX_SPP,
+                spp: crate::limits::MAX_SPP,
                 ..RenderOptions::for_camera(&buffers.camera)
             },
         );

@@ -10,7 +10,7 @@ use glam::Vec3;
 use gpurt::bvh::{self, MAX_LEAF_PRIMS};
 use gpurt::cpu::intersect;
 use gpurt::cpu::traverse::{closest_hit, stack_high_water, transmission};
-use gpurt::cpu::types::{Bindings, NO_HIT, NO_PRIM, PLANE_FLAG, Ray};
+use gpurt::cpu::types::{Bindings, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};

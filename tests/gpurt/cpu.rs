@@ -11,8 +11,9 @@ use glam::{DVec3, Vec3};
 use gpurt::cpu::shade::trace;
 use gpurt::cpu::types::{Bindings, Ray, RayCounts};
 use gpurt::film::Film;
-use gpurt::frame::{self, DEFAULT_AMBIENT, RenderOptions};
+use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
+use gpurt::limits::DEFAULT_AMBIENT;
 use gpurt::pack;
 use gpurt::scene::{self, Scene};
 

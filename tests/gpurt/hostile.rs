@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::Duration;
 
+use gpurt::limits;
 use gpurt::scene::{self, nff};
 
 use crate::common::temp_dir;
@@ -176,7 +177,7 @@ fn peak_memory_stays_within_its_documented_bound() {
     let dir = crate::common::workdir("peak-memory");
     for name in ["balls-6.nff.gz", "mount-9.nff.gz"] {
         let path = root.join("spd").join(name);
-        let bytes = scene::read_file(&path).expect("reads").len() as f64;
+        let bytes = scene::io::read_file(&path).expect("reads").len() as f64;
         let (w, h) = (320, 240);
         let out = crate::common::gpurt(
             &[
@@ -283,7 +284,7 @@ fn a_16k_frame_at_4096_spp_starts_small_and_stops_on_ctrl_c() {
 
 /// A gzip bomb at the real limit: 4 GiB and one byte of zeros in 65 gzip members (about
 /// 4 MB on disk) is refused by the command line with the limit named, no output file,
-/// and without holding more than `scene::HELD_BYTES` of it (its size is counted before
+/// and without holding more than `limits::HELD_BYTES` of it (its size is counted before
 /// it is kept); the peak memory is sampled from /proc while it runs.
 #[test]
 fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
@@ -296,7 +297,7 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
     let member = member.finish().unwrap();
     let mut last = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
     last.write_all(b"\n").unwrap();
-    let mut bomb = member.repeat((scene::MAX_FILE_BYTES / zeros.len() as u64) as usize);
+    let mut bomb = member.repeat((limits::MAX_FILE_BYTES / zeros.len() as u64) as usize);
     bomb.extend(last.finish().unwrap());
     drop(zeros);
     std::fs::write(dir.join("bomb.nff.gz"), &bomb).unwrap();
@@ -336,7 +337,7 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
         "{stderr}"
     );
     assert!(!dir.join("out.png").exists());
-    let bound = 2 * scene::HELD_BYTES / 1024 + bomb.len() as u64 / 1024 + (64 << 10);
+    let bound = 2 * limits::HELD_BYTES / 1024 + bomb.len() as u64 / 1024 + (64 << 10);
     assert!(
         peak_kib > 0 && peak_kib < bound,
         "peak {peak_kib} KiB, bound {bound} KiB"

@@ -141,53 +141,180 @@ fn wgsl_const(module: &naga::Module, name: &str) -> naga::Literal {
     }
 }
 
-/// Constants the two sides must agree on.
+/// Every constant shared with WGSL, as the shader must see it: (WGSL name, Rust value).
+fn shared_constants() -> Vec<(&'static str, WgslValue)> {
+    use WgslValue::{F32, U32};
+    vec![
+        ("PRIM_SPHERE", U32(PRIM_SPHERE)),
+        ("PRIM_TRIANGLE", U32(PRIM_TRIANGLE)),
+        ("PRIM_CONE", U32(PRIM_CONE)),
+        ("PRIM_BOX", U32(PRIM_BOX)),
+        ("PRIM_KIND_SHIFT", U32(PRIM_KIND_SHIFT)),
+        ("PRIM_MATERIAL_MASK", U32(PRIM_MATERIAL_MASK)),
+        ("NODE_AXIS_SHIFT", U32(NODE_AXIS_SHIFT)),
+        ("NODE_COUNT_MASK", U32(NODE_COUNT_MASK)),
+        ("WIDE_LEAF", U32(WIDE_LEAF)),
+        ("WIDE_EMPTY", U32(WIDE_EMPTY)),
+        ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
+        ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
+        ("LIGHT_POINT", U32(LIGHT_POINT)),
+        ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
+        ("LIGHT_AREA", U32(LIGHT_AREA)),
+        ("AOV_COLOR", U32(AOV_COLOR)),
+        ("AOV_NORMAL", U32(AOV_NORMAL)),
+        ("AOV_DEPTH", U32(AOV_DEPTH)),
+        ("AOV_COST", U32(AOV_COST)),
+        ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
+        ("PHASE_RAY", U32(PHASE_RAY)),
+        ("PHASE_LIGHT", U32(PHASE_LIGHT)),
+        ("PHASE_DONE", U32(PHASE_DONE)),
+        ("RESUME_BUDGET", U32(RESUME_BUDGET)),
+        ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
+        ("RESUME_X_MASK", U32(RESUME_X_MASK)),
+        ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
+        ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
+        ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
+        ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
+        ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
+        ("RAY_STACK", U32(RAY_STACK as u32)),
+        ("NO_HIT", F32(NO_HIT)),
+        ("F32_MAX", F32(F32_MAX)),
+        ("PLANE_FLAG", U32(PLANE_FLAG)),
+        ("NO_PRIM", U32(NO_PRIM)),
+        ("SLAB_WIDEN", F32(SLAB_WIDEN)),
+    ]
+}
+
+/// The constants the two sides must agree on have the Rust value in the generated shader,
+/// of the same type (an `f32` to the bit), and the generator writes exactly these.
 #[test]
 fn shared_constants_match() {
     let (module, _) = shaders::validate().expect("shader validates");
-    let u32s = [
-        ("TRAVERSAL_STACK", TRAVERSAL_STACK as u32),
-        ("WIDE_LEAF", WIDE_LEAF),
-        ("WIDE_EMPTY", WIDE_EMPTY),
-        ("TEXTURE_WIDTH", TEXTURE_WIDTH),
-        ("RAY_STACK", RAY_STACK as u32),
-        ("PRIM_SPHERE", PRIM_SPHERE),
-        ("PRIM_TRIANGLE", PRIM_TRIANGLE),
-        ("PRIM_CONE", PRIM_CONE),
-        ("PRIM_BOX", PRIM_BOX),
-        ("PRIM_KIND_SHIFT", PRIM_KIND_SHIFT),
-        ("PRIM_MATERIAL_MASK", PRIM_MATERIAL_MASK),
-        ("LIGHT_POINT", LIGHT_POINT),
-        ("LIGHT_DIRECTIONAL", LIGHT_DIRECTIONAL),
-        ("LIGHT_AREA", LIGHT_AREA),
-        ("AOV_COLOR", AOV_COLOR),
-        ("AOV_NORMAL", AOV_NORMAL),
-        ("AOV_DEPTH", AOV_DEPTH),
-        ("AOV_COST", AOV_COST),
-        ("PLANE_FLAG", gpurt::cpu::types::PLANE_FLAG),
-        ("NO_PRIM", gpurt::cpu::types::NO_PRIM),
-        ("PIXEL_CUT_SHORT", PIXEL_CUT_SHORT),
-        ("WORKGROUP_SIDE", WORKGROUP_SIDE),
-        ("WORKGROUP_INVOCATIONS", WORKGROUP_INVOCATIONS),
-    ];
-    for (name, value) in u32s {
-        assert_eq!(
-            wgsl_const(&module, name),
-            naga::Literal::U32(value),
-            "{name}"
-        );
+    for (name, value) in shared_constants() {
+        let want = match value {
+            WgslValue::U32(v) => naga::Literal::U32(v),
+            WgslValue::F32(v) => naga::Literal::F32(v),
+        };
+        let got = wgsl_const(&module, name);
+        assert_eq!(got, want, "{name}");
+        if let (naga::Literal::F32(g), naga::Literal::F32(w)) = (got, want) {
+            assert_eq!(g.to_bits(), w.to_bits(), "{name}: the bits of the f32");
+        }
     }
-    let f32s = [
-        ("NO_HIT", gpurt::cpu::types::NO_HIT),
-        ("SLAB_WIDEN", gpurt::cpu::intersect::SLAB_WIDEN),
-    ];
-    for (name, value) in f32s {
-        assert_eq!(
-            wgsl_const(&module, name),
-            naga::Literal::F32(value),
-            "{name}"
-        );
+    let listed: Vec<&str> = shared_constants().iter().map(|(n, _)| *n).collect();
+    let generated: Vec<&str> = WGSL_CONSTANTS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(generated, listed, "gpu_types::WGSL_CONSTANTS");
+    assert_eq!(
+        wgsl_const(&module, "TRACE_STACK"),
+        naga::Literal::U32(RAY_STACK as u32),
+        "the validated source has the longest ray stack"
+    );
+}
+
+/// `text` without its `//` comments.
+fn strip_comments(text: &str) -> String {
+    text.lines()
+        .map(|l| l.find("//").map_or(l, |i| &l[..i]))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The numeric literals of WGSL code, as written: `2048u`, `0x80000000u`, `1.5e-3f`.
+fn literals(code: &str) -> Vec<String> {
+    let b = code.as_bytes();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'_'));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let hex = b[i..].starts_with(b"0x") || b[i..].starts_with(b"0X");
+        let mut j = i + 1;
+        while j < b.len()
+            && (b[j].is_ascii_alphanumeric()
+                || b[j] == b'.'
+                || (!hex && matches!(b[j], b'+' | b'-') && matches!(b[j - 1], b'e' | b'E')))
+        {
+            j += 1;
+        }
+        out.push(code[i..j].to_string());
+        i = j;
     }
+    out
+}
+
+/// The value of a WGSL numeric literal, as a u32 or as an f32 (`None` for others).
+fn literal_value(lit: &str) -> Option<WgslValue> {
+    if let Some(hex) = lit.strip_prefix("0x").or_else(|| lit.strip_prefix("0X")) {
+        let digits = hex.trim_end_matches(['u', 'i']);
+        return u32::from_str_radix(digits, 16).ok().map(WgslValue::U32);
+    }
+    if lit.contains(['.', 'e', 'E']) || lit.ends_with('f') {
+        let digits = lit.trim_end_matches(['f', 'h']);
+        return digits.parse::<f32>().ok().map(WgslValue::F32);
+    }
+    let digits = lit.trim_end_matches(['u', 'i']);
+    digits.parse::<u32>().ok().map(WgslValue::U32)
+}
+
+/// No WGSL file declares a constant shared with Rust, or writes the value of one as a
+/// literal of its own: each is written once, in Rust, into the generated header. Small
+/// integers (below 256) are ordinary numbers in code, and are checked by name only.
+#[test]
+fn no_wgsl_file_writes_a_shared_constant() {
+    for (file, text) in shaders::FILES {
+        let code = strip_comments(text);
+        for (name, value) in shared_constants() {
+            for decl in ["const", "override", "let", "var<private>"] {
+                assert!(
+                    !code.contains(&format!("{decl} {name}:"))
+                        && !code.contains(&format!("{decl} {name} ")),
+                    "shaders/{file} declares {name}, which only src/gpu_types.rs may define"
+                );
+            }
+            let distinctive = match value {
+                WgslValue::U32(v) => v >= 256,
+                WgslValue::F32(v) => v.fract() != 0.0 || v.abs() >= 256.0,
+            };
+            if !distinctive {
+                continue;
+            }
+            for lit in literals(&code) {
+                let same = match (literal_value(&lit), value) {
+                    (Some(WgslValue::U32(a)), WgslValue::U32(b)) => a == b,
+                    (Some(WgslValue::F32(a)), WgslValue::F32(b)) => a.to_bits() == b.to_bits(),
+                    _ => false,
+                };
+                assert!(
+                    !same,
+                    "shaders/{file} writes {lit}, the value of {name}: use the constant"
+                );
+            }
+        }
+    }
+}
+
+/// The literal scanner finds what the old shader wrote for these constants.
+#[test]
+fn the_literal_scanner_sees_shared_values() {
+    let old = "const NO_HIT: f32 = 3.40282347e+38;\nlet x = y & 0x0fffffffu; // 2048u\n\
+               let w = 1.0000152587890625 * a2048u + 2048u;";
+    let found: Vec<Option<WgslValue>> = literals(&strip_comments(old))
+        .iter()
+        .map(|l| literal_value(l))
+        .collect();
+    assert_eq!(
+        found,
+        [
+            Some(WgslValue::F32(NO_HIT)),
+            Some(WgslValue::U32(PRIM_MATERIAL_MASK)),
+            Some(WgslValue::F32(SLAB_WIDEN)),
+            Some(WgslValue::U32(RESUME_BUDGET)),
+        ]
+    );
 }
 
 /// WGSL functions without a CPU twin, and why.

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use glam::{DVec2, DVec3, Vec3};
 use gpurt::Error;
+use gpurt::limits;
 use gpurt::scene::{
     self, BoxPrim, Light, Material, MaterialId, Plane, Scene, Triangle, nff, obj, stl,
     triangulate::triangulate,
@@ -1576,18 +1577,21 @@ fn decompress_is_what_read_file_does_and_honours_its_limit() {
     let gz = [gzip(src.as_bytes()), gzip(b"# second member\n")].concat();
     let path = dir.join("scene.nff.gz");
     write(&path, &gz);
-    let read = scene::read_file(&path).unwrap();
+    let read = scene::io::read_file(&path).unwrap();
     assert_eq!(read, [src.as_bytes(), b"# second member\n"].concat());
     assert_eq!(
-        scene::decompress(gz.clone(), &path, scene::MAX_FILE_BYTES).unwrap(),
+        scene::io::decompress(gz.clone(), &path, limits::MAX_FILE_BYTES).unwrap(),
         read
     );
     let plain = src.clone().into_bytes();
-    assert_eq!(scene::decompress(plain.clone(), &path, 4).unwrap(), plain);
+    assert_eq!(
+        scene::io::decompress(plain.clone(), &path, 4).unwrap(),
+        plain
+    );
     // Exactly the limit is fine; one byte more is not.
     let n = read.len() as u64;
-    assert_eq!(scene::decompress(gz.clone(), &path, n).unwrap(), read);
-    let e = scene::decompress(gz.clone(), &path, n - 1).unwrap_err();
+    assert_eq!(scene::io::decompress(gz.clone(), &path, n).unwrap(), read);
+    let e = scene::io::decompress(gz.clone(), &path, n - 1).unwrap_err();
     let shown = e.to_string();
     assert!(
         shown.contains("scene.nff.gz") && shown.contains(&format!("more than {} bytes", n - 1)),
@@ -1596,15 +1600,15 @@ fn decompress_is_what_read_file_does_and_honours_its_limit() {
     // A bomb: a megabyte of zeros in about a kilobyte, refused at 64 KiB.
     let bomb = gzip(&vec![0; 1 << 20]);
     assert!(bomb.len() < 8192, "{}", bomb.len());
-    assert!(scene::decompress(bomb, &path, 64 << 10).is_err());
+    assert!(scene::io::decompress(bomb, &path, 64 << 10).is_err());
     // Past HELD_BYTES the size is counted first, then the whole decompressed again:
     // the same bytes, to the last one, and still refused one byte past the limit.
-    let held = scene::HELD_BYTES as usize;
+    let held = limits::HELD_BYTES as usize;
     let big = [gzip(&vec![0; held]), gzip(b"# tail\n")].concat();
-    let out = scene::decompress(big.clone(), &path, scene::MAX_FILE_BYTES).unwrap();
+    let out = scene::io::decompress(big.clone(), &path, limits::MAX_FILE_BYTES).unwrap();
     assert_eq!(out.len(), held + 7);
     assert!(out.ends_with(b"\0# tail\n") && out[..held].iter().all(|&b| b == 0));
-    let e = scene::decompress(big, &path, held as u64 + 6).unwrap_err();
+    let e = scene::io::decompress(big, &path, held as u64 + 6).unwrap_err();
     assert!(
         e.to_string()
             .contains(&format!("more than {} bytes", held + 6)),

@@ -4,9 +4,9 @@
 use glam::{Vec2, Vec3};
 use gpurt::cpu::main::camera_ray;
 use gpurt::cpu::traverse::closest_hit;
-use gpurt::cpu::types::{Bindings, NO_HIT, Ray};
+use gpurt::cpu::types::{Bindings, Ray};
 use gpurt::frame::{self, RenderOptions};
-use gpurt::gpu_types::{GpuGlobals, PRIM_TRIANGLE};
+use gpurt::gpu_types::{GpuGlobals, NO_HIT, PRIM_TRIANGLE};
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene;
 use gpurt::view::wireframe::{self, Wireframe};

@@ -1,4 +1,5 @@
-//! BVH construction and flattening.
+//! BVH construction and flattening: the binary tree here, collapsed into the wide trees
+//! the walks that test several boxes at once read in `wide`.
 //!
 //! `obvhs` builds a binary BVH (PLOC, then reinsertion and SAH leaf collapsing) over the
 //! bounds of every bounded primitive; this module flattens it into the depth-first
@@ -11,10 +12,12 @@
 //! size (`TRAVERSAL_STACK`); a tree deeper than that is rebuilt with a median split, whose
 //! depth is at most log2(n) + 1 and so always fits.
 
+pub mod wide;
+
 use glam::{Vec3, Vec3A};
 use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
 
-use crate::gpu_types::{GpuNode, TRAVERSAL_STACK};
+use crate::gpu_types::{GpuNode, NODE_AXIS_SHIFT, TRAVERSAL_STACK};
 use crate::scene::Bounds;
 
 /// Most primitives a leaf may hold.
@@ -221,7 +224,7 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
             if swap {
                 std::mem::swap(&mut c0, &mut c1);
             }
-            node.count_axis = axis << 16;
+            node.count_axis = axis << NODE_AXIS_SHIFT;
             out.nodes.push(node);
             stack.push((c1, Some(here), depth + 1));
             stack.push((c0, None, depth + 1));
@@ -280,7 +283,7 @@ fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
         out.order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
             centre(a)[axis].total_cmp(&centre(b)[axis])
         });
-        node.count_axis = (axis as u32) << 16;
+        node.count_axis = (axis as u32) << NODE_AXIS_SHIFT;
         out.nodes.push(node);
         stack.push((mid, hi, Some(here), depth + 1));
         stack.push((lo, mid, None, depth + 1));

@@ -1,26 +1,27 @@
 //! The NFF reader: Haines' NFF 3.9 (`v b l f c s p pp`), the IST P3D dialect (`pl`, `aabb`)
 //! and gpurt's extensions (`mesh`, `dl`, `al`, `am`, and `aperture`/`focal` in the view).
 //! The exact syntax accepted is documented in `docs/scene-format.md`.
+//!
+//! This module holds the statement loop and the primitives and lights; the `v` camera
+//! block (`view`), the `mesh` include (`include`) and the materials with the ranges
+//! colours are held to (`material`) are beside it.
+
+mod include;
+mod material;
+mod view;
 
 use std::collections::HashMap;
 use std::path::Path;
 
 use glam::Vec3;
 
-use super::lex::{Lexer, Token, escape_controls};
-use super::mesh::{self, MeshTransform};
-use super::triangulate::triangulate;
-use super::{BoxPrim, Cone, FileKind, Light, Material, MaterialId, Plane, Scene, Sphere, Triangle};
-use crate::error::{Error, Result};
-use crate::frame::MAX_IMAGE_SIDE;
-
-/// Largest light, ambient and background colour component; larger ones are held to it with
-/// a warning. Material colours, Kd, Ks and T are held to [0, 1]. Within these ranges every
-/// pixel stays finite: shading.md sums a bounded number of bounded terms.
-pub const MAX_LIGHT: f32 = 1e6;
-/// Largest Phong exponent; a negative one (which would make highlights infinite) is held
-/// to 0, a larger one to this.
-pub const MAX_SHINE: f32 = 1e6;
+use crate::error::Result;
+use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT};
+use crate::scene::lex::{Lexer, Token, parse_f32};
+use crate::scene::model::{
+    BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, Triangle, nff_default_camera, unit,
+};
+use crate::scene::triangulate::triangulate;
 
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
@@ -28,7 +29,7 @@ pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
     let mut p = Parser {
         lx: Lexer::new(src, name),
         base,
-        scene: Scene::new(name, super::nff_default_camera()),
+        scene: Scene::new(name, nff_default_camera()),
         have_view: false,
         material: None,
         material_ids: HashMap::new(),
@@ -118,7 +119,7 @@ impl Parser<'_> {
                         "this is a Sense8 NFF file (starts with 'nff'), not Haines' NFF",
                     ));
                 }
-                _ if super::lex::parse_f32(tok.text).is_some() => {
+                _ if parse_f32(tok.text).is_some() => {
                     // Usually a light in the `l x y z intensity r g b` variant, or a count
                     // that is smaller than the numbers that follow it.
                     return Err(self.lx.error_at(
@@ -145,34 +146,6 @@ impl Parser<'_> {
         Ok(())
     }
 
-    /// `v` held to `[0, hi]`, with a warning naming the line when it was outside.
-    fn hold(&mut self, tok: &Token, what: &str, v: f32, hi: f32) -> f32 {
-        if (0.0..=hi).contains(&v) {
-            return v;
-        }
-        let held = v.clamp(0.0, hi);
-        self.warn(
-            tok,
-            &format!("{what} {v} is outside [0, {hi}]; using {held}"),
-        );
-        held
-    }
-
-    /// Each component of `v` held to `[0, hi]`, with one warning when any was outside.
-    fn hold3(&mut self, tok: &Token, what: &str, v: Vec3, hi: f32) -> Vec3 {
-        let held = v.clamp(Vec3::ZERO, Vec3::splat(hi));
-        if held != v {
-            self.warn(
-                tok,
-                &format!(
-                    "{what} {} {} {} is outside [0, {hi}]; using {} {} {}",
-                    v.x, v.y, v.z, held.x, held.y, held.z
-                ),
-            );
-        }
-        held
-    }
-
     fn warn(&mut self, tok: &Token, msg: &str) {
         let w = format!("{}:{}:{}: {msg}", self.lx.name(), tok.line, tok.col);
         self.scene.warnings.push(w);
@@ -184,163 +157,6 @@ impl Parser<'_> {
         } else {
             Ok(None)
         }
-    }
-
-    fn current_material(&mut self) -> MaterialId {
-        match self.material {
-            Some(m) => m,
-            None => {
-                let id = self.intern(Material::DEFAULT);
-                self.material = Some(id);
-                id
-            }
-        }
-    }
-
-    fn intern(&mut self, m: Material) -> MaterialId {
-        let key = [
-            m.color.x, m.color.y, m.color.z, m.kd, m.ks, m.shine, m.t, m.ior,
-        ]
-        .map(f32::to_bits);
-        let materials = &mut self.scene.materials;
-        *self.material_ids.entry(key).or_insert_with(|| {
-            materials.push(m);
-            MaterialId(materials.len() as u32 - 1)
-        })
-    }
-
-    fn view(&mut self, vtok: &Token) -> Result<()> {
-        let mut cam = super::nff_default_camera();
-        let (mut from, mut at, mut up, mut angle) = (None, None, None, None);
-        let mut resolution = None;
-        while let Some(t) = self.lx.peek() {
-            match t.text {
-                b"from" | b"at" | b"up" | b"angle" | b"hither" | b"resolution" | b"aperture"
-                | b"focal" => {}
-                _ => break,
-            }
-            self.lx.next_token();
-            match t.text {
-                b"from" => from = Some(self.lx.vec3("'from' coordinate")?),
-                b"at" => at = Some(self.lx.vec3("'at' coordinate")?),
-                b"up" => up = Some(self.lx.vec3("'up' coordinate")?),
-                b"angle" => {
-                    let a = self.lx.peek();
-                    let v = self.lx.number("view angle in degrees")?;
-                    if !(v > 0.0 && v < 180.0) {
-                        let a = a.expect("number was read");
-                        return Err(self.lx.error_at(
-                            &a,
-                            format!("expected a view angle in (0, 180) degrees, found {v}"),
-                        ));
-                    }
-                    angle = Some(v);
-                }
-                b"hither" => {
-                    let h = self.lx.number("hither distance")?;
-                    cam.hither = h.max(0.0);
-                }
-                b"resolution" => {
-                    let (w, wt) = self.lx.count("resolution width")?;
-                    let (h, ht) = self.lx.count("resolution height")?;
-                    for (v, t) in [(w, wt), (h, ht)] {
-                        if v == 0 || v > MAX_IMAGE_SIDE {
-                            return Err(self.lx.error_at(
-                                &t,
-                                format!(
-                                    "expected a resolution between 1 and {MAX_IMAGE_SIDE}, found {v}"
-                                ),
-                            ));
-                        }
-                    }
-                    resolution = Some((w, h));
-                }
-                b"aperture" => cam.aperture = self.lx.number("lens aperture")?.abs(),
-                b"focal" => {
-                    let f = self.lx.peek();
-                    let d = self.lx.number("focal distance")?;
-                    if d <= 0.0 {
-                        let f = f.expect("number was read");
-                        return Err(self.lx.error_at(
-                            &f,
-                            format!("expected a positive focal distance, found {d}"),
-                        ));
-                    }
-                    cam.focal = Some(d);
-                }
-                _ => unreachable!(),
-            }
-        }
-        let missing = [
-            ("from", from.is_none()),
-            ("at", at.is_none()),
-            ("up", up.is_none()),
-            ("angle", angle.is_none()),
-        ];
-        if let Some((what, _)) = missing.iter().find(|(_, m)| *m) {
-            return Err(self.lx.error_at(
-                vtok,
-                format!("view is missing '{what}' (from, at, up and angle are required)"),
-            ));
-        }
-        cam.from = from.unwrap();
-        cam.at = at.unwrap();
-        cam.up = up.unwrap();
-        cam.angle = angle.unwrap();
-        if let Some((w, h)) = resolution {
-            cam.width = w;
-            cam.height = h;
-        }
-        let dir = cam.at - cam.from;
-        if dir.length_squared() == 0.0 {
-            return Err(self
-                .lx
-                .error_at(vtok, "degenerate view: 'from' and 'at' are the same point"));
-        }
-        let side = dir.normalize().cross(cam.up.normalize_or_zero());
-        if side.length() < 1e-6 {
-            return Err(self.lx.error_at(
-                vtok,
-                "degenerate view: 'up' is zero or parallel to the view direction",
-            ));
-        }
-        if self.have_view {
-            self.warn(vtok, "second view replaces the first");
-        }
-        self.have_view = true;
-        self.scene.camera = cam;
-        Ok(())
-    }
-
-    fn fill(&mut self, tok: &Token) -> Result<()> {
-        let color = self.lx.vec3("material colour")?;
-        let color = self.hold3(tok, "material colour", color, 1.0);
-        let kd = self.lx.number("Kd")?;
-        let kd = self.hold(tok, "Kd", kd, 1.0);
-        let ks = self.lx.number("Ks")?;
-        let ks = self.hold(tok, "Ks", ks, 1.0);
-        let shine = self.lx.number("Shine")?;
-        let shine = self.hold(tok, "Shine", shine, MAX_SHINE);
-        let t = self.lx.number("T")?;
-        let t = self.hold(tok, "T", t, 1.0);
-        let ior = self.lx.number("index of refraction")?;
-        if t > 0.0 && ior <= 0.0 {
-            return Err(self.lx.error_at(
-                tok,
-                format!("a transmitting material (T = {t}) needs a positive index of refraction, found {ior}"),
-            ));
-        }
-        let m = Material {
-            color,
-            kd,
-            ks,
-            shine,
-            t,
-            // T = 0 makes ior meaningless (SPD writes 0): keep a harmless value.
-            ior: if t > 0.0 { ior } else { 1.0 },
-        };
-        self.material = Some(self.intern(m));
-        Ok(())
     }
 
     fn cone(&mut self) -> Result<()> {
@@ -404,7 +220,7 @@ impl Parser<'_> {
         // direction (zero) would shade to 0 / 0, so it is read as a flat polygon.
         let mut zero = None;
         for (i, n) in self.normals.iter_mut().enumerate() {
-            match super::unit(*n) {
+            match unit(*n) {
                 Some(u) => *n = u,
                 None => zero = zero.or(Some(i + 1)),
             }
@@ -477,10 +293,12 @@ impl Parser<'_> {
         let (nu, nut) = self.lx.count("area light samples along u")?;
         let (nv, nvt) = self.lx.count("area light samples along v")?;
         for (n, t) in [(nu, nut), (nv, nvt)] {
-            if n == 0 || n > 64 {
+            if n == 0 || n > MAX_AREA_LIGHT_SAMPLES {
                 return Err(self.lx.error_at(
                     &t,
-                    format!("expected area light samples between 1 and 64, found {n}"),
+                    format!(
+                        "expected area light samples between 1 and {MAX_AREA_LIGHT_SAMPLES}, found {n}"
+                    ),
                 ));
             }
         }
@@ -496,83 +314,6 @@ impl Parser<'_> {
             color,
             samples: [nu, nv],
         });
-        Ok(())
-    }
-
-    fn mesh(&mut self, tok: &Token) -> Result<()> {
-        let ptok = self.lx.expect_token("mesh file path")?;
-        let raw = String::from_utf8_lossy(ptok.text);
-        let rel = raw.trim_matches('"');
-        let mut xf = MeshTransform::default();
-        while let Some(t) = self.lx.peek() {
-            match t.text {
-                b"translate" => {
-                    self.lx.next_token();
-                    xf.translate = self.lx.vec3("mesh translation")?;
-                }
-                b"rotate" => {
-                    self.lx.next_token();
-                    xf.rotate_deg = self.lx.vec3("mesh rotation in degrees")?;
-                }
-                b"scale" => {
-                    self.lx.next_token();
-                    let s = self.lx.number("mesh scale")?;
-                    xf.scale = if self.lx.peek_is_number() {
-                        Vec3::new(
-                            s,
-                            self.lx.number("mesh scale y")?,
-                            self.lx.number("mesh scale z")?,
-                        )
-                    } else {
-                        Vec3::splat(s)
-                    };
-                    if xf.scale.cmpeq(Vec3::ZERO).any() {
-                        return Err(self.lx.error_at(&t, "mesh scale must not be zero"));
-                    }
-                }
-                _ => break,
-            }
-        }
-        let path = self.base.join(rel);
-        let kind = FileKind::of(&path);
-        if kind == FileKind::Nff {
-            return Err(self.lx.error_at(
-                &ptok,
-                format!(
-                    "mesh file '{}' must end in .stl or .obj (optionally .gz)",
-                    escape_controls(rel)
-                ),
-            ));
-        }
-        let bytes = super::read_file(&path).map_err(|e| {
-            let why = match e {
-                Error::Io { source, .. } => source.to_string(),
-                Error::Scene { msg, .. } => msg,
-                other => return other,
-            };
-            self.lx.error_at(
-                &ptok,
-                format!(
-                    "cannot read mesh file '{}': {why}",
-                    escape_controls(&path.display().to_string())
-                ),
-            )
-        })?;
-        let mesh = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
-        self.scene.warnings.extend(mesh.warnings);
-        let mut tris = mesh.triangles;
-        if tris.is_empty() {
-            self.warn(
-                tok,
-                &format!("mesh '{}' has no triangles", escape_controls(rel)),
-            );
-        }
-        let material = self.current_material();
-        xf.apply(&mut tris);
-        for t in &mut tris {
-            t.material = material;
-        }
-        self.scene.triangles.append(&mut tris);
         Ok(())
     }
 }

@@ -1,0 +1,388 @@
+//! The wide trees: the binary tree of `SceneBuffers::nodes` collapsed so that each node
+//! holds several children, whose boxes one ray tests together. Eight wide for the CPU
+//! renderer (`WideNode`, `build`; walked by `cpu::wide`), in SIMD lanes: two of glam's
+//! `Vec4`s per coordinate (SSE on x86-64, NEON on AArch64; one AVX register where the
+//! compiler may use it). Four wide for the GPU's `TRAVERSAL_WIDE` walk (`GpuWideNode`,
+//! `gpu_nodes`): there a ray waits on node fetches, and a wide node halves the chain of
+//! them. On the CPU eight lanes beat four on primary rays (2 to 10% more a second on the
+//! five SPD scenes of `benches/embree.sh`), docs/bvh.md.
+//!
+//! The leaves are the binary tree's leaves, the same primitive ranges of the same `prims`
+//! array. Building a tree belongs with the tree: `pack` caches both wide trees without
+//! depending on either renderer.
+
+use glam::Vec4;
+
+use crate::gpu_types::{
+    GpuNode, GpuWideNode, TRAVERSAL_STACK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
+};
+
+/// Children of a wide node.
+pub const WIDTH: usize = 8;
+
+/// One coordinate of the boxes of a wide node's children: lane `l` is `[l / 4][l % 4]`.
+pub(crate) type Lanes = [Vec4; WIDTH / 4];
+
+/// `WideNode::count` of a lane that holds no child (its box is empty, so no ray enters).
+pub(crate) const EMPTY: u32 = u32::MAX;
+
+/// Eight child boxes in structure-of-arrays form, and where each child leads.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct WideNode {
+    /// Lower and upper corners: `lo[axis]` holds that coordinate of the eight boxes.
+    pub(crate) lo: [Lanes; 3],
+    pub(crate) hi: [Lanes; 3],
+    /// A wide node's index (`count == 0`), or a leaf's first primitive.
+    pub(crate) child: [u32; WIDTH],
+    /// Primitives of a leaf child, 0 for an inner child, `EMPTY` for no child.
+    pub(crate) count: [u32; WIDTH],
+}
+
+impl WideNode {
+    fn empty() -> Self {
+        WideNode {
+            lo: [[Vec4::INFINITY; WIDTH / 4]; 3],
+            hi: [[Vec4::NEG_INFINITY; WIDTH / 4]; 3],
+            child: [0; WIDTH],
+            count: [EMPTY; WIDTH],
+        }
+    }
+}
+
+/// Surface area of a binary node's box: the node opened first when collapsing.
+fn area(n: &GpuNode) -> f32 {
+    let d = n.max - n.min;
+    d.x * d.y + d.y * d.z + d.z * d.x
+}
+
+/// A binary node standing as a child of a wide node, and, for an inner one, the index of
+/// the wide node that stands for it in turn.
+#[derive(Clone, Copy)]
+struct Lane {
+    binary: u32,
+    wide: u32,
+}
+
+/// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
+/// `offset`) into nodes of up to `width` children, root first, as the lanes of each:
+/// each inner node takes its children, then repeatedly replaces its largest inner child
+/// by that child's two children while a lane is free.
+fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
+    if nodes.is_empty() {
+        return Vec::new();
+    }
+    let mut wide = vec![Vec::new()];
+    // (wide node to fill, binary node it stands for)
+    let mut todo = vec![(0usize, 0u32)];
+    while let Some((w, i)) = todo.pop() {
+        let n = &nodes[i as usize];
+        let mut kids: Vec<u32> = if n.count() > 0 {
+            vec![i] // a tree that is one leaf
+        } else {
+            vec![i + 1, n.offset]
+        };
+        while kids.len() < width {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|&(_, &k)| nodes[k as usize].count() == 0)
+                .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
+            let Some((j, &k)) = open else { break };
+            kids.swap_remove(j);
+            kids.extend([k + 1, nodes[k as usize].offset]);
+        }
+        let lanes = kids
+            .into_iter()
+            .map(|k| {
+                let mut lane = Lane { binary: k, wide: 0 };
+                if nodes[k as usize].count() == 0 {
+                    lane.wide = wide.len() as u32;
+                    todo.push((wide.len(), k));
+                    wide.push(Vec::new());
+                }
+                lane
+            })
+            .collect();
+        wide[w] = lanes;
+    }
+    wide
+}
+
+/// The CPU renderer's eight-wide tree over the binary `nodes`.
+pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
+    collapse(nodes, WIDTH)
+        .into_iter()
+        .map(|lanes| {
+            let mut node = WideNode::empty();
+            for (lane, Lane { binary, wide }) in lanes.into_iter().enumerate() {
+                let c = &nodes[binary as usize];
+                for axis in 0..3 {
+                    node.lo[axis][lane / 4][lane % 4] = c.min[axis];
+                    node.hi[axis][lane / 4][lane % 4] = c.max[axis];
+                }
+                (node.child[lane], node.count[lane]) = if c.count() > 0 {
+                    (c.offset, c.count())
+                } else {
+                    (wide, 0)
+                };
+            }
+            node
+        })
+        .collect()
+}
+
+/// The binary `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them
+/// (`GpuWideNode`), and the traversal-stack entries that walk can need on them; `None`
+/// where that walk cannot take the tree: a path whose waiting children could overflow
+/// `TRAVERSAL_STACK` (see `next_leaf_wide` in traverse.wgsl: a node leaves at most three
+/// children waiting, and its pushes write up to two slots past those it keeps), a leaf of
+/// more than four primitives, a first primitive beyond the entry's 29 bits, or no tree.
+pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
+    let wide = collapse(nodes, 4);
+    if wide.is_empty() {
+        return None;
+    }
+    let mut out = Vec::with_capacity(wide.len());
+    for lanes in &wide {
+        let mut node = GpuWideNode {
+            lo: [Vec4::INFINITY; 3],
+            hi: [Vec4::NEG_INFINITY; 3],
+            entry: [WIDE_EMPTY; 4],
+        };
+        for (lane, &Lane { binary, wide }) in lanes.iter().enumerate() {
+            let c = &nodes[binary as usize];
+            for axis in 0..3 {
+                node.lo[axis][lane] = c.min[axis];
+                node.hi[axis][lane] = c.max[axis];
+            }
+            node.entry[lane] = match c.count() {
+                0 => wide,
+                count @ 1..=4 if c.offset < (1 << 29) - 1 => {
+                    WIDE_LEAF | c.offset << WIDE_FIRST_SHIFT | (count - 1)
+                }
+                _ => return None,
+            };
+        }
+        out.push(node);
+    }
+    // Entries waiting when the walk reaches each node: the sum over its ancestors of the
+    // children each left waiting (at most its children less the one entered).
+    let mut todo = vec![(0usize, 0usize)];
+    let mut need = 0;
+    while let Some((w, waiting)) = todo.pop() {
+        need = need.max(waiting + 3);
+        if need > TRAVERSAL_STACK {
+            return None;
+        }
+        let lanes = &wide[w];
+        for lane in lanes {
+            if nodes[lane.binary as usize].count() == 0 {
+                todo.push((lane.wide as usize, waiting + lanes.len() - 1));
+            }
+        }
+    }
+    Some((out, need as u32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{self, Quality};
+    use crate::gpu_types::WIDE_COUNT_MASK;
+    use glam::Vec3;
+    use obvhs::aabb::Aabb;
+
+    fn boxes(n: usize) -> Vec<Aabb> {
+        (0..n)
+            .map(|i| {
+                let p = glam::Vec3A::new((i * 7 % 13) as f32, (i * 5 % 11) as f32, i as f32 * 0.1);
+                Aabb {
+                    min: p,
+                    max: p + 0.5,
+                }
+            })
+            .collect()
+    }
+
+    /// A lane of either wide tree, as `check` reads it: its box, and a leaf's (first,
+    /// count), an inner child's node, or nothing.
+    enum Child {
+        Leaf(u32, u32),
+        Inner(usize),
+        Empty,
+    }
+
+    fn cpu_lanes(wide: &[WideNode]) -> Vec<Vec<(Vec3, Vec3, Child)>> {
+        let at = |v: &[Lanes; 3], l: usize| Vec3::from_array([0, 1, 2].map(|a| v[a][l / 4][l % 4]));
+        wide.iter()
+            .map(|n| {
+                (0..WIDTH)
+                    .map(|l| {
+                        let child = match n.count[l] {
+                            EMPTY => Child::Empty,
+                            0 => Child::Inner(n.child[l] as usize),
+                            c => Child::Leaf(n.child[l], c),
+                        };
+                        (at(&n.lo, l), at(&n.hi, l), child)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    fn gpu_lanes(wide: &[GpuWideNode]) -> Vec<Vec<(Vec3, Vec3, Child)>> {
+        let at = |v: &[Vec4; 3], l: usize| Vec3::from_array([0, 1, 2].map(|a| v[a][l]));
+        wide.iter()
+            .map(|n| {
+                (0..4)
+                    .map(|l| {
+                        let e = n.entry[l];
+                        let child = if e == WIDE_EMPTY {
+                            Child::Empty
+                        } else if e & WIDE_LEAF != 0 {
+                            Child::Leaf(
+                                (e & !WIDE_LEAF) >> WIDE_FIRST_SHIFT,
+                                (e & WIDE_COUNT_MASK) + 1,
+                            )
+                        } else {
+                            Child::Inner(e as usize)
+                        };
+                        (at(&n.lo, l), at(&n.hi, l), child)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Walks a wide tree: every binary leaf appears once, as a lane with the leaf's own
+    /// box; every inner lane's box is that of a binary node; empty lanes come last and
+    /// hold empty boxes; no path is deeper than the binary tree's (the stack bound).
+    fn check(binary: &bvh::FlatBvh, wide: &[Vec<(Vec3, Vec3, Child)>]) {
+        let leaves: Vec<&GpuNode> = binary.nodes.iter().filter(|n| n.count() > 0).collect();
+        let mut seen = vec![0u32; binary.order.len()];
+        let mut reached = vec![false; wide.len()];
+        let mut todo = vec![(0usize, 1usize)];
+        let mut depth = 0;
+        while let Some((w, d)) = todo.pop() {
+            assert!(!std::mem::replace(&mut reached[w], true), "node {w} twice");
+            depth = depth.max(d);
+            let n = &wide[w];
+            let lanes = n
+                .iter()
+                .take_while(|l| !matches!(l.2, Child::Empty))
+                .count();
+            assert!(lanes >= 1 && n[lanes..].iter().all(|l| matches!(l.2, Child::Empty)));
+            // A lane stays free only when no inner child was left to open into it.
+            assert!(
+                lanes == n.len() || n[..lanes].iter().all(|l| matches!(l.2, Child::Leaf(..))),
+                "node {w}"
+            );
+            for (lo, hi, child) in n {
+                let box_of = |b: &GpuNode| b.min == *lo && b.max == *hi;
+                match *child {
+                    Child::Empty => assert!(lo.cmpgt(*hi).all(), "empty lane of {w} has a box"),
+                    Child::Leaf(first, count) => {
+                        assert!(
+                            leaves
+                                .iter()
+                                .any(|l| l.offset == first && l.count() == count && box_of(l))
+                        );
+                        for k in first..first + count {
+                            seen[k as usize] += 1;
+                        }
+                    }
+                    Child::Inner(node) => {
+                        assert!(binary.nodes.iter().any(|b| b.count() == 0 && box_of(b)));
+                        todo.push((node, d + 1));
+                    }
+                }
+            }
+        }
+        assert!(reached.iter().all(|&r| r), "unreachable wide nodes");
+        assert!(
+            seen.iter().all(|&s| s == 1),
+            "a primitive is not in exactly one leaf"
+        );
+        assert!(
+            depth <= binary.depth,
+            "wide depth {depth} > {}",
+            binary.depth
+        );
+    }
+
+    #[test]
+    fn the_wide_tree_holds_the_binary_leaves_once_and_is_no_deeper() {
+        for n in [1, 2, 3, 5, 17, 1000] {
+            for quality in [Quality::Medium, Quality::High] {
+                let binary = bvh::build(&boxes(n), quality);
+                check(&binary, &cpu_lanes(&build(&binary.nodes)));
+                let (gpu, _) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
+                check(&binary, &gpu_lanes(&gpu));
+            }
+        }
+        // A chain deeper than obvhs keeps, rebuilt by median splits (bvh.rs): the deepest
+        // tree the stack must hold.
+        let chain: Vec<Aabb> = (0..120)
+            .map(|k| {
+                let x = 2f32.powi(k);
+                Aabb {
+                    min: glam::Vec3A::new(x, 0.0, 0.0),
+                    max: glam::Vec3A::new(x * 1.25, 1.0, 1.0),
+                }
+            })
+            .collect();
+        let binary = bvh::build(&chain, Quality::Medium);
+        check(&binary, &cpu_lanes(&build(&binary.nodes)));
+        assert!(build(&[]).is_empty());
+        assert!(gpu_nodes(&[]).is_none());
+    }
+
+    /// A binary tree whose path to its deepest leaf passes `depth` inner nodes, each with
+    /// a larger two-leaf subtree beside it: collapsed, every wide node on that path leaves
+    /// three children waiting.
+    fn comb(depth: usize) -> Vec<GpuNode> {
+        fn node(nodes: &mut Vec<GpuNode>, size: f32, count: u32) -> usize {
+            nodes.push(GpuNode {
+                min: Vec3::ZERO,
+                max: Vec3::splat(size),
+                offset: 0,
+                count_axis: count,
+            });
+            nodes.len() - 1
+        }
+        fn path(nodes: &mut Vec<GpuNode>, depth: usize) -> usize {
+            if depth == 0 {
+                return node(nodes, 1.0, 1);
+            }
+            let i = node(nodes, 1.0, 0);
+            let side = node(nodes, 10.0, 0);
+            node(nodes, 10.0, 1);
+            let second = node(nodes, 10.0, 1);
+            nodes[side].offset = second as u32;
+            nodes[i].offset = path(nodes, depth - 1) as u32;
+            i
+        }
+        let mut nodes = Vec::new();
+        path(&mut nodes, depth);
+        nodes
+    }
+
+    /// The GPU's wide walk takes trees whose waiting children fit the traversal stack,
+    /// and refuses the others, which then walk the binary tree in pairs.
+    #[test]
+    fn the_gpu_wide_tree_is_refused_where_it_could_overflow_the_stack() {
+        for n in [1, 17, 1000] {
+            let binary = bvh::build(&boxes(n), Quality::High);
+            let (gpu, need) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
+            check(&binary, &gpu_lanes(&gpu));
+            assert!((3..=TRAVERSAL_STACK as u32).contains(&need));
+        }
+        // Two binary levels a wide node, three waiting each: 20 levels need 3 * 10 + 3
+        // entries, 42 need 66, more than the stack.
+        assert_eq!(gpu_nodes(&comb(20)).map(|(_, need)| need), Some(33));
+        let deep = comb(42);
+        assert!(deep.len() < 4 * 42 + 2);
+        assert!(gpu_nodes(&deep).is_none());
+    }
+}

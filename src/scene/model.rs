@@ -1,0 +1,222 @@
+//! The scene's data model: plain data that the readers produce and `pack` consumes (the
+//! scene, its camera, lights, materials and primitives, and a mesh file's triangles). Kept
+//! apart from the readers so that every reader, and everything that reads a scene, shares
+//! one definition without depending on a reader (`Mesh` in `mesh.rs` once made `mesh` and
+//! `obj` import each other).
+//!
+//! Primitives carry a `MaterialId` that indexes `Scene::materials` directly, so the same
+//! index is used on the GPU.
+
+use glam::Vec3;
+
+/// Index into `Scene::materials`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct MaterialId(pub u32);
+
+/// Which way eye rays leave the camera, in NFF terms.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub from: Vec3,
+    pub at: Vec3,
+    pub up: Vec3,
+    /// Full vertical field of view in degrees between the centres of the outermost pixel rows.
+    pub angle: f32,
+    /// Near distance for eye rays.
+    pub hither: f32,
+    pub width: u32,
+    pub height: u32,
+    /// Thin-lens aperture diameter (0 = pinhole). Extension `aperture a`.
+    pub aperture: f32,
+    /// Thin-lens focal distance; `None` means `|at - from|`. Extension `focal d`.
+    pub focal: Option<f32>,
+}
+
+/// The camera a scene has before its `v` is read.
+pub fn nff_default_camera() -> Camera {
+    Camera {
+        from: Vec3::ZERO,
+        at: Vec3::NEG_Z,
+        up: Vec3::Y,
+        angle: 45.0,
+        hither: 0.0,
+        width: 512,
+        height: 512,
+        aperture: 0.0,
+        focal: None,
+    }
+}
+
+impl Camera {
+    /// Distance at which the thin lens is in focus.
+    pub fn focal_distance(&self) -> f32 {
+        self.focal.unwrap_or_else(|| (self.at - self.from).length())
+    }
+}
+
+/// NFF `f r g b Kd Ks Shine T ior`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    pub color: Vec3,
+    pub kd: f32,
+    pub ks: f32,
+    pub shine: f32,
+    pub t: f32,
+    pub ior: f32,
+}
+
+impl Material {
+    /// Used for primitives that come before the first `f` (documented in docs/scene-format.md).
+    pub const DEFAULT: Material = Material {
+        color: Vec3::ONE,
+        kd: 1.0,
+        ks: 0.0,
+        shine: 1.0,
+        t: 0.0,
+        ior: 1.0,
+    };
+    /// Neutral grey given to a bare mesh rendered without a scene file.
+    pub const NEUTRAL_GREY: Material = Material {
+        color: Vec3::splat(0.8),
+        kd: 0.8,
+        ks: 0.1,
+        shine: 30.0,
+        t: 0.0,
+        ior: 1.0,
+    };
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Light {
+    /// `l x y z [r g b]`; `color: None` gets the SPD intensity `1/sqrt(n_lights)`.
+    Point { position: Vec3, color: Option<Vec3> },
+    /// `dl dx dy dz [r g b]`: light travelling along `direction` (from the light towards the scene).
+    Directional {
+        direction: Vec3,
+        color: Option<Vec3>,
+    },
+    /// `al cx cy cz ux uy uz vx vy vz r g b nu nv`: a rectangle `corner + a*u + b*v`,
+    /// sampled `nu x nv` times per shading point (stratified, jittered).
+    Area {
+        corner: Vec3,
+        u: Vec3,
+        v: Vec3,
+        color: Vec3,
+        samples: [u32; 2],
+    },
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    /// Negative in NFF means "inside visible"; every surface is rendered two-sided, so
+    /// readers store the absolute value.
+    pub radius: f32,
+    pub material: MaterialId,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Triangle {
+    pub v: [Vec3; 3],
+    /// Shading normals per vertex (`pp` patches, STL facet normals, OBJ normals). Boxed:
+    /// most triangles have none, and a flat triangle then takes 48 bytes instead of 80
+    /// (8.4 million of them in mount-11).
+    pub n: Option<Box<[Vec3; 3]>>,
+    pub material: MaterialId,
+}
+
+impl Triangle {
+    /// Twice-area vector (cross product of the edges); zero for degenerate triangles.
+    pub fn cross(&self) -> Vec3 {
+        (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
+    }
+    pub fn area(&self) -> f32 {
+        0.5 * self.cross().length()
+    }
+}
+
+/// Infinite plane (`pl` of the P3D dialect).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plane {
+    pub point: Vec3,
+    /// Unit normal.
+    pub normal: Vec3,
+    pub material: MaterialId,
+}
+
+/// NFF `c`: a truncated cone or cylinder between two cap centres; sides only, no caps.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    pub base: Vec3,
+    pub base_radius: f32,
+    pub apex: Vec3,
+    pub apex_radius: f32,
+    pub material: MaterialId,
+}
+
+/// P3D `aabb x0 x1 y0 y1 z0 z1`: an axis-aligned box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoxPrim {
+    pub min: Vec3,
+    pub max: Vec3,
+    pub material: MaterialId,
+}
+
+/// A whole scene as read from one file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// Display name used in messages (usually the path).
+    pub name: String,
+    pub camera: Camera,
+    pub background: Vec3,
+    /// `am r g b`; `None` means the renderer's default.
+    pub ambient: Option<Vec3>,
+    pub lights: Vec<Light>,
+    pub materials: Vec<Material>,
+    pub spheres: Vec<Sphere>,
+    pub triangles: Vec<Triangle>,
+    pub planes: Vec<Plane>,
+    pub cones: Vec<Cone>,
+    pub boxes: Vec<BoxPrim>,
+    /// Non-fatal problems (e.g. dropped degenerate polygons), each naming its line.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// An empty scene with the given camera.
+    pub fn new(name: impl Into<String>, camera: Camera) -> Self {
+        Scene {
+            name: name.into(),
+            camera,
+            background: Vec3::ZERO,
+            ambient: None,
+            lights: Vec::new(),
+            materials: Vec::new(),
+            spheres: Vec::new(),
+            triangles: Vec::new(),
+            planes: Vec::new(),
+            cones: Vec::new(),
+            boxes: Vec::new(),
+            warnings: Vec::new(),
+        }
+    }
+}
+
+/// `n` scaled to unit length, or `None` when it has no direction (zero or not finite).
+/// It is divided by its largest component first, so that a vector whose squared length
+/// overflows or underflows f32 (components beyond about 1e19 or below 1e-19) is still
+/// normalised: `Vec3::normalize` turns `(3e38, 0, 0)` into zero, and zero shading normals
+/// into NaN pixels.
+pub fn unit(n: Vec3) -> Option<Vec3> {
+    let largest = n.abs().max_element();
+    if !n.is_finite() || largest == 0.0 {
+        return None;
+    }
+    Some((n / largest).normalize())
+}
+
+/// A mesh file's triangles (material 0) and what was dropped from it, as
+/// `FILE:LINE:COL: message`.
+pub struct Mesh {
+    pub triangles: Vec<Triangle>,
+    pub warnings: Vec<String>,
+}

@@ -1,0 +1,114 @@
+//! The NFF `v` block: the camera (`from`, `at`, `up`, `angle`, `hither`, `resolution`,
+//! and our `aperture` and `focal`), checked for what would make no image. Apart from the
+//! statement loop because it is a small grammar of its own.
+
+use super::Parser;
+use crate::error::Result;
+use crate::limits::MAX_IMAGE_SIDE;
+use crate::scene::lex::Token;
+use crate::scene::model::nff_default_camera;
+
+impl Parser<'_> {
+    pub(super) fn view(&mut self, vtok: &Token) -> Result<()> {
+        let mut cam = nff_default_camera();
+        let (mut from, mut at, mut up, mut angle) = (None, None, None, None);
+        let mut resolution = None;
+        while let Some(t) = self.lx.peek() {
+            match t.text {
+                b"from" | b"at" | b"up" | b"angle" | b"hither" | b"resolution" | b"aperture"
+                | b"focal" => {}
+                _ => break,
+            }
+            self.lx.next_token();
+            match t.text {
+                b"from" => from = Some(self.lx.vec3("'from' coordinate")?),
+                b"at" => at = Some(self.lx.vec3("'at' coordinate")?),
+                b"up" => up = Some(self.lx.vec3("'up' coordinate")?),
+                b"angle" => {
+                    let a = self.lx.peek();
+                    let v = self.lx.number("view angle in degrees")?;
+                    if !(v > 0.0 && v < 180.0) {
+                        let a = a.expect("number was read");
+                        return Err(self.lx.error_at(
+                            &a,
+                            format!("expected a view angle in (0, 180) degrees, found {v}"),
+                        ));
+                    }
+                    angle = Some(v);
+                }
+                b"hither" => {
+                    let h = self.lx.number("hither distance")?;
+                    cam.hither = h.max(0.0);
+                }
+                b"resolution" => {
+                    let (w, wt) = self.lx.count("resolution width")?;
+                    let (h, ht) = self.lx.count("resolution height")?;
+                    for (v, t) in [(w, wt), (h, ht)] {
+                        if v == 0 || v > MAX_IMAGE_SIDE {
+                            return Err(self.lx.error_at(
+                                &t,
+                                format!(
+                                    "expected a resolution between 1 and {MAX_IMAGE_SIDE}, found {v}"
+                                ),
+                            ));
+                        }
+                    }
+                    resolution = Some((w, h));
+                }
+                b"aperture" => cam.aperture = self.lx.number("lens aperture")?.abs(),
+                b"focal" => {
+                    let f = self.lx.peek();
+                    let d = self.lx.number("focal distance")?;
+                    if d <= 0.0 {
+                        let f = f.expect("number was read");
+                        return Err(self.lx.error_at(
+                            &f,
+                            format!("expected a positive focal distance, found {d}"),
+                        ));
+                    }
+                    cam.focal = Some(d);
+                }
+                _ => unreachable!(),
+            }
+        }
+        let missing = [
+            ("from", from.is_none()),
+            ("at", at.is_none()),
+            ("up", up.is_none()),
+            ("angle", angle.is_none()),
+        ];
+        if let Some((what, _)) = missing.iter().find(|(_, m)| *m) {
+            return Err(self.lx.error_at(
+                vtok,
+                format!("view is missing '{what}' (from, at, up and angle are required)"),
+            ));
+        }
+        cam.from = from.unwrap();
+        cam.at = at.unwrap();
+        cam.up = up.unwrap();
+        cam.angle = angle.unwrap();
+        if let Some((w, h)) = resolution {
+            cam.width = w;
+            cam.height = h;
+        }
+        let dir = cam.at - cam.from;
+        if dir.length_squared() == 0.0 {
+            return Err(self
+                .lx
+                .error_at(vtok, "degenerate view: 'from' and 'at' are the same point"));
+        }
+        let side = dir.normalize().cross(cam.up.normalize_or_zero());
+        if side.length() < 1e-6 {
+            return Err(self.lx.error_at(
+                vtok,
+                "degenerate view: 'up' is zero or parallel to the view direction",
+            ));
+        }
+        if self.have_view {
+            self.warn(vtok, "second view replaces the first");
+        }
+        self.have_view = true;
+        self.scene.camera = cam;
+        Ok(())
+    }
+}
