@@ -9,12 +9,14 @@ use super::device::{buffer_init, read_mapped, scoped};
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
 use crate::film::Film;
-use crate::gpu_types::{GpuPixelState, GpuTile, PHASE_DONE, WORKGROUP_INVOCATIONS};
+use crate::gpu_types::{
+    GpuPixelState, GpuTile, PHASE_DONE, RESUME_X_MASK, RESUME_Y_SHIFT, WORKGROUP_INVOCATIONS,
+};
 
 /// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
 pub(super) const RESUME_CHUNK: usize = 16384;
 
-/// Traces `samples` of the pixels (x | y << 16) whose work did not fit one invocation,
+/// Traces `samples` of the pixels (x | y << RESUME_Y_SHIFT) whose work did not fit one invocation,
 /// with the `resume` entry point, one dispatch after another until none is left, and adds
 /// them to `sums`. Returns their rays and how many were still cut short.
 pub(super) fn resume(
@@ -110,7 +112,7 @@ pub(super) fn resume(
         read_mapped(device, &state_back, state_bytes, |bytes| {
             let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
             for (&xy, st) in chunk.iter().zip(states) {
-                let (x, y) = (xy & 0xffff, xy >> 16);
+                let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);
                 let sum = sums.get(x, y);
                 sums.set(x, y, [0, 1, 2].map(|c| sum[c] + st.sum[c]));
                 rays += u64::from(st.rays);

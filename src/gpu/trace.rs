@@ -18,7 +18,7 @@ use super::resume::resume;
 use super::scene::{Bound, GpuScene};
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
-use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT};
+use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT, RESUME_Y_SHIFT};
 
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
 pub fn trace(
@@ -232,7 +232,7 @@ pub(super) fn encode_band(
 }
 
 /// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;
-/// returns its ray count and the pixels (x | y << 16) whose work was cut short, which are
+/// returns its ray count and the pixels (x | y << RESUME_Y_SHIFT) whose work was cut short, which are
 /// left to `resume` (neither their sums nor their rays are counted).
 fn read_band(
     device: &wgpu::Device,
@@ -257,7 +257,7 @@ fn read_band(
                 for (i, (out, p)) in out.iter_mut().zip(px).enumerate() {
                     if p[3] & PIXEL_CUT_SHORT != 0 {
                         let j = start + k * CHUNK + i;
-                        cut.push((j % width) as u32 | ((j / width) as u32) << 16);
+                        cut.push((j % width) as u32 | ((j / width) as u32) << RESUME_Y_SHIFT);
                     } else {
                         for c in 0..3 {
                             out[c] += f32::from_bits(p[c]);
