@@ -1,4 +1,8 @@
-//! Helpers shared by the test modules.
+//! Helpers shared by the test modules: whether to skip or fail, where the scenes are,
+//! temporary directories, a seedable random source, and the `gpurt` binary; `inputs` holds
+//! the scene texts and files the tests write.
+
+pub mod inputs;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};

@@ -1,0 +1,106 @@
+//! Scene inputs the tests write: a valid NFF view to put entities after, the NFF reader
+//! run on a string, meshes in each format, and files, gzip-compressed or not.
+
+use std::io::Write;
+use std::path::Path;
+
+use glam::Vec3;
+use gpurt::Error;
+use gpurt::scene::{MaterialId, Scene, Triangle, nff};
+
+/// A valid view on lines 1-5; entities after it start on line 6.
+pub const VIEW: &str = "v\nfrom 0 -5 0\nat 0 0 0\nup 0 0 1\nangle 45\n";
+
+pub fn parse_nff(src: &str) -> Result<Scene, Error> {
+    nff::parse(src.as_bytes(), "t.nff", Path::new("."))
+}
+
+/// The position and message of the parse error `src` must give.
+pub fn parse_error(src: &str) -> (u32, u32, String) {
+    match parse_nff(src) {
+        Err(e @ Error::Parse { .. }) => {
+            let shown = e.to_string();
+            let Error::Parse {
+                file,
+                line,
+                col,
+                msg,
+            } = e
+            else {
+                unreachable!()
+            };
+            assert_eq!(file, "t.nff");
+            assert_eq!(shown, format!("t.nff:{line}:{col}: {msg}"), "error display");
+            (line, col, msg)
+        }
+        other => panic!("expected a parse error for {src:?}, got {other:?}"),
+    }
+}
+
+/// Asserts the error's line and column and that its message mentions every `words`.
+#[track_caller]
+pub fn assert_error(src: &str, line: u32, col: u32, words: &[&str]) {
+    let (l, c, msg) = parse_error(src);
+    assert_eq!((l, c), (line, col), "position of error {msg:?} in {src:?}");
+    for w in words {
+        assert!(msg.contains(w), "{msg:?} mentions {w:?}");
+    }
+}
+
+pub fn parse_ok(src: &str) -> Scene {
+    parse_nff(src).unwrap_or_else(|e| panic!("{src:?} should parse: {e}"))
+}
+
+pub fn tri(v: [[f32; 3]; 3], n: Option<[f32; 3]>) -> Triangle {
+    Triangle {
+        v: v.map(Vec3::from),
+        n: n.map(|n| Box::new([Vec3::from(n); 3])),
+        material: MaterialId(0),
+    }
+}
+
+/// A tetrahedron with unit facet normals, one facet without a normal.
+pub fn tetra() -> Vec<Triangle> {
+    let (o, x, y, z) = ([0., 0., 0.], [1., 0., 0.], [0., 1., 0.], [0., 0., 1.]);
+    vec![
+        tri([o, y, x], Some([0., 0., -1.])),
+        tri([o, x, z], Some([0., -1., 0.])),
+        tri([o, z, y], Some([-1., 0., 0.])),
+        tri([x, y, z], None),
+        // One more, far away, so bounds are not symmetric.
+        tri(
+            [[2., 3., 4.], [2.5, 3., 4.], [2., 3.5, 4.25]],
+            Some([0., 0., 1.]),
+        ),
+    ]
+}
+
+pub fn ascii_stl(tris: &[Triangle]) -> String {
+    let mut s = String::from("solid test part\n");
+    for t in tris {
+        let n = t.n.as_ref().map_or(Vec3::ZERO, |n| n[0]);
+        // `{}` prints the shortest text that reads back as the same f32.
+        s += &format!("  facet normal {} {} {}\n    outer loop\n", n.x, n.y, n.z);
+        for v in t.v {
+            s += &format!("      vertex {} {} {}\n", v.x, v.y, v.z);
+        }
+        s += "    endloop\n  endfacet\n";
+    }
+    s + "endsolid test part\n"
+}
+
+pub fn header(text: &[u8]) -> [u8; 80] {
+    let mut h = [b' '; 80];
+    h[..text.len()].copy_from_slice(text);
+    h
+}
+
+pub fn gzip(bytes: &[u8]) -> Vec<u8> {
+    let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
+    e.write_all(bytes).unwrap();
+    e.finish().unwrap()
+}
+
+pub fn write(path: &Path, bytes: &[u8]) {
+    std::fs::write(path, bytes).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+}
