@@ -16,6 +16,8 @@ use gpurt::gpu_types::*;
 use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
+use crate::common::inputs::HALF_COLUMN;
+use crate::common::oracle::column_mean;
 use crate::common::{files_with, shared_scenes};
 
 /// The spec's 8-bit quantum: analytic values must match to within one level.
@@ -537,22 +539,6 @@ fn agreement_rejects_a_perturbed_film() {
         gpurt::agreement::agreement(&buffers, &globals, &reference, &moved).expect("compares");
     assert!(moved.verdict.is_err(), "{}", moved.stats);
     assert_eq!(moved.noise_floor, Some(0.0));
-}
-
-/// A white quad under ambient light 1 whose right edge runs through the centres of pixel
-/// column 100 (x = 0.013465 on the plane, 200x200, 30 degrees): every sample count
-/// covers half of that column, on average, within 0.02 (a k x ceil(n/k) grid with empty
-/// cells gave 0.667 at 3 spp and 0.568 at 7). One sample sits on the edge itself, so its
-/// value there is 0 or 1 by construction; it is checked on the columns beside it.
-pub const HALF_COLUMN: &str = "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nresolution 200 200\n\
-am 1 1 1\nb 0 0 0\nf 1 1 1 1 0 1 0 1\np 4\n-10 -10 0\n0.013465 -10 0\n0.013465 10 0\n-10 10 0\n";
-
-/// Mean of one column of the film's first channel.
-pub fn column_mean(film: &Film, x: u32) -> f64 {
-    (0..film.height)
-        .map(|y| f64::from(film.get(x, y)[0]))
-        .sum::<f64>()
-        / f64::from(film.height)
 }
 
 #[test]

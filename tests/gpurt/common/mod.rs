@@ -3,6 +3,8 @@
 //! the scene texts and files the tests write.
 
 pub mod inputs;
+pub mod oracle;
+pub mod versus;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
