@@ -112,3 +112,16 @@ pub fn write(path: &Path, bytes: &[u8]) {
 /// value there is 0 or 1 by construction; it is checked on the columns beside it.
 pub const HALF_COLUMN: &str = "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nresolution 200 200\n\
 am 1 1 1\nb 0 0 0\nf 1 1 1 1 0 1 0 1\np 4\n-10 -10 0\n0.013465 -10 0\n0.013465 10 0\n-10 10 0\n";
+
+/// A lit ball at 32 x 32: the scene the command line's tests render.
+pub const SCENE: &str = "b 0.1 0.2 0.3
+v
+from 0 -4 1
+at 0 0 0
+up 0 0 1
+angle 40
+resolution 32 32
+l 2 -3 4
+f 1 0.5 0.2 0.8 0.2 20 0 1
+s 0 0 0 1
+";

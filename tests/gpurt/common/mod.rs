@@ -1,6 +1,7 @@
 //! Helpers shared by the test modules: whether to skip or fail, where the scenes are,
-//! temporary directories, a seedable random source, and the `gpurt` binary; `inputs` holds
-//! the scene texts and files the tests write.
+//! temporary directories, a seedable random source, and the `gpurt` binary. Apart:
+//! `inputs` (the scene texts and files the tests write), `oracle` (expected values
+//! computed independently of the renderer), `versus` (the GPU against the CPU).
 
 pub mod inputs;
 pub mod oracle;
@@ -154,4 +155,9 @@ pub fn workdir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The error output of a finished command, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }
