@@ -17,7 +17,7 @@ use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
 use crate::common::inputs::HALF_COLUMN;
-use crate::common::oracle::column_mean;
+use crate::common::oracle::{Camera, column_mean, d, sphere_hit};
 use crate::common::{files_with, shared_scenes};
 
 /// The spec's 8-bit quantum: analytic values must match to within one level.
@@ -43,67 +43,6 @@ fn render(scene: &Scene) -> Film {
 fn pixel(film: &Film, x: u32, y: u32) -> DVec3 {
     let [r, g, b] = film.get(x, y);
     DVec3::new(r as f64, g as f64, b as f64)
-}
-
-fn d(v: Vec3) -> DVec3 {
-    v.as_dvec3()
-}
-
-/// The eye rays of shading.md, in f64, from the scene's camera (not from `GpuGlobals`).
-struct Camera {
-    from: DVec3,
-    forward: DVec3,
-    right: DVec3,
-    up: DVec3,
-    pitch: f64,
-    width: u32,
-    height: u32,
-    hither: f64,
-}
-
-impl Camera {
-    fn of(scene: &Scene) -> Camera {
-        let c = &scene.camera;
-        let forward = (d(c.at) - d(c.from)).normalize();
-        let right = forward.cross(d(c.up)).normalize();
-        Camera {
-            from: d(c.from),
-            forward,
-            right,
-            up: right.cross(forward),
-            pitch: 2.0 * (0.5 * (c.angle as f64).to_radians()).tan() / (c.height - 1) as f64,
-            width: c.width,
-            height: c.height,
-            hither: c.hither as f64,
-        }
-    }
-
-    /// Direction through the centre of pixel `(x, y)`, y down.
-    fn dir(&self, x: u32, y: u32) -> DVec3 {
-        let sx = (x as f64 + 0.5 - 0.5 * self.width as f64) * self.pitch;
-        let sy = (0.5 * self.height as f64 - (y as f64 + 0.5)) * self.pitch;
-        (self.forward + sx * self.right + sy * self.up).normalize()
-    }
-
-    fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
-        let (w, h) = (self.width, self.height);
-        (0..h).flat_map(move |y| (0..w).map(move |x| (x, y)))
-    }
-}
-
-/// A sphere crossing: the nearer distance past `tmin`, and how clearly the ray hits or
-/// misses (discriminant over r^2: near 0 at the silhouette, where f32 and f64 may disagree).
-fn sphere_hit(o: DVec3, dir: DVec3, c: DVec3, r: f64, tmin: f64) -> (Option<f64>, f64) {
-    let oc = o - c;
-    let b = oc.dot(dir);
-    let disc = b * b - (oc.length_squared() - r * r);
-    let clarity = disc / (r * r);
-    if disc < 0.0 {
-        return (None, clarity);
-    }
-    let h = disc.sqrt();
-    let t = [-b - h, -b + h].into_iter().find(|&t| t > tmin);
-    (t, clarity)
 }
 
 /// Distance from `c` to the segment `a -> b`.
