@@ -1,17 +1,67 @@
 //! `gpurt SCENE` as a user runs it: the image it writes in each format, where and how it
 //! writes it, a view file's camera, the wireframe overlay, and the backend it picks.
 
+use std::path::Path;
+
+use glam::DVec3;
+use gpurt::scene::{Scene, nff};
+
 use crate::common::inputs::SCENE;
+use crate::common::oracle::{Camera, d, lone_sphere};
 use crate::common::{gpurt, stderr, workdir};
+
+/// Holds the image file `path`, a render of `scene` (one lit ball), against what
+/// docs/shading.md says each pixel shows, computed independently (`oracle::lone_sphere`):
+/// every pixel away from the ball's outline within one 8-bit level and a half (8-bit
+/// files are quantised; EXR keeps linear values). Returns the ball's pixels and the
+/// background's.
+fn check_ball_image(path: &Path, scene: &Scene) -> (usize, usize) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb32f();
+    let cam = Camera::sized(scene, img.width(), img.height());
+    let (mut ball, mut background) = (0, 0);
+    for (x, y) in cam.pixels() {
+        let Some(want) = lone_sphere(scene, &cam, x, y) else {
+            continue;
+        };
+        let exr = path.extension().is_some_and(|e| e == "exr");
+        let want = if exr {
+            want
+        } else {
+            want.clamp(DVec3::ZERO, DVec3::ONE)
+        };
+        let got = DVec3::from(img.get_pixel(x, y).0.map(f64::from));
+        assert!(
+            (got - want).abs().max_element() <= 1.5 / 255.0,
+            "{}: pixel ({x}, {y}) is {got}, shading.md says {want}",
+            path.display()
+        );
+        if want == d(scene.background) {
+            background += 1;
+        } else {
+            ball += 1;
+        }
+    }
+    (ball, background)
+}
 
 #[test]
 fn renders_to_the_default_name_and_to_each_format() {
     let d = workdir("formats");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let scene = nff::parse(SCENE.as_bytes(), "ball.nff", Path::new(".")).expect("parses");
     let o = gpurt(&["ball.nff", "--backend", "cpu"], &d);
     assert!(o.status.success(), "{}", stderr(&o));
     let img = image::open(d.join("ball.png")).expect("ball.png written");
     assert_eq!((img.width(), img.height()), (32, 32));
+    // Background 0.1 0.2 0.3, scaled by 255 and rounded (0.1 as an f32 is a little over).
+    assert_eq!(img.to_rgb8().get_pixel(0, 0).0, [26, 51, 77], "a corner");
+    let (ball, background) = check_ball_image(&d.join("ball.png"), &scene);
+    assert!(
+        ball > 300 && background > 500,
+        "{ball} ball, {background} background"
+    );
     for ext in ["ppm", "bmp", "exr"] {
         let out = format!("ball.{ext}");
         let o = gpurt(
@@ -21,6 +71,11 @@ fn renders_to_the_default_name_and_to_each_format() {
         assert!(o.status.success(), "{ext}: {}", stderr(&o));
         let img = image::open(d.join(&out)).unwrap_or_else(|e| panic!("{out}: {e}"));
         assert_eq!(img.width(), 20);
+        let (ball, background) = check_ball_image(&d.join(&out), &scene);
+        assert!(
+            ball > 200 && background > 200,
+            "{out}: {ball} ball, {background} background"
+        );
     }
 }
 

@@ -1,11 +1,12 @@
 //! Independent expectations: values a test computes on its own, in f64 and from the
 //! scene rather than from the renderer's buffers, to hold a render against: the eye rays
-//! of docs/shading.md, where a ray crosses a sphere or a triangle, and a film's column
-//! means.
+//! of docs/shading.md, where a ray crosses a sphere or a triangle, the shading of a lone
+//! sphere, and a film's column means.
 
 use glam::{DVec3, Vec3};
 use gpurt::film::Film;
-use gpurt::scene::Scene;
+use gpurt::frame::DEFAULT_AMBIENT;
+use gpurt::scene::{Light, Scene};
 
 pub fn d(v: Vec3) -> DVec3 {
     v.as_dvec3()
@@ -73,6 +74,50 @@ pub fn sphere_hit(o: DVec3, dir: DVec3, c: DVec3, r: f64, tmin: f64) -> (Option<
     let h = disc.sqrt();
     let t = [-b - h, -b + h].into_iter().find(|&t| t > tmin);
     (t, clarity)
+}
+
+/// What docs/shading.md says the eye ray through the centre of pixel `(x, y)` shows of a
+/// scene of one opaque sphere (convex: it never shadows itself, and what it mirrors is the
+/// background) lit by uncoloured point lights: the background where the ray clearly
+/// misses, ambient + sum over lights of I (Kd C N.L + Ks max(R.L, 0)^Shine) + Ks
+/// background where it clearly hits, with I = 1/sqrt(n_lights); `None` near the
+/// silhouette, where f32 and f64 may disagree.
+pub fn lone_sphere(scene: &Scene, cam: &Camera, x: u32, y: u32) -> Option<DVec3> {
+    let [sphere] = &scene.spheres[..] else {
+        panic!("{}: one sphere expected", scene.name)
+    };
+    let (c, r) = (d(sphere.center), sphere.radius as f64);
+    let m = scene.materials[sphere.material.0 as usize];
+    assert_eq!(m.t, 0.0, "an opaque sphere");
+    let bg = d(scene.background);
+    let dir = cam.dir(x, y);
+    let (t, clarity) = sphere_hit(cam.from, dir, c, r, cam.hither);
+    if clarity.abs() < 1e-3 {
+        return None;
+    }
+    let Some(t) = t else { return Some(bg) };
+    let (kd_c, ks) = (m.kd as f64 * d(m.color), m.ks as f64);
+    let ambient = d(scene.ambient.unwrap_or(Vec3::splat(DEFAULT_AMBIENT)));
+    let p = cam.from + t * dir;
+    let n = (p - c) / r;
+    let refl = dir - 2.0 * n.dot(dir) * n;
+    let intensity = 1.0 / (scene.lights.len() as f64).sqrt();
+    let mut colour = ambient * kd_c + ks * bg;
+    for light in &scene.lights {
+        let Light::Point {
+            position,
+            color: None,
+        } = light
+        else {
+            panic!("{}: uncoloured point lights expected", scene.name)
+        };
+        let l = (d(*position) - p).normalize();
+        if n.dot(l) > 0.0 {
+            let highlight = ks * refl.dot(l).max(0.0).powf(m.shine as f64);
+            colour += intensity * (kd_c * n.dot(l) + DVec3::splat(highlight));
+        }
+    }
+    Some(colour)
 }
 
 /// Where the line `o + t dir` (`dir` a unit vector) crosses the plane of triangle `v`, if
