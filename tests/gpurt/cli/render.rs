@@ -162,7 +162,9 @@ fn outputs_follow_links_keep_permissions_and_are_checked_first() {
 }
 
 /// `--view FILE` takes the camera from a file's `v` block: the image is the one of the
-/// scene with that block in place of its own, to the bit (CPU backend).
+/// scene with that block in place of its own, to the bit (CPU backend), and what
+/// docs/shading.md says that camera sees; the scene's own camera at the same size (the
+/// control) sees something else, so the view moved more than the image's size.
 #[test]
 fn a_view_file_replaces_the_scene_camera() {
     let d = workdir("view-file");
@@ -174,11 +176,15 @@ fn a_view_file_replaces_the_scene_camera() {
         view,
     );
     assert_ne!(moved, SCENE);
-    std::fs::write(d.join("moved.nff"), moved).unwrap();
+    std::fs::write(d.join("moved.nff"), &moved).unwrap();
     for (scene, out, extra) in [
         ("scene.nff", "a.png", vec!["--view", "view.nff"]),
         ("moved.nff", "b.png", vec![]),
-        ("scene.nff", "c.png", vec![]),
+        (
+            "scene.nff",
+            "c.png",
+            vec!["--width", "40", "--height", "30"],
+        ),
     ] {
         let mut args = vec![scene, "--backend", "cpu", "-o", out];
         args.extend(extra);
@@ -188,6 +194,17 @@ fn a_view_file_replaces_the_scene_camera() {
     let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb8();
     assert_eq!(read("a.png").dimensions(), (40, 30));
     assert_eq!(read("a.png"), read("b.png"));
+    let seen = nff::parse(moved.as_bytes(), "moved.nff", Path::new(".")).expect("parses");
+    let (ball, background) = check_ball_image(&d.join("a.png"), &seen);
+    assert!(
+        ball > 100 && background > 100,
+        "{ball} ball, {background} background"
+    );
+    assert_eq!(read("c.png").dimensions(), (40, 30));
+    assert!(
+        read("a.png") != read("c.png"),
+        "the view file's camera changed nothing"
+    );
     let o = gpurt(&["scene.nff", "--view", "missing.nff", "-o", "x.png"], &d);
     assert_eq!(o.status.code(), Some(2));
     assert!(!d.join("x.png").exists());
