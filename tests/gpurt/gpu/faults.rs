@@ -4,12 +4,14 @@
 
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
+use glam::Vec3;
+use gpurt::agreement::noise_floor;
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu::GpuRenderer;
 use gpurt::pack;
 use gpurt::scene::Scene;
 
-use crate::common::versus::{Gpu, features_scene, gpu, opts};
+use crate::common::versus::{Gpu, compare, features_scene, gpu, opts};
 
 /// Opens a second device on the test adapter with some limits lowered.
 fn device_with(g: &Gpu, limits: wgpu::Limits) -> (wgpu::Device, wgpu::Queue) {
@@ -36,6 +38,31 @@ fn with_triangles(n: usize) -> Scene {
             material,
         });
     }
+    scene
+}
+
+/// The features scene with a wall of `n` triangles behind it, facing the camera, whose
+/// shading normals lean away from the wall's own by an angle that changes across it: the
+/// normals a renderer reads show in its image.
+fn with_a_wall_of_normals(n: usize) -> Scene {
+    let mut scene = features_scene("");
+    let material = scene.spheres[0].material;
+    let (columns, rows) = (150, n / 300);
+    let (dx, dz) = (6.0 / columns as f32, 3.0 / rows as f32);
+    let normal = |x: f32, z: f32| Vec3::new(0.6 * (2.0 * x).sin(), -1.0, 0.6 * (3.0 * z).cos());
+    for (i, j) in (0..rows).flat_map(|j| (0..columns).map(move |i| (i, j))) {
+        let (x, z) = (-3.0 + i as f32 * dx, j as f32 * dz);
+        let corners = [(x, z), (x + dx, z), (x + dx, z + dz), (x, z + dz)];
+        for [a, b, c] in [[0, 1, 2], [0, 2, 3]] {
+            let [a, b, c] = [corners[a], corners[b], corners[c]];
+            scene.triangles.push(gpurt::scene::Triangle {
+                v: [a, b, c].map(|(x, z)| Vec3::new(x, 2.5, z)),
+                n: Some(Box::new([a, b, c].map(|(x, z)| normal(x, z).normalize()))),
+                material,
+            });
+        }
+    }
+    assert_eq!(scene.triangles.len(), n);
     scene
 }
 
@@ -91,10 +118,35 @@ fn oversized_scene_is_refused_with_the_limit_named() {
         "{msg}"
     );
     // Triangle normals travel in a texture array, like nodes and primitives: 30000
-    // triangles' normals (1.4 MiB) render under that 1 MiB storage limit.
+    // triangles' normals (1.4 MiB) render under that 1 MiB storage limit, to the CPU's
+    // image, which differs without them (so it is the normals that agree).
     let renderer = GpuRenderer::new(&device, None).expect("shader module");
-    render_with(&device, &queue, &renderer, &with_triangles(30_000))
+    let wall = with_a_wall_of_normals(30_000);
+    let never = AtomicBool::new(false);
+    let frame_of = |scene: &Scene| {
+        let buffers = pack::pack(scene.clone()).expect("packs");
+        let globals = renderer.frame(&buffers, &frame::globals(&buffers, &opts(scene)));
+        (buffers, globals)
+    };
+    let cpu_image = |buffers, globals| {
+        let (film, _) = gpurt::cpu::render(buffers, globals, &|_| {}, &never).expect("renders");
+        film.to_rgb8()
+    };
+    let (buffers, globals) = frame_of(&wall);
+    let cpu = cpu_image(&buffers, &globals);
+    let floor = || noise_floor(&buffers, &globals, &cpu);
+    let (gpu, _) = renderer
+        .render(&device, &queue, &buffers, &globals, &|_| {}, &never)
         .expect("normals beyond a storage binding render");
+    compare("normals in layers", &cpu, &gpu.to_rgb8(), floor).unwrap_or_else(|e| panic!("{e}"));
+    let mut flat = wall;
+    flat.triangles.iter_mut().for_each(|t| t.n = None);
+    let (flat_buffers, flat_globals) = frame_of(&flat);
+    let flat = cpu_image(&flat_buffers, &flat_globals);
+    assert!(
+        compare("normals-control-flat", &cpu, &flat, floor).is_err(),
+        "the wall looks the same without its normals"
+    );
     // Nodes and primitives travel as texture arrays 4096 texels wide.
     let (device, queue) = device_with(
         g,
