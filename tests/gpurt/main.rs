@@ -1,5 +1,6 @@
 //! gpurt's integration tests: one binary, one module per area.
 
+mod architecture;
 mod bvh;
 mod cli;
 mod common;
