@@ -375,7 +375,7 @@ fn check_renders_finite(files: &[PathBuf]) {
 
 /// Most spheres and most triangles of a scene whose crossings `check_against_the_scene`
 /// computes for every pixel.
-const PROBES: usize = 256;
+const PROBES: usize = 64;
 
 /// Holds a 64 x 64 render (colour and the depth AOV, one sample a pixel, pinhole) against
 /// what the scene itself says, computed here in f64 from the scene's camera and

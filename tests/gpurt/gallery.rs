@@ -2,8 +2,8 @@
 //! `docs/gallery/list.txt` is rendered on the CPU and compared with the PNG in
 //! `docs/gallery/` under the GPU-vs-CPU thresholds. `docs/gallery/regenerate.sh` writes
 //! the images; this test never does, and a missing image fails it. The comparison checks
-//! itself on every image: the stored image moved by two pixels, or brightened by two
-//! levels, must fail it.
+//! itself on every image: the stored image moved by two pixels (or, every other image,
+//! brightened by two levels) must fail it.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -85,10 +85,10 @@ fn gallery_matches_its_commands() {
         if let Err(why) = verdict(&stored, &rendered) {
             failures.push(format!("{name}: {why}; run docs/gallery/regenerate.sh"));
         }
-        for (what, wrong) in perturbed(&stored) {
-            if verdict(&wrong, &rendered).is_ok() {
-                failures.push(format!("{name}: the stored image {what} still passes"));
-            }
+        // One perturbation an image, the two in turn, to keep the check cheap.
+        let (what, wrong) = &perturbed(&stored)[checked % 2];
+        if verdict(wrong, &rendered).is_ok() {
+            failures.push(format!("{name}: the stored image {what} still passes"));
         }
         checked += 1;
     }
