@@ -169,7 +169,7 @@ impl Thresholds {
     /// square root and normalisation may be a few ulps off (Vulkan allows it) and it may
     /// fuse multiply-adds, so rays that graze a silhouette can hit on one renderer and miss
     /// on the other; such pixels are few but can differ completely. On lavapipe the worst
-    /// of the 190 comparisons in `tests/gpurt/gpu.rs` (every scene, 1 and 4 samples, each
+    /// of the 190 comparisons in `tests/gpurt/gpu/agreement.rs` (every scene, 1 and 4 samples, each
     /// AOV) is 0.45% of pixels over 2/255 (p3d/balls_high at 4 samples, thousands of small
     /// mirror spheres), FLIP mean 0.0018 and mean signed difference 0.003/255. A bias or a
     /// moved feature, which is what a real bug looks like, fails by a wide margin (see the

@@ -359,13 +359,19 @@ mod tests {
         assert_ne!(p.last().unwrap().image, whole.film.to_rgb8());
     }
 
+    /// A paused tracer reports no pass although its frame is far from done (a frame that
+    /// had finished would report none either); told to trace again, the same worker goes
+    /// on (the control: the quiet was the pause); dropped while busy, it stops within
+    /// seconds (a worker that never stopped would otherwise hang the test) and has let go
+    /// of its callback.
     #[test]
     fn a_paused_tracer_traces_nothing_and_dropping_it_stops_the_worker() {
         let buffers = scene();
+        let spp = crate::limits::MAX_SPP;
         let g = frame::globals(
             &buffers,
             &RenderOptions {
-                spp: crate::limits::MAX_SPP,
+                spp,
                 ..RenderOptions::for_camera(&buffers.camera)
             },
         );
@@ -379,7 +385,30 @@ mod tests {
         std::thread::sleep(Duration::from_millis(50));
         let n = passes.lock().unwrap().len();
         std::thread::sleep(Duration::from_millis(200));
-        assert_eq!(passes.lock().unwrap().len(), n, "paused");
-        drop(t);
+        {
+            let p = passes.lock().unwrap();
+            assert_eq!(p.len(), n, "paused");
+            let done = p[n - 1].samples;
+            assert!(done < spp / 2, "{done} of {spp} samples before the pause");
+        }
+        t.trace(Job {
+            view: 2,
+            globals: g,
+        });
+        wait_for(&passes, |p| {
+            p.len() > n && p[n..].iter().all(|p| p.view == 2)
+        });
+        let (stopped, done) = mpsc::channel();
+        std::thread::spawn(move || {
+            drop(t);
+            let _ = stopped.send(());
+        });
+        done.recv_timeout(Duration::from_secs(30))
+            .expect("dropping a busy tracer stops its worker");
+        assert_eq!(
+            Arc::strong_count(&passes),
+            1,
+            "the worker kept its callback"
+        );
     }
 }

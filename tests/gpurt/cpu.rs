@@ -1,8 +1,9 @@
 //! The CPU reference renderer against closed forms: scenes written inline as NFF, expected
 //! pixel values computed here in f64 from docs/shading.md (camera rays, sphere and plane
 //! intersections, Lambert, Phong, ambient, shadows, mirrors, Snell), never stored numbers.
-//! Plus: every shared scene and every scene of our own renders to finite values, renders
-//! are bit-for-bit deterministic (also across thread counts), and the AOVs are sane.
+//! Plus: every shared scene and every scene of our own renders to finite values, with
+//! hits and background where the scene's own geometry puts them; renders are bit-for-bit
+//! deterministic (also across thread counts), and the AOVs are sane.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -17,6 +18,8 @@ use gpurt::limits::DEFAULT_AMBIENT;
 use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
+use crate::common::inputs::HALF_COLUMN;
+use crate::common::oracle::{Camera, column_mean, d, sphere_hit, triangle_hit};
 use crate::common::{files_with, shared_scenes};
 
 /// The spec's 8-bit quantum: analytic values must match to within one level.
@@ -42,67 +45,6 @@ fn render(scene: &Scene) -> Film {
 fn pixel(film: &Film, x: u32, y: u32) -> DVec3 {
     let [r, g, b] = film.get(x, y);
     DVec3::new(r as f64, g as f64, b as f64)
-}
-
-fn d(v: Vec3) -> DVec3 {
-    v.as_dvec3()
-}
-
-/// The eye rays of shading.md, in f64, from the scene's camera (not from `GpuGlobals`).
-struct Camera {
-    from: DVec3,
-    forward: DVec3,
-    right: DVec3,
-    up: DVec3,
-    pitch: f64,
-    width: u32,
-    height: u32,
-    hither: f64,
-}
-
-impl Camera {
-    fn of(scene: &Scene) -> Camera {
-        let c = &scene.camera;
-        let forward = (d(c.at) - d(c.from)).normalize();
-        let right = forward.cross(d(c.up)).normalize();
-        Camera {
-            from: d(c.from),
-            forward,
-            right,
-            up: right.cross(forward),
-            pitch: 2.0 * (0.5 * (c.angle as f64).to_radians()).tan() / (c.height - 1) as f64,
-            width: c.width,
-            height: c.height,
-            hither: c.hither as f64,
-        }
-    }
-
-    /// Direction through the centre of pixel `(x, y)`, y down.
-    fn dir(&self, x: u32, y: u32) -> DVec3 {
-        let sx = (x as f64 + 0.5 - 0.5 * self.width as f64) * self.pitch;
-        let sy = (0.5 * self.height as f64 - (y as f64 + 0.5)) * self.pitch;
-        (self.forward + sx * self.right + sy * self.up).normalize()
-    }
-
-    fn pixels(&self) -> impl Iterator<Item = (u32, u32)> + use<> {
-        let (w, h) = (self.width, self.height);
-        (0..h).flat_map(move |y| (0..w).map(move |x| (x, y)))
-    }
-}
-
-/// A sphere crossing: the nearer distance past `tmin`, and how clearly the ray hits or
-/// misses (discriminant over r^2: near 0 at the silhouette, where f32 and f64 may disagree).
-fn sphere_hit(o: DVec3, dir: DVec3, c: DVec3, r: f64, tmin: f64) -> (Option<f64>, f64) {
-    let oc = o - c;
-    let b = oc.dot(dir);
-    let disc = b * b - (oc.length_squared() - r * r);
-    let clarity = disc / (r * r);
-    if disc < 0.0 {
-        return (None, clarity);
-    }
-    let h = disc.sqrt();
-    let t = [-b - h, -b + h].into_iter().find(|&t| t > tmin);
-    (t, clarity)
 }
 
 /// Distance from `c` to the segment `a -> b`.
@@ -387,13 +329,23 @@ fn glass_slab_displaces_rays_as_snell_says() {
 }
 
 /// Every scene file of ours and every shared scene (including the big gzipped ones) at
-/// 64 x 64: no error, every channel finite and not negative.
+/// 64 x 64: no error, every channel finite and not negative; and the image is the scene's,
+/// by `check_against_the_scene`.
 fn check_renders_finite(files: &[PathBuf]) {
+    let mut seen = Vec::new();
     for path in files {
         let scene = scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let mut opts = RenderOptions::for_camera(&scene.camera);
         (opts.width, opts.height) = (64, 64);
-        let film = render_with(&scene, &opts);
+        let buffers = pack::pack(scene.clone()).expect("scene packs");
+        let render = |opts: &RenderOptions| {
+            let never = AtomicBool::new(false);
+            let globals = frame::globals(&buffers, opts);
+            let (film, _) = gpurt::cpu::render(&buffers, &globals, &|_| {}, &never)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            film
+        };
+        let film = render(&opts);
         for (i, p) in film.pixels.iter().enumerate() {
             assert!(
                 p.iter().all(|c| c.is_finite() && *c >= 0.0),
@@ -407,7 +359,131 @@ fn check_renders_finite(files: &[PathBuf]) {
             "{}: uniform image",
             path.display()
         );
+        if scene.camera.aperture > 0.0 {
+            // A thin lens has no one eye ray a pixel; its scene is checked elsewhere.
+            continue;
+        }
+        let depth = render(&RenderOptions {
+            aov: AOV_DEPTH,
+            ..opts
+        });
+        let name = path.file_name().unwrap().to_string_lossy();
+        let (hits, misses) = check_against_the_scene(&name, &scene, &film, &depth);
+        seen.push(format!("{name} {hits}/{misses}"));
     }
+    println!("pixels checked (hits/misses): {}", seen.join(", "));
+}
+
+/// Most spheres and most triangles of a scene whose crossings `check_against_the_scene`
+/// computes for every pixel.
+const PROBES: usize = 64;
+
+/// Holds a 64 x 64 render (colour and the depth AOV, one sample a pixel, pinhole) against
+/// what the scene itself says, computed here in f64 from the scene's camera and
+/// primitives, not from the packed buffers: an eye ray that clearly crosses one of up to
+/// `PROBES` spheres and triangles (taken evenly through the scene) hits something no
+/// farther away; one that misses the primitives' bounds and every plane shows the
+/// background, exactly, at depth 0. A flipped or shifted camera, or a traversal that loses
+/// primitives, fails here. Returns the pixels checked each way; some must hit.
+fn check_against_the_scene(name: &str, scene: &Scene, film: &Film, depth: &Film) -> (usize, usize) {
+    let cam = Camera::sized(scene, film.width, film.height);
+    // The bounds of every bounded primitive, a cone's taken as wide as its wider cap.
+    let mut lo = DVec3::INFINITY;
+    let mut hi = DVec3::NEG_INFINITY;
+    let mut grow = |c: DVec3, r: f64| {
+        lo = lo.min(c - r);
+        hi = hi.max(c + r);
+    };
+    for s in &scene.spheres {
+        grow(d(s.center), s.radius as f64);
+    }
+    for v in scene.triangles.iter().flat_map(|t| t.v) {
+        grow(d(v), 0.0);
+    }
+    for c in &scene.cones {
+        let r = c.base_radius.abs().max(c.apex_radius.abs()) as f64;
+        grow(d(c.base), r);
+        grow(d(c.apex), r);
+    }
+    for b in &scene.boxes {
+        grow(d(b.min), 0.0);
+        grow(d(b.max), 0.0);
+    }
+    let margin = 1e-3 * (hi - lo).max_element().max(1e-6);
+    let (lo, hi) = (lo - margin, hi + margin);
+    let misses_bounds = |dir: DVec3| {
+        let (a, b) = ((lo - cam.from) / dir, (hi - cam.from) / dir);
+        let (near, far) = (a.min(b).max_element(), a.max(b).min_element());
+        !(near <= far && far > 0.0)
+    };
+    // A plane is missed when the ray runs away from it (or along it).
+    let misses_planes = |dir: DVec3| {
+        scene.planes.iter().all(|p| {
+            let n = d(p.normal);
+            let t = (d(p.point) - cam.from).dot(n) / dir.dot(n);
+            !t.is_finite() || t < 0.0
+        })
+    };
+    let step = |n: usize| n.div_ceil(PROBES).max(1);
+    let spheres: Vec<_> = scene
+        .spheres
+        .iter()
+        .step_by(step(scene.spheres.len()))
+        .collect();
+    let triangles: Vec<_> = scene
+        .triangles
+        .iter()
+        .step_by(step(scene.triangles.len()))
+        .collect();
+    // A crossing the renderer's f32 rounding cannot move across the near plane.
+    let clear = |t: f64| (t - cam.hither).abs() > 1e-3 * t.abs().max(cam.hither);
+    let background = scene.background.to_array();
+    let (mut hits, mut misses) = (0, 0);
+    for (x, y) in cam.pixels() {
+        let dir = cam.dir(x, y);
+        let mut nearest = f64::INFINITY;
+        for s in &spheres {
+            let (c, r) = (d(s.center), s.radius as f64);
+            let oc = cam.from - c;
+            let b = oc.dot(dir);
+            let disc = b * b - (oc.length_squared() - r * r);
+            // Not near the silhouette, where f32 and f64 may disagree.
+            if disc <= 1e-3 * r * r {
+                continue;
+            }
+            let roots = [-b - disc.sqrt(), -b + disc.sqrt()];
+            let first = roots.into_iter().find(|&t| t > cam.hither);
+            if let Some(t) = first.filter(|_| roots.iter().all(|&t| clear(t))) {
+                nearest = nearest.min(t);
+            }
+        }
+        for t in &triangles {
+            let t = triangle_hit(cam.from, dir, t.v.map(d), 1e-3);
+            if let Some(t) = t.filter(|&t| t > cam.hither && clear(t)) {
+                nearest = nearest.min(t);
+            }
+        }
+        let got = f64::from(depth.get(x, y)[0]);
+        if nearest.is_finite() {
+            assert!(
+                got > 0.0 && got <= nearest * (1.0 + 1e-3),
+                "{name}: pixel ({x}, {y}) hits at depth {got}, but a primitive is {nearest} away"
+            );
+            hits += 1;
+        } else if misses_bounds(dir) && misses_planes(dir) {
+            assert_eq!(
+                (film.get(x, y), got),
+                (background, 0.0),
+                "{name}: pixel ({x}, {y}) misses everything: background at depth 0"
+            );
+            misses += 1;
+        }
+    }
+    assert!(
+        hits > 0,
+        "{name}: no pixel crosses a primitive of the scene"
+    );
+    (hits, misses)
 }
 
 #[test]
@@ -538,22 +614,6 @@ fn agreement_rejects_a_perturbed_film() {
         gpurt::agreement::agreement(&buffers, &globals, &reference, &moved).expect("compares");
     assert!(moved.verdict.is_err(), "{}", moved.stats);
     assert_eq!(moved.noise_floor, Some(0.0));
-}
-
-/// A white quad under ambient light 1 whose right edge runs through the centres of pixel
-/// column 100 (x = 0.013465 on the plane, 200x200, 30 degrees): every sample count
-/// covers half of that column, on average, within 0.02 (a k x ceil(n/k) grid with empty
-/// cells gave 0.667 at 3 spp and 0.568 at 7). One sample sits on the edge itself, so its
-/// value there is 0 or 1 by construction; it is checked on the columns beside it.
-pub const HALF_COLUMN: &str = "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nresolution 200 200\n\
-am 1 1 1\nb 0 0 0\nf 1 1 1 1 0 1 0 1\np 4\n-10 -10 0\n0.013465 -10 0\n0.013465 10 0\n-10 10 0\n";
-
-/// Mean of one column of the film's first channel.
-pub fn column_mean(film: &Film, x: u32) -> f64 {
-    (0..film.height)
-        .map(|y| f64::from(film.get(x, y)[0]))
-        .sum::<f64>()
-        / f64::from(film.height)
 }
 
 #[test]

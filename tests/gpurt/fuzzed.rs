@@ -3,13 +3,13 @@
 //! the GPU relies on, and a small CPU render. A reader may refuse an input, with its
 //! position; a scene it accepts must render to finite, non-negative pixels.
 
-use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use glam::Vec3;
 use gpurt::frame::{self, RenderOptions};
 use gpurt::scene::{self, MaterialId, Scene, Triangle, nff, stl};
 
+use crate::common::inputs::parse_ok;
 use crate::common::temp_dir;
 
 /// Packs, checks and renders `scene` at 8 x 8, 1 sample, depth 4 (the `render` target's
@@ -34,10 +34,6 @@ fn assert_renders_finite(scene: Scene) {
     }
 }
 
-fn parse_nff(src: &str) -> Scene {
-    nff::parse(src.as_bytes(), "t.nff", Path::new(".")).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// `render` target: a `pp` patch whose vertex normals are zero made the interpolated shading
 /// normal 0 / 0, and every pixel that saw the patch NaN. The patch is now shaded flat, with
 /// a warning naming its line.
@@ -46,7 +42,7 @@ fn patch_with_zero_vertex_normals_is_shaded_flat_with_a_warning() {
     let src = "v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n\
                pp 3 -1 0 -1 0 0 0  1 0 -1 0 0 0  0 0 1 0 0 0\n\
                pp 3 -1 0 -1 0 -1 0  1 0 -1 0 -2 0  0 0 1 0 0 0\n";
-    let scene = parse_nff(src);
+    let scene = parse_ok(src);
     assert_eq!(scene.triangles.len(), 2);
     assert!(scene.triangles.iter().all(|t| t.n.is_none()));
     assert_eq!(scene.warnings.len(), 2, "{:?}", scene.warnings);
@@ -63,7 +59,7 @@ fn patch_with_zero_vertex_normals_is_shaded_flat_with_a_warning() {
 fn patch_normals_too_long_to_square_are_kept_as_unit_vectors() {
     let src = "v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n\
                pp 3 -1 0 -1 0 -3e38 0  1 0 -1 0 -2e20 1e20  0 0 1 0 -1e-30 0\n";
-    let scene = parse_nff(src);
+    let scene = parse_ok(src);
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let n = scene.triangles[0].n.clone().expect("smooth");
     for n in *n {
@@ -113,7 +109,7 @@ fn mesh_with_extreme_non_uniform_scale_keeps_unit_normals() {
 /// normals or none: a triangle with a normal that has no direction is packed flat.
 #[test]
 fn pack_shades_triangles_with_unusable_normals_flat() {
-    let mut scene = parse_nff("v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n");
+    let mut scene = parse_ok("v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n");
     let v = [
         Vec3::new(-1.0, 0.0, -1.0),
         Vec3::new(1.0, 0.0, -1.0),
@@ -155,7 +151,7 @@ fn pack_shades_triangles_with_unusable_normals_flat() {
 fn hit_point_rounded_onto_a_sphere_centre_renders_finite() {
     let src = "v from 2 3 7 at 0 0 0 up 0 0 1 angle 45\nl 4 3 2\n\
                f 1 1 0 0 1 0 0 1\ns 0 0 0 .5\ns 0 0 6 66616067\n";
-    assert_renders_finite(parse_nff(src));
+    assert_renders_finite(parse_ok(src));
 }
 
 /// The same undefined normals at the unit level: a hit on a sphere's centre, on a cone's
@@ -168,8 +164,8 @@ fn surface_normals_are_finite_where_the_geometry_has_none() {
     let src = "v from 0 -5 0 at 0 0 0 up 0 0 1 angle 45\nl 1 -3 2\n\
                s 0 0 0 1\nc 3 0 0 1 3 0 2 0\n\
                pp 3 -1 1 -1 1 0 0  1 1 -1 -1 0 0  0 1 1 1 0 0\n";
-    let buffers = gpurt::pack::pack(parse_nff(src)).unwrap();
-    let scene = parse_nff(src);
+    let buffers = gpurt::pack::pack(parse_ok(src)).unwrap();
+    let scene = parse_ok(src);
     let opts = RenderOptions::for_camera(&scene.camera);
     let globals = frame::globals(&buffers, &opts);
     let b = Bindings::new(&buffers, &globals);

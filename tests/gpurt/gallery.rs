@@ -1,7 +1,9 @@
 //! The README's gallery matches what its commands render today: every image of
 //! `docs/gallery/list.txt` is rendered on the CPU and compared with the PNG in
 //! `docs/gallery/` under the GPU-vs-CPU thresholds. `docs/gallery/regenerate.sh` writes
-//! the images; this test never does, and a missing image fails it.
+//! the images; this test never does, and a missing image fails it. The comparison checks
+//! itself on every image: the stored image moved by two pixels (or, every other image,
+//! brightened by two levels) must fail it.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -11,8 +13,34 @@ use gpurt::film;
 use gpurt::frame::{self, RenderOptions};
 use gpurt::pack;
 use gpurt::scene;
+use image::RgbImage;
 
 use crate::common::shared_scenes;
+
+/// The gallery's comparison: the GPU-vs-CPU thresholds, no noise floor.
+fn verdict(stored: &RgbImage, rendered: &RgbImage) -> Result<(), String> {
+    let stats = compare::diff(stored, rendered, Thresholds::GPU_VS_CPU.tolerance_255)
+        .map_err(|e| e.to_string())?;
+    Thresholds::GPU_VS_CPU
+        .check(&stats)
+        .map_err(|why| format!("{why} ({stats})"))
+}
+
+/// Wrong versions of `image` the comparison must reject: moved two pixels to the right
+/// (the left columns repeated), and every channel two levels brighter.
+fn perturbed(image: &RgbImage) -> [(&'static str, RgbImage); 2] {
+    let moved = RgbImage::from_fn(image.width(), image.height(), |x, y| {
+        *image.get_pixel(x.saturating_sub(2), y)
+    });
+    let mut brighter = image.clone();
+    for p in brighter.pixels_mut() {
+        p.0 = p.0.map(|c| c.saturating_add(2));
+    }
+    [
+        ("moved by two pixels", moved),
+        ("two levels brighter", brighter),
+    ]
+}
 
 #[test]
 fn gallery_matches_its_commands() {
@@ -54,15 +82,13 @@ fn gallery_matches_its_commands() {
                 continue;
             }
         };
-        let verdict = compare::diff(&stored, &rendered, Thresholds::GPU_VS_CPU.tolerance_255)
-            .map_err(|e| e.to_string())
-            .and_then(|stats| {
-                Thresholds::GPU_VS_CPU
-                    .check(&stats)
-                    .map_err(|why| format!("{why} ({stats})"))
-            });
-        if let Err(why) = verdict {
+        if let Err(why) = verdict(&stored, &rendered) {
             failures.push(format!("{name}: {why}; run docs/gallery/regenerate.sh"));
+        }
+        // One perturbation an image, the two in turn, to keep the check cheap.
+        let (what, wrong) = &perturbed(&stored)[checked % 2];
+        if verdict(wrong, &rendered).is_ok() {
+            failures.push(format!("{name}: the stored image {what} still passes"));
         }
         checked += 1;
     }

@@ -1,5 +1,8 @@
-//! gpurt's integration tests: one binary, one module per area.
+//! gpurt's integration tests: one binary, one module (or directory) a subject, each file
+//! under 800 lines, sharing the helpers of `common`; `architecture` checks the library's
+//! module graph.
 
+mod architecture;
 mod bvh;
 mod cli;
 mod common;

@@ -1,4 +1,11 @@
-//! Helpers shared by the test modules.
+//! Helpers shared by the test modules: whether to skip or fail, where the scenes are,
+//! temporary directories, a seedable random source, and the `gpurt` binary. Apart:
+//! `inputs` (the scene texts and files the tests write), `oracle` (expected values
+//! computed independently of the renderer), `versus` (the GPU against the CPU).
+
+pub mod inputs;
+pub mod oracle;
+pub mod versus;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -148,4 +155,9 @@ pub fn workdir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
+}
+
+/// The error output of a finished command, as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
 }

@@ -1,0 +1,224 @@
+//! The command line's failures: bad scenes, formats, arguments and adapters refused with
+//! exit code 2 and nothing written, an interrupt that stops without a partial file, and
+//! GPU faults (a lost device, an out-of-memory upload) that leave no output behind.
+
+use std::path::Path;
+use std::process::Command;
+
+use crate::common::inputs::SCENE;
+use crate::common::{gpurt, stderr, workdir};
+
+#[test]
+fn bad_scene_reports_file_line_column_exits_2_and_writes_nothing() {
+    let d = workdir("bad-scene");
+    std::fs::write(
+        d.join("bad.nff"),
+        SCENE.replace("s 0 0 0 1", "s 0 0 zero 1"),
+    )
+    .unwrap();
+    let o = gpurt(&["bad.nff", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("bad.nff:10:7:"), "{err}");
+    assert!(!d.join("out.png").exists());
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "no stray files");
+}
+
+#[test]
+fn unknown_output_format_is_refused_before_rendering() {
+    let d = workdir("bad-format");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-o", "out.jpg"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("jpg"), "{}", stderr(&o));
+    assert!(!d.join("out.jpg").exists());
+}
+
+#[test]
+fn missing_scene_and_bad_arguments_fail_cleanly() {
+    let d = workdir("missing");
+    let o = gpurt(&["nope.nff"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("nope.nff"), "{}", stderr(&o));
+    // A bad argument is refused for itself: the scene exists and is valid.
+    std::fs::write(d.join("x.nff"), SCENE).unwrap();
+    let o = gpurt(&["x.nff", "--depth", "99", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--depth"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("99"), "{}", stderr(&o));
+    assert!(!d.join("x.png").exists());
+    let o = gpurt(&["x.nff", "--backend", "cpu"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Ctrl-C (SIGINT) stops a render cleanly: exit code 130, a message, and no output file.
+#[test]
+fn interrupt_stops_without_writing_a_partial_file() {
+    for signal in ["INT", "TERM"] {
+        let d = workdir(&format!("interrupt-{signal}"));
+        std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+        // Some seconds of work on two cores; interrupted long before it ends.
+        let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([
+                "ball.nff",
+                "--backend",
+                "cpu",
+                "--width",
+                "2048",
+                "--height",
+                "2048",
+            ])
+            .args(["--spp", "64", "-o", "out.png"])
+            .current_dir(&d)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("gpurt starts");
+        std::thread::sleep(std::time::Duration::from_millis(700));
+        let killed = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .expect("kill runs");
+        assert!(killed.success());
+        let out = child.wait_with_output().expect("gpurt ends");
+        assert_eq!(
+            out.status.code(),
+            Some(130),
+            "SIG{signal}: {}",
+            stderr(&out)
+        );
+        assert!(stderr(&out).contains("interrupted"), "{}", stderr(&out));
+        assert!(!d.join("out.png").exists());
+        let leftovers: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(leftovers.len(), 1, "only the scene remains: {leftovers:?}");
+    }
+}
+
+/// An adapter asked for by name that does not exist is an error (exit 2, no image), not a
+/// silent fallback to the CPU; a non-finite `diff` threshold is refused.
+#[test]
+fn missing_named_adapter_and_nan_thresholds_are_refused() {
+    let d = workdir("named-adapter");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(
+        &[
+            "ball.nff",
+            "--adapter",
+            "no-such-adapter-xyz",
+            "-o",
+            "out.png",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("no-such-adapter-xyz"), "{}", stderr(&o));
+    assert!(!d.join("out.png").exists());
+
+    let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for bad in ["nan", "inf", "-1"] {
+        let o = gpurt(&["diff", "a.png", "a.png", "--max-flip", bad], &d);
+        assert_eq!(o.status.code(), Some(2), "--max-flip {bad}: {}", stderr(&o));
+        let o = gpurt(&["diff", "a.png", "a.png", "--max-bad", bad], &d);
+        assert_eq!(o.status.code(), Some(2), "--max-bad {bad}: {}", stderr(&o));
+    }
+    let o = gpurt(&["diff", "a.png", "a.png", "--max-flip", "0.01"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// Two scenes are refused with a message saying one is rendered at a time (not clap's
+/// "the subcommand 'b.nff' cannot be used"), and nothing is written.
+#[test]
+fn two_scenes_are_refused_with_a_clear_message() {
+    let d = workdir("two-scenes");
+    std::fs::write(d.join("a.nff"), SCENE).unwrap();
+    std::fs::write(d.join("b.nff"), SCENE).unwrap();
+    let o = gpurt(&["a.nff", "b.nff", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("one scene is rendered at a time"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("a.png").exists() && !d.join("b.png").exists());
+}
+
+/// Runs `gpurt SCENE --backend gpu -o out.png ARGS` in `d` with `GPURT_FAULT=fault`: it
+/// must exit 2 and leave nothing in `d` but the scene (no output file, partial or
+/// temporary), and the same command without the fault must write its image. Returns the
+/// faulty run's error output.
+fn a_gpu_fault_exits_2_without_an_output_file(
+    d: &Path,
+    scene: &str,
+    args: &[&str],
+    fault: &str,
+) -> String {
+    let run = |fault: &str| {
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([scene, "--backend", "gpu", "-o", "out.png"])
+            .args(args)
+            .current_dir(d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_FAULT", fault)
+            .output()
+            .expect("gpurt runs")
+    };
+    let o = run(fault);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let left: Vec<_> = std::fs::read_dir(d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, [scene], "no output file, partial or temporary");
+    let ok = run("");
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(d.join("out.png").exists());
+    stderr(&o)
+}
+
+/// A GPU lost mid-render (`GPURT_FAULT=lose-device` destroys the device once the first
+/// band is in) ends the command with an error naming the step, a non-zero exit and no
+/// output file, partial or temporary.
+#[test]
+fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    drop(ctx);
+    let d = workdir("device-lost");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    // Four bands on a software adapter (2^18 samples a band), several on any other.
+    let size = ["--width", "512", "--height", "2048", "--spp", "4"];
+    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "ball.nff", &size, "lose-device");
+    assert!(err.contains("GPU error: reading back"), "{err}");
+}
+
+/// A GPU out of memory on upload (`GPURT_FAULT=out-of-memory` allocates each texture of
+/// the scene on its own with the process's address space capped just above its size, and
+/// lavapipe's device memory is the process's own: `fault.rs`) ends in an error naming the
+/// upload and the allocation that failed, exit 2, and no output file. The scene's arrays
+/// (a million spheres, 48 MB of them primitives) are larger than the cap leaves, and than
+/// the 32 MiB above which glibc always maps fresh memory (a smaller texture may fit in
+/// heap space freed by the BVH build).
+#[cfg(target_os = "linux")]
+#[test]
+fn an_out_of_memory_on_upload_exits_non_zero_without_an_output_file() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    drop(ctx);
+    let d = workdir("out-of-memory");
+    let mut scene = String::from(SCENE);
+    for i in 0..1_000_000 {
+        scene += &format!("s {} {} -900 0.4\n", i % 1000 - 500, i / 1000 - 500);
+    }
+    std::fs::write(d.join("many.nff"), scene).unwrap();
+    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "many.nff", &[], "out-of-memory");
+    assert!(
+        err.contains("GPU error: uploading the scene: Out of Memory")
+            && err.contains("create_texture"),
+        "{err}"
+    );
+}

@@ -1,0 +1,298 @@
+//! `gpurt SCENE` as a user runs it: the image it writes in each format, where and how it
+//! writes it, a view file's camera, the wireframe overlay, and the backend it picks.
+
+use std::path::Path;
+
+use glam::DVec3;
+use gpurt::scene::{Scene, nff};
+
+use crate::common::inputs::SCENE;
+use crate::common::oracle::{Camera, d, lone_sphere};
+use crate::common::{gpurt, stderr, workdir};
+
+/// Holds the image file `path`, a render of `scene` (one lit ball), against what
+/// docs/shading.md says each pixel shows, computed independently (`oracle::lone_sphere`):
+/// every pixel away from the ball's outline within one 8-bit level and a half (8-bit
+/// files are quantised; EXR keeps linear values). Returns the ball's pixels and the
+/// background's.
+fn check_ball_image(path: &Path, scene: &Scene) -> (usize, usize) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb32f();
+    let cam = Camera::sized(scene, img.width(), img.height());
+    let (mut ball, mut background) = (0, 0);
+    for (x, y) in cam.pixels() {
+        let Some(want) = lone_sphere(scene, &cam, x, y) else {
+            continue;
+        };
+        let exr = path.extension().is_some_and(|e| e == "exr");
+        let want = if exr {
+            want
+        } else {
+            want.clamp(DVec3::ZERO, DVec3::ONE)
+        };
+        let got = DVec3::from(img.get_pixel(x, y).0.map(f64::from));
+        assert!(
+            (got - want).abs().max_element() <= 1.5 / 255.0,
+            "{}: pixel ({x}, {y}) is {got}, shading.md says {want}",
+            path.display()
+        );
+        if want == d(scene.background) {
+            background += 1;
+        } else {
+            ball += 1;
+        }
+    }
+    (ball, background)
+}
+
+#[test]
+fn renders_to_the_default_name_and_to_each_format() {
+    let d = workdir("formats");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let scene = nff::parse(SCENE.as_bytes(), "ball.nff", Path::new(".")).expect("parses");
+    let o = gpurt(&["ball.nff", "--backend", "cpu"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(d.join("ball.png")).expect("ball.png written");
+    assert_eq!((img.width(), img.height()), (32, 32));
+    // Background 0.1 0.2 0.3, scaled by 255 and rounded (0.1 as an f32 is a little over).
+    assert_eq!(img.to_rgb8().get_pixel(0, 0).0, [26, 51, 77], "a corner");
+    let (ball, background) = check_ball_image(&d.join("ball.png"), &scene);
+    assert!(
+        ball > 300 && background > 500,
+        "{ball} ball, {background} background"
+    );
+    for ext in ["ppm", "bmp", "exr"] {
+        let out = format!("ball.{ext}");
+        let o = gpurt(
+            &["ball.nff", "--backend", "cpu", "-o", &out, "--width", "20"],
+            &d,
+        );
+        assert!(o.status.success(), "{ext}: {}", stderr(&o));
+        let img = image::open(d.join(&out)).unwrap_or_else(|e| panic!("{out}: {e}"));
+        assert_eq!(img.width(), 20);
+        let (ball, background) = check_ball_image(&d.join(&out), &scene);
+        assert!(
+            ball > 200 && background > 200,
+            "{out}: {ball} ball, {background} background"
+        );
+    }
+}
+
+/// A successful render prints no `error:` line (Mesa's device-select layer printed two on
+/// headless machines).
+#[test]
+fn a_successful_render_prints_no_error_lines() {
+    let d = workdir("no-error-lines");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-v", "-o", "out.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+}
+
+/// Writing an output: through a symbolic link to its target (the link stays), keeping an
+/// existing file's permissions, with a 250-byte name (the temporary name stays within the
+/// limit), and refused before rendering when the directory is missing or not writable.
+#[test]
+fn outputs_follow_links_keep_permissions_and_are_checked_first() {
+    use std::os::unix::fs::PermissionsExt;
+    let d = workdir("outputs");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let render = |out: &str| gpurt(&["ball.nff", "--backend", "cpu", "-o", out], &d);
+
+    std::fs::create_dir(d.join("renders")).unwrap();
+    std::os::unix::fs::symlink("renders/v1.png", d.join("latest.png")).unwrap();
+    let o = render("latest.png");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        std::fs::symlink_metadata(d.join("latest.png"))
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert!(d.join("renders/v1.png").is_file());
+
+    std::fs::write(d.join("private.png"), b"old").unwrap();
+    std::fs::set_permissions(
+        d.join("private.png"),
+        std::fs::Permissions::from_mode(0o600),
+    )
+    .unwrap();
+    let o = render("private.png");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mode = std::fs::metadata(d.join("private.png"))
+        .unwrap()
+        .permissions()
+        .mode();
+    assert_eq!(mode & 0o777, 0o600);
+    assert_ne!(std::fs::read(d.join("private.png")).unwrap(), b"old");
+
+    let long = format!("{}.png", "a".repeat(246));
+    assert_eq!(long.len(), 250);
+    let o = render(&long);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(d.join(&long).is_file());
+
+    let t = std::time::Instant::now();
+    let o = gpurt(
+        &[
+            "ball.nff",
+            "--backend",
+            "cpu",
+            "--spp",
+            "4096",
+            "-o",
+            "missing/out.png",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing/out.png"), "{}", stderr(&o));
+    assert!(
+        t.elapsed() < std::time::Duration::from_secs(5),
+        "refused only after rendering"
+    );
+
+    let leftovers: Vec<_> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+/// `--view FILE` takes the camera from a file's `v` block: the image is the one of the
+/// scene with that block in place of its own, to the bit (CPU backend), and what
+/// docs/shading.md says that camera sees; the scene's own camera at the same size (the
+/// control) sees something else, so the view moved more than the image's size.
+#[test]
+fn a_view_file_replaces_the_scene_camera() {
+    let d = workdir("view-file");
+    let view = "v\nfrom 1.5 -3 2\nat 0.2 0 0\nup 0 0 1\nangle 35\nhither 0.01\nresolution 40 30\n";
+    std::fs::write(d.join("scene.nff"), SCENE).unwrap();
+    std::fs::write(d.join("view.nff"), view).unwrap();
+    let moved = SCENE.replace(
+        "v\nfrom 0 -4 1\nat 0 0 0\nup 0 0 1\nangle 40\nresolution 32 32\n",
+        view,
+    );
+    assert_ne!(moved, SCENE);
+    std::fs::write(d.join("moved.nff"), &moved).unwrap();
+    for (scene, out, extra) in [
+        ("scene.nff", "a.png", vec!["--view", "view.nff"]),
+        ("moved.nff", "b.png", vec![]),
+        (
+            "scene.nff",
+            "c.png",
+            vec!["--width", "40", "--height", "30"],
+        ),
+    ] {
+        let mut args = vec![scene, "--backend", "cpu", "-o", out];
+        args.extend(extra);
+        let o = gpurt(&args, &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb8();
+    assert_eq!(read("a.png").dimensions(), (40, 30));
+    assert_eq!(read("a.png"), read("b.png"));
+    let seen = nff::parse(moved.as_bytes(), "moved.nff", Path::new(".")).expect("parses");
+    let (ball, background) = check_ball_image(&d.join("a.png"), &seen);
+    assert!(
+        ball > 100 && background > 100,
+        "{ball} ball, {background} background"
+    );
+    assert_eq!(read("c.png").dimensions(), (40, 30));
+    assert!(
+        read("a.png") != read("c.png"),
+        "the view file's camera changed nothing"
+    );
+    let o = gpurt(&["scene.nff", "--view", "missing.nff", "-o", "x.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!d.join("x.png").exists());
+}
+
+/// `--overlay wireframe` draws the wireframe (`--aov wireframe` alone) over the image:
+/// every pixel is either the plain render's or the line colour, the lines are where the
+/// wireframe alone has them, and there are some.
+#[test]
+fn the_wireframe_overlay_is_the_render_plus_the_lines() {
+    if crate::common::gpu_context().is_none() {
+        return;
+    }
+    let d = workdir("overlay");
+    std::fs::write(d.join("scene.nff"), SCENE).unwrap();
+    for (out, extra) in [
+        ("plain.png", vec![]),
+        ("over.png", vec!["--overlay", "wireframe"]),
+        ("wire.png", vec!["--aov", "wireframe"]),
+    ] {
+        let mut args = vec!["scene.nff", "--backend", "cpu", "--width", "61", "-o", out];
+        args.extend(extra);
+        let o = gpurt(&args, &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb8();
+    let (plain, over, wire) = (read("plain.png"), read("over.png"), read("wire.png"));
+    let line = gpurt::view::wireframe::LINE_COLOR.map(gpurt::film::quantize);
+    let mut lines = 0;
+    for ((p, o), w) in plain.pixels().zip(over.pixels()).zip(wire.pixels()) {
+        if w.0 == [0, 0, 0] {
+            assert_eq!(o, p, "off the lines the overlay is the render");
+        } else {
+            assert_eq!(w.0, line[..3]);
+            assert_eq!(o.0, line[..3]);
+            lines += 1;
+        }
+    }
+    let n = plain.pixels().len();
+    assert!(
+        lines > n / 50 && lines < n / 2,
+        "{lines} of {n} pixels are lines"
+    );
+}
+
+#[test]
+fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_and_says_why() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    let software = gpurt::gpu::is_software(&ctx.info);
+    if ctx.info.name.to_lowercase().contains("llvmpipe") {
+        assert!(software, "{} is Mesa's software rasteriser", ctx.describe());
+    }
+    drop(ctx);
+    let d = workdir("auto-backend");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-v", "-o", "auto.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    let ran: Vec<&str> = err
+        .lines()
+        .filter_map(|l| l.split_whitespace().next())
+        .filter(|w| *w == "cpu" || *w == "gpu")
+        .collect();
+    if software {
+        // Software adapters only: said so, or (Linux) no GPU device node to look at.
+        assert!(
+            err.contains("backend     cpu: the GPU adapters here are software rasterisers")
+                || err.contains("backend     cpu: there is no GPU device here"),
+            "{err}"
+        );
+        assert_eq!(ran, ["cpu"], "{err}");
+        // The very image `--backend cpu` writes.
+        let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "cpu.png"], &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let a = gpurt::film::load_rgb8(&d.join("auto.png")).unwrap();
+        assert_eq!(a, gpurt::film::load_rgb8(&d.join("cpu.png")).unwrap());
+    } else {
+        assert!(err.contains("backend     gpu: "), "{err}");
+        assert_eq!(ran, ["gpu"], "{err}");
+    }
+    // `--backend gpu` takes any adapter, software or not.
+    let o = gpurt(&["ball.nff", "--backend", "gpu", "-v", "-o", "gpu.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).lines().any(|l| l.starts_with("gpu ")),
+        "{}",
+        stderr(&o)
+    );
+}

@@ -1,0 +1,176 @@
+//! `gpurt info` and `gpurt diff`: the documented JSON, exit codes and heat maps, and a
+//! reader that goes away ending the command quietly.
+
+use std::process::Command;
+
+use crate::common::inputs::SCENE;
+use crate::common::{gpurt, stderr, workdir};
+
+#[test]
+fn info_json_has_the_documented_keys() {
+    let d = workdir("info");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    std::fs::write(
+        d.join("full.nff"),
+        format!("{SCENE}am 0.05 0.05 0.05\nal 0 0 5 1 0 0 0 1 0 0.5 0.5 0.5 2 3\n"),
+    )
+    .unwrap();
+    let o = gpurt(&["info", "ball.nff", "--json"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    for key in ["spheres", "triangles", "planes", "cones", "boxes"] {
+        assert!(v[key].is_u64(), "{key} missing or not an integer in {v}");
+    }
+    assert_eq!(v["spheres"], 1);
+    assert!(v["warnings"].is_array());
+    assert!(v["ambient"].is_null());
+    assert_eq!(v["ambient_used"], serde_json::json!([0.1, 0.1, 0.1]));
+
+    // docs/info-json.md: every light and material with its parameters, the ambient, and
+    // floats as the shortest decimal of the f32.
+    let o = gpurt(&["info", "full.nff", "--json"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(!text.contains("0.0500000"), "{text}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(v["ambient"], serde_json::json!([0.05, 0.05, 0.05]));
+    let lights = v["lights"].as_array().expect("lights array");
+    assert_eq!(lights.len(), 2, "{v}");
+    assert_eq!(lights[0]["kind"], "point");
+    assert_eq!(lights[0]["position"], serde_json::json!([2.0, -3.0, 4.0]));
+    assert!(lights[0]["color"].is_null());
+    assert_eq!(lights[1]["kind"], "area");
+    assert_eq!(lights[1]["samples"], serde_json::json!([2, 3]));
+    assert_eq!(lights[1]["color"], serde_json::json!([0.5, 0.5, 0.5]));
+    let m = &v["materials"][0];
+    assert_eq!(m["color"], serde_json::json!([1.0, 0.5, 0.2]));
+    assert_eq!(
+        (m["kd"].as_f64(), m["shine"].as_f64()),
+        (Some(0.8), Some(20.0))
+    );
+
+    let o = gpurt(&["info", "full.nff"], &d);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("ambient     0.05 0.05 0.05"));
+}
+
+#[test]
+fn diff_exit_codes_and_heat_map() {
+    let d = workdir("diff");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let a = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(a.status.success(), "{}", stderr(&a));
+    std::fs::copy(d.join("a.png"), d.join("same.png")).unwrap();
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "same.png",
+            "--max-flip",
+            "0.01",
+            "--max-bad",
+            "0.005",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("PSNR"));
+
+    let b = gpurt(
+        &[
+            "ball.nff",
+            "--backend",
+            "cpu",
+            "-o",
+            "b.png",
+            "--ambient",
+            "0.6",
+        ],
+        &d,
+    );
+    assert!(b.status.success(), "{}", stderr(&b));
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "b.png",
+            "-o",
+            "heat.png",
+            "--max-flip",
+            "0.01",
+            "--max-bad",
+            "0.005",
+        ],
+        &d,
+    );
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let heat = image::open(d.join("heat.png")).expect("heat map written");
+    assert_eq!(
+        (heat.width(), heat.height()),
+        (96, 32),
+        "A | B | difference"
+    );
+
+    // With no flags the GPU-vs-CPU limits apply: the same images pass, different ones
+    // fail; a flag loosens the limit it names.
+    let o = gpurt(&["diff", "a.png", "same.png"], &d);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let o = gpurt(&["diff", "a.png", "b.png"], &d);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let o = gpurt(
+        &[
+            "diff",
+            "a.png",
+            "b.png",
+            "--max-bad",
+            "1",
+            "--max-flip",
+            "1",
+        ],
+        &d,
+    );
+    assert_eq!(o.status.code(), Some(1), "the bias limit still applies");
+
+    let o = gpurt(&["diff", "a.png", "missing.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+}
+
+/// A reader that goes away (`gpurt info scene | true`) ends the command quietly: no
+/// panic, exit 0, and `diff` still writes its heat map.
+#[test]
+fn closed_stdout_ends_quietly() {
+    let d = workdir("closed-stdout");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "a.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    std::fs::copy(d.join("a.png"), d.join("b.png")).unwrap();
+    let closed = |args: &[&str]| {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(args)
+            .current_dir(&d)
+            .stdout(writer)
+            .output()
+            .expect("gpurt runs")
+    };
+    for args in [
+        &["info", "ball.nff"][..],
+        &["info", "ball.nff", "--json"],
+        &["diff", "a.png", "b.png", "-o", "heat.png"],
+    ] {
+        let o = closed(args);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
+    }
+    assert!(d.join("heat.png").is_file());
+}
