@@ -31,14 +31,15 @@ pub fn prepare(
     samples: impl FnOnce(&Camera) -> u64,
 ) -> Result<Prepared> {
     let t0 = Instant::now();
-    let mut scene = scene::load(path)?;
+    // Read straight into the renderers' records: the scene is never held twice.
+    let mut flat = scene::load_flat(path)?;
     if let Some(view) = view {
-        scene.camera = scene::load(view)?.camera;
+        flat.scene.camera = scene::summary(view)?.scene.camera;
     }
     let t1 = Instant::now();
-    let warnings = std::mem::take(&mut scene.warnings);
-    let samples = samples(&scene.camera);
-    let buffers = pack::pack_for(scene, samples)?;
+    let warnings = std::mem::take(&mut flat.scene.warnings);
+    let samples = samples(&flat.scene.camera);
+    let buffers = pack::pack_flat(flat, samples)?;
     Ok(Prepared {
         buffers,
         warnings,

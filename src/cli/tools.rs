@@ -17,7 +17,7 @@ use super::print_warnings;
 
 /// `gpurt info SCENE [--json]`.
 pub fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
-    let s = gpurt::scene::load(path)?;
+    let s = gpurt::scene::summary(path)?;
     if json {
         outln!("{}", gpurt::info::to_json(&s));
     } else {

@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use super::bounds::Bounds;
 use super::model::{
     Camera, Light, Material, MaterialId, Plane, Scene, Triangle, nff_default_camera,
 };
@@ -23,13 +24,20 @@ pub fn scene_for_mesh(name: &str, mut tris: Vec<Triangle>) -> Result<Scene> {
     let mut scene = Scene::new(name, nff_default_camera());
     scene.triangles.append(&mut tris);
     let b = scene.bounds();
+    frame_mesh(&mut scene, b)?;
+    Ok(scene)
+}
+
+/// Gives `scene`, which holds a bare mesh whose triangles (material 0) have bounds `b`,
+/// its camera, light, materials and ground plane.
+pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
     if b.is_empty() {
         return Err(Error::Scene {
-            file: name.to_string(),
+            file: scene.name.clone(),
             msg: "the mesh has no triangles".into(),
         });
     }
-    let up = up_axis_for(name);
+    let up = up_axis_for(&scene.name);
     let center = b.center();
     let radius = (0.5 * b.extent().length()).max(1e-6);
     // Three-quarter view: 45 degrees around the up axis, 30 degrees above the horizon.
@@ -79,5 +87,5 @@ pub fn scene_for_mesh(name: &str, mut tris: Vec<Triangle>) -> Result<Scene> {
         normal: up,
         material: MaterialId(1),
     });
-    Ok(scene)
+    Ok(())
 }

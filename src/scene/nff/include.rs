@@ -4,32 +4,33 @@
 
 use glam::Vec3;
 
-use super::Parser;
+use super::{Parser, keyword};
 use crate::error::{Error, Result};
-use crate::scene::io::{FileKind, read_file};
+use crate::scene::io::{self, FileKind};
 use crate::scene::lex::{Token, escape_controls};
-use crate::scene::mesh::{self, MeshTransform};
+use crate::scene::mesh::{self, MeshTransform, Placed};
 
 impl Parser<'_> {
     pub(super) fn mesh(&mut self, tok: &Token) -> Result<()> {
         let ptok = self.lx.expect_token("mesh file path")?;
-        let raw = String::from_utf8_lossy(ptok.text);
+        let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
         let rel = raw.trim_matches('"');
         let mut xf = MeshTransform::default();
-        while let Some(t) = self.lx.peek() {
-            match t.text {
+        while let Some(t) = self.lx.peek()? {
+            let (word, len) = keyword(self.lx.text(&t));
+            match &word[..len] {
                 b"translate" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     xf.translate = self.lx.vec3("mesh translation")?;
                 }
                 b"rotate" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     xf.rotate_deg = self.lx.vec3("mesh rotation in degrees")?;
                 }
                 b"scale" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     let s = self.lx.number("mesh scale")?;
-                    xf.scale = if self.lx.peek_is_number() {
+                    xf.scale = if self.lx.peek_is_number()? {
                         Vec3::new(
                             s,
                             self.lx.number("mesh scale y")?,
@@ -56,7 +57,9 @@ impl Parser<'_> {
                 ),
             ));
         }
-        let bytes = read_file(&path).map_err(|e| {
+        let material = self.current_material();
+        // What keeps the file from being read is reported at the path in the scene.
+        let cannot_read = |e: Error| {
             let why = match e {
                 Error::Io { source, .. } => source.to_string(),
                 Error::Scene { msg, .. } => msg,
@@ -69,22 +72,19 @@ impl Parser<'_> {
                     escape_controls(&path.display().to_string())
                 ),
             )
-        })?;
-        let mesh = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
-        self.scene.warnings.extend(mesh.warnings);
-        let mut tris = mesh.triangles;
-        if tris.is_empty() {
+        };
+        let input = io::open(&path).map_err(cannot_read)?;
+        let name = path.display().to_string();
+        let mut placed = Placed::new(&mut *self.sink, &xf, material);
+        let read = mesh::read(input, kind, &name, &mut placed, &mut self.scene.warnings);
+        let placed = placed.placed;
+        read.map_err(cannot_read)?;
+        if placed == 0 {
             self.warn(
                 tok,
                 &format!("mesh '{}' has no triangles", escape_controls(rel)),
             );
         }
-        let material = self.current_material();
-        xf.apply(&mut tris);
-        for t in &mut tris {
-            t.material = material;
-        }
-        self.scene.triangles.append(&mut tris);
         Ok(())
     }
 }

@@ -2,7 +2,7 @@
 //! and our `aperture` and `focal`), checked for what would make no image. Apart from the
 //! statement loop because it is a small grammar of its own.
 
-use super::Parser;
+use super::{Parser, keyword};
 use crate::error::Result;
 use crate::limits::MAX_IMAGE_SIDE;
 use crate::scene::lex::Token;
@@ -13,19 +13,20 @@ impl Parser<'_> {
         let mut cam = nff_default_camera();
         let (mut from, mut at, mut up, mut angle) = (None, None, None, None);
         let mut resolution = None;
-        while let Some(t) = self.lx.peek() {
-            match t.text {
+        while let Some(t) = self.lx.peek()? {
+            let (word, len) = keyword(self.lx.text(&t));
+            match &word[..len] {
                 b"from" | b"at" | b"up" | b"angle" | b"hither" | b"resolution" | b"aperture"
                 | b"focal" => {}
                 _ => break,
             }
-            self.lx.next_token();
-            match t.text {
+            self.lx.next_token()?;
+            match &word[..len] {
                 b"from" => from = Some(self.lx.vec3("'from' coordinate")?),
                 b"at" => at = Some(self.lx.vec3("'at' coordinate")?),
                 b"up" => up = Some(self.lx.vec3("'up' coordinate")?),
                 b"angle" => {
-                    let a = self.lx.peek();
+                    let a = self.lx.peek()?;
                     let v = self.lx.number("view angle in degrees")?;
                     if !(v > 0.0 && v < 180.0) {
                         let a = a.expect("number was read");
@@ -57,7 +58,7 @@ impl Parser<'_> {
                 }
                 b"aperture" => cam.aperture = self.lx.number("lens aperture")?.abs(),
                 b"focal" => {
-                    let f = self.lx.peek();
+                    let f = self.lx.peek()?;
                     let d = self.lx.number("focal distance")?;
                     if d <= 0.0 {
                         let f = f.expect("number was read");
