@@ -12,6 +12,7 @@
 #   benches/huge.sh
 #   MOUNT="8 9" BALLS="5" BACKENDS=cpu SIZE=128 TIMEOUT=300 benches/huge.sh
 #   BASELINE=/path/to/old/gpurt benches/huge.sh
+#   GPURT=/path/to/gpurt SPD=/path/to/spd benches/huge.sh   (given builds, nothing built)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 MOUNT=${MOUNT-8 9 10 11}
@@ -19,9 +20,11 @@ BALLS=${BALLS-5 6 7}
 BACKENDS=${BACKENDS:-cpu gpu}
 SIZE=${SIZE:-256}
 TIMEOUT=${TIMEOUT:-900}
-(cd "$ROOT" && cargo build --release --quiet --bin gpurt --example spd)
-GPURT="$ROOT/target/release/gpurt"
-SPD="$ROOT/target/release/examples/spd"
+if [ -z "${GPURT:-}" ] || [ -z "${SPD:-}" ]; then
+    (cd "$ROOT" && cargo build --release --quiet --bin gpurt --example spd)
+fi
+GPURT=${GPURT:-$ROOT/target/release/gpurt}
+SPD=${SPD:-$ROOT/target/release/examples/spd}
 BINS=("new $GPURT")
 [ -n "${BASELINE:-}" ] && BINS+=("old $BASELINE")
 WORK=$(mktemp -d)

@@ -13,6 +13,7 @@
 #   benches/memory.sh
 #   BASELINE=/path/to/old/gpurt REPEAT=3 benches/memory.sh
 #   TERRAIN=500 SPHERES=500 COMMENTS_GZ_MB=300 COMMENTS_PLAIN_MB=100 BACKENDS=cpu benches/memory.sh
+#   GPURT=/path/to/gpurt FIELD=/path/to/field benches/memory.sh   (given builds, nothing built)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SIZE=${SIZE:-256}
@@ -23,9 +24,11 @@ COMMENTS_PLAIN_MB=${COMMENTS_PLAIN_MB:-1000}
 BACKENDS=${BACKENDS:-cpu gpu}
 REPEAT=${REPEAT:-1}
 BASELINE=${BASELINE:-}
-(cd "$ROOT" && cargo build --release --quiet --bin gpurt --example field)
-GPURT="$ROOT/target/release/gpurt"
-FIELD="$ROOT/target/release/examples/field"
+if [ -z "${GPURT:-}" ] || [ -z "${FIELD:-}" ]; then
+    (cd "$ROOT" && cargo build --release --quiet --bin gpurt --example field)
+fi
+GPURT=${GPURT:-$ROOT/target/release/gpurt}
+FIELD=${FIELD:-$ROOT/target/release/examples/field}
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 ROWS="$WORK/rows.tsv"
@@ -92,6 +95,7 @@ for scene in "${scenes[@]}"; do
             printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$prims" "$mb" "$backend" \
                 "$tag" "${rc[$tag]}" "$(best "${parse[$tag]}")" "$(best "${build[$tag]}")" \
                 "$(best "${peak[$tag]}")" >>"$ROWS"
+            echo "row: $(tail -n 1 "$ROWS")" >&2
         done
         unset parse build peak rc
     done
