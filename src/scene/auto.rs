@@ -22,14 +22,15 @@ pub fn up_axis_for(name: &str) -> Vec3 {
 
 pub fn scene_for_mesh(name: &str, mut tris: Vec<Triangle>) -> Result<Scene> {
     let mut scene = Scene::new(name, nff_default_camera());
+    scene.materials.push(Material::NEUTRAL_GREY);
     scene.triangles.append(&mut tris);
     let b = scene.bounds();
     frame_mesh(&mut scene, b)?;
     Ok(scene)
 }
 
-/// Gives `scene`, which holds a bare mesh whose triangles (material 0) have bounds `b`,
-/// its camera, light, materials and ground plane.
+/// Gives `scene`, which holds a bare mesh with bounds `b` and its materials (the grey of
+/// faces without one first), its camera, light, ground material and ground plane.
 pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
     if b.is_empty() {
         return Err(Error::Scene {
@@ -70,7 +71,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
         position: light,
         color: Some(Vec3::ONE),
     });
-    scene.materials.push(Material::NEUTRAL_GREY);
+    let ground = MaterialId(scene.materials.len() as u32);
     scene.materials.push(Material {
         color: Vec3::splat(0.9),
         kd: 0.9,
@@ -85,7 +86,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
     scene.planes.push(Plane {
         point: up * floor,
         normal: up,
-        material: MaterialId(1),
+        material: ground,
     });
     Ok(())
 }

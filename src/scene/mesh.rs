@@ -7,31 +7,35 @@ use super::bounds::Bounds;
 use super::io::{FileKind, Input};
 use super::lex::Lexer;
 use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
-use super::sink::{Collect, Sink};
+use super::palette::Palette;
+use super::sink::{Collect, MeshOut, Sink};
 use super::{obj, stl};
 use crate::error::Result;
 
-/// Reads a mesh file's triangles (material 0) into `sink` as they are read, and what is
-/// dropped from it into `warnings` (`FILE:LINE:COL: message`).
-pub fn read(
-    input: Input,
-    kind: FileKind,
-    name: &str,
-    sink: &mut dyn Sink,
-    warnings: &mut Vec<String>,
-) -> Result<()> {
+/// Reads a mesh file's triangles into `out` as they are read (`name` in messages).
+pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Result<()> {
     match kind {
-        FileKind::Stl => stl::read(input, name, sink),
-        FileKind::Obj => obj::read(Lexer::from_input(input, name), sink, warnings),
+        FileKind::Stl => stl::read(input, name, out.sink, out.default),
+        FileKind::Obj => obj::read(Lexer::from_input(input, name), out),
         FileKind::Nff => unreachable!("NFF is not a mesh format"),
     }
 }
 
-/// Parses a mesh file's bytes (gzip-compressed or not) into triangles with material 0.
+/// Parses a mesh file's bytes (gzip-compressed or not) into triangles with material 0;
+/// an OBJ's materials are not read.
 pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
     let mut tris = Collect::default();
     let mut warnings = Vec::new();
-    read(Input::bytes(bytes), kind, name, &mut tris, &mut warnings)?;
+    let mut out = MeshOut {
+        sink: &mut tris,
+        warnings: &mut warnings,
+        materials: &mut Vec::new(),
+        palette: &mut Palette::default(),
+        default: MaterialId(0),
+        mtl: false,
+        dir: None,
+    };
+    read(Input::bytes(bytes), kind, name, &mut out)?;
     Ok(Mesh {
         triangles: tris.into_triangles(),
         warnings,
@@ -110,34 +114,32 @@ impl Placement {
     }
 }
 
-/// A mesh on its way into a scene: every triangle transformed and given `material`.
+/// A mesh on its way into a scene: every triangle transformed.
 pub struct Placed<'a> {
     sink: &'a mut dyn Sink,
     placement: Option<Placement>,
-    material: MaterialId,
     /// Triangles placed.
     pub placed: usize,
 }
 
 impl<'a> Placed<'a> {
-    pub fn new(sink: &'a mut dyn Sink, xf: &MeshTransform, material: MaterialId) -> Self {
+    pub fn new(sink: &'a mut dyn Sink, xf: &MeshTransform) -> Self {
         Placed {
             sink,
             placement: xf.matrices(),
-            material,
             placed: 0,
         }
     }
 }
 
 impl Sink for Placed<'_> {
-    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, _: MaterialId) {
+    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId) {
         let (v, n) = match &self.placement {
             Some(p) => p.place(v, n),
             None => (v, n),
         };
         self.placed += 1;
-        self.sink.triangle(v, n, self.material);
+        self.sink.triangle(v, n, material);
     }
     // Mesh files hold triangles only.
     fn sphere(&mut self, s: Sphere) {

@@ -14,9 +14,11 @@ pub mod io;
 pub mod lex;
 pub mod mesh;
 pub mod model;
+pub mod mtl;
 pub mod nff;
 pub mod number;
 pub mod obj;
+pub mod palette;
 pub mod sink;
 pub mod stl;
 pub mod triangulate;
@@ -33,6 +35,8 @@ pub use sink::{Collect, Sink};
 
 use crate::error::Result;
 use io::FileKind;
+use palette::Palette;
+use sink::MeshOut;
 
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an
 /// automatic camera, light, material and ground plane.
@@ -60,17 +64,28 @@ pub fn summary(path: &Path) -> Result<FlatScene> {
 }
 
 /// Reads the scene file at `path`, its bounded primitives into `sink`; returns the rest.
+/// A bare mesh's faces get the materials of its OBJ's `.mtl` libraries, the neutral grey
+/// (material 0) where they name none.
 pub fn read(path: &Path, sink: &mut dyn Sink) -> Result<Scene> {
     let input = io::open(path)?;
     let name = path.display().to_string();
+    let dir = path.parent().unwrap_or(Path::new("."));
     match FileKind::of(path) {
-        FileKind::Nff => {
-            let base = path.parent().unwrap_or(Path::new("."));
-            nff::read(lex::Lexer::from_input(input, &name), base, sink)
-        }
+        FileKind::Nff => nff::read(lex::Lexer::from_input(input, &name), dir, sink),
         kind => {
             let mut scene = Scene::new(&name, nff_default_camera());
-            mesh::read(input, kind, &name, sink, &mut scene.warnings)?;
+            let mut palette = Palette::default();
+            let grey = palette.id(&mut scene.materials, Material::NEUTRAL_GREY);
+            let mut out = MeshOut {
+                sink,
+                warnings: &mut scene.warnings,
+                materials: &mut scene.materials,
+                palette: &mut palette,
+                default: grey,
+                mtl: true,
+                dir: Some(dir),
+            };
+            mesh::read(input, kind, &name, &mut out)?;
             auto::frame_mesh(&mut scene, sink.bounds())?;
             Ok(scene)
         }

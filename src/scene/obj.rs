@@ -1,6 +1,6 @@
-//! Wavefront OBJ reader: positions (`v`), normals (`vn`) and faces (`f`); polygons are
-//! triangulated by our ear clipper. Every other statement (`vt`, `o`, `g`, `s`, `usemtl`,
-//! `mtllib`, `l`, `p`, ...) is skipped: materials come from the `mesh` statement's `f`.
+//! Wavefront OBJ reader: positions (`v`), normals (`vn`), faces (`f`) and their materials
+//! (`mtllib`, `usemtl`: `mtl`); polygons are triangulated by our ear clipper. Every other
+//! statement (`vt`, `o`, `g`, `s`, `l`, `p`, ...) is skipped.
 //!
 //! Read as a stream: a face goes to the sink as soon as it is read, when every corner
 //! refers to a vertex already defined. A face may refer to vertices defined later, so the
@@ -14,9 +14,11 @@
 
 use glam::Vec3;
 
-use super::lex::{Lexer, Token, parse_f32};
+use super::lex::{Lexer, Token};
 use super::model::{MaterialId, Mesh, Triangle, unit};
-use super::sink::{Collect, Sink};
+use super::mtl::ObjMaterials;
+use super::palette::Palette;
+use super::sink::{Collect, MeshOut};
 use super::triangulate::triangulate;
 use crate::error::Result;
 use crate::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
@@ -36,21 +38,33 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
     parse_with_warnings(bytes, name).map(|m| m.triangles)
 }
 
-/// The triangles of an OBJ file, and a warning for each face dropped because it has fewer
-/// than three corners or no area (as the NFF reader warns of degenerate polygons).
+/// The triangles of an OBJ file (material 0; its `.mtl` materials are not read), and a
+/// warning for each face dropped because it has fewer than three corners or no area (as
+/// the NFF reader warns of degenerate polygons).
 pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
     let mut tris = Collect::default();
     let mut warnings = Vec::new();
-    read(Lexer::new(bytes, name), &mut tris, &mut warnings)?;
+    let mut out = MeshOut {
+        sink: &mut tris,
+        warnings: &mut warnings,
+        materials: &mut Vec::new(),
+        palette: &mut Palette::default(),
+        default: MaterialId(0),
+        mtl: false,
+        dir: None,
+    };
+    read(Lexer::new(bytes, name), &mut out)?;
     Ok(Mesh {
         triangles: tris.into_triangles(),
         warnings,
     })
 }
 
-/// Reads an OBJ file's triangles (material 0) into `sink`, and a warning for each face
-/// dropped into `warnings`.
-pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> Result<()> {
+/// Reads an OBJ file's triangles into `out`, each with the material its `usemtl` names
+/// (`out.default` without one), and a warning for each face dropped.
+pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
+    let mut materials = ObjMaterials::default();
+    let mut material = out.default;
     let mut r = Reader {
         positions: Vec::new(),
         normals: Vec::new(),
@@ -82,7 +96,7 @@ pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> R
                 }
                 let mut p = [0.0f32; 3];
                 for c in &mut p {
-                    *c = number_on_line(&mut lx, &mut last, what)?;
+                    *c = lx.number_on_line(&mut last, what)?;
                 }
                 if vertex {
                     r.positions.push(Vec3::from(p));
@@ -90,11 +104,11 @@ pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> R
                     r.normals.push(Vec3::from(p));
                 }
                 // `v x y z w` and `v x y z r g b` (vertex colours): the rest is ignored.
-                skip_line(&mut lx, line)?;
+                lx.skip_line(line)?;
             }
             b"f" | b"fo" => {
                 r.face.clear();
-                while let Some(c) = token_on_line(&mut lx, line)? {
+                while let Some(c) = lx.token_on_line(line)? {
                     if r.face.len() as u32 >= MAX_POLYGON_VERTICES {
                         return Err(lx.error_at(
                             &c,
@@ -106,7 +120,7 @@ pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> R
                     let corner = corner(&lx, &c, r.positions.len(), r.normals.len())?;
                     r.face.push(corner);
                 }
-                if sink.count() >= MAX_PRIMITIVES {
+                if out.sink.count() >= MAX_PRIMITIVES {
                     return Err(lx.error_at(
                         &t,
                         format!("more than {MAX_PRIMITIVES} triangles (the limit)"),
@@ -114,21 +128,23 @@ pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> R
                 }
                 if r.faces.is_empty() && r.face.iter().all(|c| r.defined(c)) {
                     let face = std::mem::take(&mut r.face);
-                    r.emit(&face, &lx, sink, warnings)?;
+                    r.emit(&face, material, &lx, out)?;
                     r.face = face;
                 } else {
-                    r.faces.push(r.held.len());
+                    r.faces.push((r.held.len(), material));
                     r.held.extend_from_slice(&r.face);
                 }
             }
-            _ => skip_line(&mut lx, line)?,
+            b"mtllib" if out.mtl => materials.mtllib(&mut lx, &t, out)?,
+            b"usemtl" if out.mtl => material = materials.usemtl(&mut lx, &t, out)?,
+            _ => lx.skip_line(line)?,
         }
     }
     // The faces held for vertices defined after them, in order.
     let (held, faces) = (std::mem::take(&mut r.held), std::mem::take(&mut r.faces));
-    for (k, &start) in faces.iter().enumerate() {
-        let end = faces.get(k + 1).copied().unwrap_or(held.len());
-        r.emit(&held[start..end], &lx, sink, warnings)?;
+    for (k, &(start, material)) in faces.iter().enumerate() {
+        let end = faces.get(k + 1).map_or(held.len(), |&(e, _)| e);
+        r.emit(&held[start..end], material, &lx, out)?;
     }
     Ok(())
 }
@@ -136,9 +152,10 @@ pub fn read(mut lx: Lexer, sink: &mut dyn Sink, warnings: &mut Vec<String>) -> R
 struct Reader {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
-    /// Corners of the faces held until the end, and where each face starts in it.
+    /// Corners of the faces held until the end, and where each face starts in it with
+    /// its material.
     held: Vec<Corner>,
-    faces: Vec<usize>,
+    faces: Vec<(usize, MaterialId)>,
     // Scratch buffers reused by every face.
     face: Vec<Corner>,
     poly: Vec<Vec3>,
@@ -153,13 +170,14 @@ impl Reader {
         ok(c.v, self.positions.len()) && c.n.is_none_or(|n| ok(n, self.normals.len()))
     }
 
-    /// Triangulates a face and gives its triangles to `sink`, or warns that it is dropped.
+    /// Triangulates a face of `material` and gives its triangles to `out`'s sink, or warns
+    /// that it is dropped.
     fn emit(
         &mut self,
         face: &[Corner],
+        material: MaterialId,
         lx: &Lexer,
-        sink: &mut dyn Sink,
-        warnings: &mut Vec<String>,
+        out: &mut MeshOut,
     ) -> Result<()> {
         let at = |c: &Corner, msg: String| lx.error_at(&Token::position(c.line, c.col), msg);
         self.poly.clear();
@@ -197,7 +215,7 @@ impl Reader {
         self.idx.clear();
         if poly.len() < 3 || !triangulate(poly, &mut self.idx) {
             let (line, col) = face.first().map_or((0, 0), |c| (c.line, c.col));
-            warnings.push(format!(
+            out.warnings.push(format!(
                 "{}:{line}:{col}: degenerate face with {} corners dropped",
                 lx.name(),
                 poly.len()
@@ -207,39 +225,9 @@ impl Reader {
         for &[a, b, c] in &self.idx {
             let ix = [a, b, c].map(|i| i as usize);
             let n = smooth.then(|| ix.map(|i| poly_n[i]));
-            sink.triangle(ix.map(|i| poly[i]), n, MaterialId(0));
+            out.sink.triangle(ix.map(|i| poly[i]), n, material);
         }
         Ok(())
-    }
-}
-
-/// The next token if it is on `line` (OBJ statements end at the end of their line).
-fn token_on_line(lx: &mut Lexer, line: u32) -> Result<Option<Token>> {
-    match lx.peek()? {
-        Some(t) if t.line == line => lx.next_token(),
-        _ => Ok(None),
-    }
-}
-
-fn skip_line(lx: &mut Lexer, line: u32) -> Result<()> {
-    while token_on_line(lx, line)?.is_some() {}
-    Ok(())
-}
-
-/// A finite number on the current line; `last` is the statement's latest token, used to
-/// point just past it when the line ends too early.
-fn number_on_line(lx: &mut Lexer, last: &mut Token, what: &str) -> Result<f32> {
-    let Some(t) = token_on_line(lx, last.line)? else {
-        let end = Token::position(last.line, last.end_col());
-        return Err(lx.error_at(&end, format!("expected {what}, found end of line")));
-    };
-    *last = t;
-    match parse_f32(lx.text(&t)) {
-        Some(v) if v.is_finite() => Ok(v),
-        _ => Err(lx.error_at(
-            &t,
-            format!("expected {what} (a finite number), found {}", lx.show(&t)),
-        )),
     }
 }
 

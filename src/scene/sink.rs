@@ -5,10 +5,13 @@
 //! lights, materials, planes, warnings) is small and goes into a `Scene` whose primitive
 //! vectors stay empty.
 
+use std::path::Path;
+
 use glam::Vec3;
 
 use super::bounds::Bounds;
-use super::model::{BoxPrim, Cone, MaterialId, Scene, Sphere, Triangle};
+use super::model::{BoxPrim, Cone, Material, MaterialId, Scene, Sphere, Triangle};
+use super::palette::Palette;
 
 /// Takes a reader's bounded primitives in the order it reads them.
 pub trait Sink {
@@ -21,6 +24,24 @@ pub trait Sink {
     fn count(&self) -> usize;
     /// The bounds of every primitive taken so far.
     fn bounds(&self) -> Bounds;
+}
+
+/// Where a mesh file's reader puts what it reads: its triangles into `sink`, what it drops
+/// or skips into `warnings`, and the materials of an OBJ's `.mtl` libraries into the
+/// scene's `materials` (through its `palette`).
+pub struct MeshOut<'a> {
+    pub sink: &'a mut dyn Sink,
+    pub warnings: &'a mut Vec<String>,
+    pub materials: &'a mut Vec<Material>,
+    pub palette: &'a mut Palette,
+    /// The material of faces without one of their own: every STL triangle, OBJ faces
+    /// before any `usemtl` or under one whose material no library defines.
+    pub default: MaterialId,
+    /// Whether an OBJ's `mtllib` and `usemtl` are read (else every face gets `default`).
+    pub mtl: bool,
+    /// The directory `mtllib` names are relative to (the OBJ's own; `None` for bytes that
+    /// come from no file, whose libraries cannot be found).
+    pub dir: Option<&'a Path>,
 }
 
 /// The primitives as `Scene` holds them.

@@ -27,15 +27,15 @@ use crate::limits::MAX_PRIMITIVES;
 /// The triangles of an STL file's bytes (gzip-compressed or not).
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
     let mut tris = Collect::default();
-    read(Input::bytes(bytes), name, &mut tris)?;
+    read(Input::bytes(bytes), name, &mut tris, MaterialId(0))?;
     Ok(tris.into_triangles())
 }
 
 /// How much of a file's start is looked at to tell binary from ASCII.
 const HEAD_BYTES: usize = 64 << 10;
 
-/// Reads an STL file's triangles (material 0) into `sink` as they are read.
-pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink) -> Result<()> {
+/// Reads an STL file's triangles, of `material`, into `sink` as they are read.
+pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink, material: MaterialId) -> Result<()> {
     let io = |e| super::io::read_error(name, e);
     let mut head = Vec::with_capacity(HEAD_BYTES);
     (&mut input.reader)
@@ -51,13 +51,14 @@ pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink) -> Result<()> {
         || !looks_like_text(&head);
     let rest = std::io::Cursor::new(head).chain(input.reader);
     if binary {
-        read_binary(BufReader::with_capacity(256 << 10, rest), len, name, sink)
+        let rest = BufReader::with_capacity(256 << 10, rest);
+        read_binary(rest, len, name, sink, material)
     } else {
         let input = Input {
             reader: Box::new(rest),
             len,
         };
-        read_ascii(Lexer::from_input(input, name), sink)
+        read_ascii(Lexer::from_input(input, name), sink, material)
     }
 }
 
@@ -105,7 +106,13 @@ fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
 /// A binary STL, its size `len` when known before reading: a size that disagrees with
 /// the header's count is reported before any triangle is read, as for a file in memory;
 /// otherwise where the stream shows it.
-fn read_binary(mut r: impl Read, len: Option<u64>, name: &str, sink: &mut dyn Sink) -> Result<()> {
+fn read_binary(
+    mut r: impl Read,
+    len: Option<u64>,
+    name: &str,
+    sink: &mut dyn Sink,
+    material: MaterialId,
+) -> Result<()> {
     let err = |offset: u64, msg: String| Error::Binary {
         file: name.to_string(),
         offset,
@@ -169,7 +176,7 @@ fn read_binary(mut r: impl Read, len: Option<u64>, name: &str, sink: &mut dyn Si
                 format!("triangle {} has a non-finite vertex", i + 1),
             ));
         }
-        sink.triangle(v, facet_normal(v3(&rec, 0)), MaterialId(0));
+        sink.triangle(v, facet_normal(v3(&rec, 0)), material);
     }
     // A stream whose size was not known may go on past the count.
     let extra = std::io::copy(&mut r, &mut std::io::sink()).map_err(io)?;
@@ -179,7 +186,7 @@ fn read_binary(mut r: impl Read, len: Option<u64>, name: &str, sink: &mut dyn Si
     Ok(())
 }
 
-fn read_ascii(mut lx: Lexer, sink: &mut dyn Sink) -> Result<()> {
+fn read_ascii(mut lx: Lexer, sink: &mut dyn Sink, material: MaterialId) -> Result<()> {
     // Keywords are ASCII literals; quoting them is only done when there is an error.
     let expect = |lx: &mut Lexer, word: &'static str| -> Result<()> {
         let t = lx.expect_token(&format_args!("'{word}'"))?;
@@ -225,7 +232,7 @@ fn read_ascii(mut lx: Lexer, sink: &mut dyn Sink) -> Result<()> {
                     }
                     expect(&mut lx, "endloop")?;
                     expect(&mut lx, "endfacet")?;
-                    sink.triangle(v, facet_normal(n), MaterialId(0));
+                    sink.triangle(v, facet_normal(n), material);
                 }
                 _ => {
                     return Err(lx.error_at(

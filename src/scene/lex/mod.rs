@@ -156,6 +156,47 @@ impl<'a> Lexer<'a> {
         self.error_at(&at, msg)
     }
 
+    /// The next token if it is on `line` (for line-based formats: OBJ, MTL).
+    pub fn token_on_line(&mut self, line: u32) -> Result<Option<Token>> {
+        match self.peek()? {
+            Some(t) if t.line == line => self.next_token(),
+            _ => Ok(None),
+        }
+    }
+
+    /// Skips what is left of `line`.
+    pub fn skip_line(&mut self, line: u32) -> Result<()> {
+        while self.token_on_line(line)?.is_some() {}
+        Ok(())
+    }
+
+    /// A finite number on the current line; `last` is the statement's latest token, used
+    /// to point just past it when the line ends too early.
+    pub fn number_on_line(&mut self, last: &mut Token, what: &str) -> Result<f32> {
+        let Some(t) = self.token_on_line(last.line)? else {
+            let end = Token::position(last.line, last.end_col());
+            return Err(self.error_at(&end, format!("expected {what}, found end of line")));
+        };
+        *last = t;
+        match parse_f32(self.text(&t)) {
+            Some(v) if v.is_finite() => Ok(v),
+            _ => Err(self.error_at(
+                &t,
+                format!("expected {what} (a finite number), found {}", self.show(&t)),
+            )),
+        }
+    }
+
+    /// What is left of `line`, its tokens joined by single spaces (names that may hold
+    /// spaces: `newmtl`, `usemtl`, `mtllib`).
+    pub fn rest_of_line(&mut self, line: u32) -> Result<String> {
+        let mut words: Vec<String> = Vec::new();
+        while let Some(t) = self.token_on_line(line)? {
+            words.push(String::from_utf8_lossy(self.text(&t)).into_owned());
+        }
+        Ok(words.join(" "))
+    }
+
     // The `what` arguments below describe the expected value for error messages. They are
     // `Display` rather than `&str` so that hot callers (polygon vertices) can pass a small
     // struct that is only formatted when an error actually happens.

@@ -1,6 +1,8 @@
-//! The `mesh PATH [translate ..] [rotate ..] [scale ..]` statement: an STL or OBJ file
-//! read (relative to the scene's directory, gzip-aware), transformed and given the current
-//! material. The only statement that opens another file, so the only one that needs `io`.
+//! The `mesh PATH [translate ..] [rotate ..] [scale ..] [nomtl]` statement: an STL or OBJ
+//! file read (relative to the scene's directory, gzip-aware) and transformed; its faces get
+//! the materials an OBJ's `usemtl` names, and the current material where it names none
+//! (or everywhere, with `nomtl`). The only statement that opens another file, so the only
+//! one that needs `io`.
 
 use glam::Vec3;
 
@@ -9,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::scene::io::{self, FileKind};
 use crate::scene::lex::{Token, escape_controls};
 use crate::scene::mesh::{self, MeshTransform, Placed};
+use crate::scene::sink::MeshOut;
 
 impl Parser<'_> {
     pub(super) fn mesh(&mut self, tok: &Token) -> Result<()> {
@@ -16,6 +19,7 @@ impl Parser<'_> {
         let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
         let rel = raw.trim_matches('"');
         let mut xf = MeshTransform::default();
+        let mut mtl = true;
         while let Some(t) = self.lx.peek()? {
             let (word, len) = keyword(self.lx.text(&t));
             match &word[..len] {
@@ -42,6 +46,10 @@ impl Parser<'_> {
                     if xf.scale.cmpeq(Vec3::ZERO).any() {
                         return Err(self.lx.error_at(&t, "mesh scale must not be zero"));
                     }
+                }
+                b"nomtl" => {
+                    self.lx.next_token()?;
+                    mtl = false;
                 }
                 _ => break,
             }
@@ -75,8 +83,17 @@ impl Parser<'_> {
         };
         let input = io::open(&path).map_err(cannot_read)?;
         let name = path.display().to_string();
-        let mut placed = Placed::new(&mut *self.sink, &xf, material);
-        let read = mesh::read(input, kind, &name, &mut placed, &mut self.scene.warnings);
+        let mut placed = Placed::new(&mut *self.sink, &xf);
+        let mut out = MeshOut {
+            sink: &mut placed,
+            warnings: &mut self.scene.warnings,
+            materials: &mut self.scene.materials,
+            palette: &mut self.palette,
+            default: material,
+            mtl,
+            dir: path.parent(),
+        };
+        let read = mesh::read(input, kind, &name, &mut out);
         let placed = placed.placed;
         read.map_err(cannot_read)?;
         if placed == 0 {

@@ -10,7 +10,6 @@ mod include;
 mod material;
 mod view;
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use glam::Vec3;
@@ -21,6 +20,7 @@ use crate::scene::lex::{Lexer, Token, parse_f32};
 use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, nff_default_camera, unit,
 };
+use crate::scene::palette::Palette;
 use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
 
@@ -45,7 +45,7 @@ pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink) -> Result<Scene> {
         scene: Scene::new(name, nff_default_camera()),
         have_view: false,
         material: None,
-        material_ids: HashMap::new(),
+        palette: Palette::default(),
         verts: Vec::new(),
         normals: Vec::new(),
         tris: Vec::new(),
@@ -74,7 +74,7 @@ struct Parser<'a> {
     /// The current material (`None` until the first `f` or the first primitive).
     material: Option<MaterialId>,
     /// Exact duplicates share one id (SPD repeats `f` lines for every object).
-    material_ids: HashMap<[u32; 8], MaterialId>,
+    palette: Palette,
     // Scratch buffers reused by every polygon.
     verts: Vec<Vec3>,
     normals: Vec<Vec3>,
