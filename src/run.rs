@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
-use crate::scene::{self, Camera};
+use crate::scene::{self, Camera, ReadOptions};
 use crate::session::Renderer;
 
 /// A scene read and packed, with the time each step took and the reader's warnings (the
@@ -24,15 +24,17 @@ pub struct Prepared {
 
 /// Reads and packs the scene at `path`, with the camera of the NFF `v` block in `view`
 /// when one is given (a view found in `gpurt view`, printed with its C key), for a
-/// render of `samples(camera)` camera samples (which picks the BVH's build quality).
+/// render of `samples(camera)` camera samples (which picks the BVH's build quality), read
+/// as `read` says (`--lenient`).
 pub fn prepare(
     path: &Path,
     view: Option<&Path>,
+    read: &ReadOptions,
     samples: impl FnOnce(&Camera) -> u64,
 ) -> Result<Prepared> {
     let t0 = Instant::now();
     // Read straight into the renderers' records: the scene is never held twice.
-    let mut flat = scene::load_flat(path)?;
+    let mut flat = scene::load_flat_with(path, read)?;
     if let Some(view) = view {
         flat.scene.camera = scene::summary(view)?.scene.camera;
     }

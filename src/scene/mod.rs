@@ -38,11 +38,26 @@ use io::FileKind;
 use palette::Palette;
 use sink::MeshOut;
 
+/// How the readers read: what a caller (the command line, a binding over the library)
+/// chooses about input they would otherwise refuse.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// An NFF keyword gpurt does not know (`Q`, `fp`, `obj`, from other tracers' dialects)
+    /// is skipped, with what follows it up to the next keyword gpurt knows, and one
+    /// warning each, instead of ending the read with an error.
+    pub lenient: bool,
+}
+
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an
 /// automatic camera, light, material and ground plane.
 pub fn load(path: &Path) -> Result<Scene> {
+    load_with(path, &ReadOptions::default())
+}
+
+/// `load` with reading options.
+pub fn load_with(path: &Path, opts: &ReadOptions) -> Result<Scene> {
     let mut prims = Collect::default();
-    let mut scene = read(path, &mut prims)?;
+    let mut scene = read(path, &mut prims, opts)?;
     prims.into_scene(&mut scene);
     Ok(scene)
 }
@@ -50,28 +65,38 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// Loads a scene file as `load` does, its bounded primitives straight into the records
 /// the renderers read (`pack::pack_flat` builds its tree).
 pub fn load_flat(path: &Path) -> Result<FlatScene> {
+    load_flat_with(path, &ReadOptions::default())
+}
+
+/// `load_flat` with reading options.
+pub fn load_flat_with(path: &Path, opts: &ReadOptions) -> Result<FlatScene> {
     let mut prims = Flat::new();
-    let scene = read(path, &mut prims)?;
+    let scene = read(path, &mut prims, opts)?;
     Ok(FlatScene { scene, prims })
 }
 
 /// What `load` would give, but for the bounded primitives, which are only counted and
 /// bounded: what `gpurt info` prints, in memory that does not grow with the scene.
 pub fn summary(path: &Path) -> Result<FlatScene> {
+    summary_with(path, &ReadOptions::default())
+}
+
+/// `summary` with reading options.
+pub fn summary_with(path: &Path, opts: &ReadOptions) -> Result<FlatScene> {
     let mut prims = Flat::counting();
-    let scene = read(path, &mut prims)?;
+    let scene = read(path, &mut prims, opts)?;
     Ok(FlatScene { scene, prims })
 }
 
 /// Reads the scene file at `path`, its bounded primitives into `sink`; returns the rest.
 /// A bare mesh's faces get the materials of its OBJ's `.mtl` libraries, the neutral grey
 /// (material 0) where they name none.
-pub fn read(path: &Path, sink: &mut dyn Sink) -> Result<Scene> {
+pub fn read(path: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scene> {
     let input = io::open(path)?;
     let name = path.display().to_string();
     let dir = path.parent().unwrap_or(Path::new("."));
     match FileKind::of(path) {
-        FileKind::Nff => nff::read(lex::Lexer::from_input(input, &name), dir, sink),
+        FileKind::Nff => nff::read(lex::Lexer::from_input(input, &name), dir, sink, opts),
         kind => {
             let mut scene = Scene::new(&name, nff_default_camera());
             let mut palette = Palette::default();

@@ -16,6 +16,7 @@ use glam::Vec3;
 
 use crate::error::Result;
 use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
+use crate::scene::ReadOptions;
 use crate::scene::lex::{Lexer, Token, parse_f32};
 use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, nff_default_camera, unit,
@@ -27,8 +28,13 @@ use crate::scene::triangulate::triangulate;
 /// Parses NFF text (gzip-compressed or not). `name` is used in messages; `base` is the
 /// directory `mesh` paths are relative to.
 pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
+    parse_with(src, name, base, &ReadOptions::default())
+}
+
+/// `parse` with reading options (`--lenient`).
+pub fn parse_with(src: &[u8], name: &str, base: &Path, opts: &ReadOptions) -> Result<Scene> {
     let mut prims = Collect::default();
-    let mut scene = read(Lexer::new(src, name), base, &mut prims)?;
+    let mut scene = read(Lexer::new(src, name), base, &mut prims, opts)?;
     prims.into_scene(&mut scene);
     Ok(scene)
 }
@@ -36,12 +42,13 @@ pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
 /// Reads NFF from `lx`, giving every bounded primitive to `sink` as it is read; returns
 /// the rest of the scene (camera, lights, materials, planes, warnings), whose vectors of
 /// bounded primitives are empty.
-pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink) -> Result<Scene> {
+pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scene> {
     let name = lx.name();
     let mut p = Parser {
         lx,
         base,
         sink,
+        lenient: opts.lenient,
         scene: Scene::new(name, nff_default_camera()),
         have_view: false,
         material: None,
@@ -53,6 +60,11 @@ pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink) -> Result<Scene> {
     p.run()?;
     Ok(p.scene)
 }
+
+/// The entity keywords (where `--lenient` stops skipping).
+const KEYWORDS: [&[u8]; 14] = [
+    b"v", b"b", b"l", b"dl", b"al", b"am", b"f", b"c", b"s", b"p", b"pp", b"pl", b"aabb", b"mesh",
+];
 
 /// A token's bytes copied out of the lexer when they are short enough to be a keyword
 /// (the longest, `resolution`, has 10), so that the statement can read on; empty otherwise.
@@ -69,6 +81,8 @@ struct Parser<'a> {
     lx: Lexer<'a>,
     base: &'a Path,
     sink: &'a mut dyn Sink,
+    /// Unknown keywords are skipped with a warning (`ReadOptions::lenient`).
+    lenient: bool,
     scene: Scene,
     have_view: bool,
     /// The current material (`None` until the first `f` or the first primitive).
@@ -157,6 +171,7 @@ impl Parser<'_> {
                         ),
                     ));
                 }
+                _ if self.lenient => self.skip_unknown(&tok)?,
                 _ => {
                     return Err(self.lx.error_at(
                         &tok,
@@ -176,6 +191,28 @@ impl Parser<'_> {
     fn warn(&mut self, tok: &Token, msg: &str) {
         let w = format!("{}:{}:{}: {msg}", self.lx.name(), tok.line, tok.col);
         self.scene.warnings.push(w);
+    }
+
+    /// `--lenient`: an unknown keyword and what follows it up to the next keyword are
+    /// skipped, with a warning naming it. The next keyword is one gpurt knows, or a word
+    /// that starts a line (another foreign statement: `obj teapot.obj` takes a word).
+    fn skip_unknown(&mut self, tok: &Token) -> Result<()> {
+        let msg = format!(
+            "unknown keyword {} skipped, with what follows it up to the next keyword",
+            self.lx.show(tok)
+        );
+        self.warn(tok, &msg);
+        let mut line = tok.line;
+        while let Some(t) = self.lx.peek()? {
+            let text = self.lx.text(&t);
+            let (word, len) = keyword(text);
+            if KEYWORDS.contains(&&word[..len]) || (t.line != line && parse_f32(text).is_none()) {
+                break;
+            }
+            line = t.line;
+            self.lx.next_token()?;
+        }
+        Ok(())
     }
 
     /// Refuses a statement that would take the scene past `MAX_PRIMITIVES`.

@@ -1,11 +1,12 @@
 //! OBJ materials (`mtllib`, `usemtl` and the `.mtl` library) as the readers give them to
 //! bare meshes and to NFF's `mesh`, what is missing or unknown as warnings at their
-//! place.
+//! place, and `--lenient` NFF (`ReadOptions::lenient`): foreign keywords skipped, each
+//! with a warning.
 
 use std::path::Path;
 
 use glam::Vec3;
-use gpurt::scene::{self, Material, MaterialId, Scene};
+use gpurt::scene::{self, Material, MaterialId, ReadOptions, Scene};
 
 use crate::common::inputs::VIEW;
 use crate::common::workdir;
@@ -199,4 +200,53 @@ fn in_an_nff_mesh_usemtl_wins_over_the_current_f_unless_nomtl() {
     let s = load(&d.join("b.nff"));
     assert!(materials_of(&s).iter().all(blue));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+}
+
+/// An NFF written for another tracer: keywords gpurt does not know, with arguments.
+pub const FOREIGN: &str = "Q 1 2 3\nfp 3\n0 0 0\n1 0 0\n0 1 0\nobj teapot.obj\n\
+    s 0 0 0 1\nQ 4 5 6\ns 2 0 0 0.5\n";
+
+#[test]
+fn lenient_skips_foreign_keywords_to_the_next_known_one_with_a_warning_each() {
+    let d = workdir("lenient");
+    let src = format!("{VIEW}f 1 0 0 1 0 0 0 0\n{FOREIGN}");
+    write(&d, "x.nff", &src);
+    let path = d.join("x.nff");
+    let file = path.display().to_string();
+    // By default the first one ends the read.
+    let e = scene::load(&path).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{file}:7:1: expected an entity keyword, found 'Q'"
+        )),
+        "{e}"
+    );
+    let lenient = ReadOptions { lenient: true };
+    let s = scene::load_with(&path, &lenient).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.spheres.len(), 2);
+    let skipped: Vec<_> = s
+        .warnings
+        .iter()
+        .map(|w| w.split(": ").next().unwrap().to_string())
+        .collect();
+    assert_eq!(skipped, [7, 8, 12, 14].map(|l| format!("{file}:{l}:1")));
+    assert!(
+        s.warnings[1]
+            .ends_with("unknown keyword 'fp' skipped, with what follows it up to the next keyword"),
+        "{:?}",
+        s.warnings
+    );
+    // The summary (`gpurt info`) and the records read the same.
+    let sum = scene::summary_with(&path, &lenient).unwrap();
+    assert_eq!(sum.scene.warnings, s.warnings);
+    assert_eq!(sum.prims.counts()[0], 2);
+    // A stray number is still an error: it is no keyword.
+    write(&d, "n.nff", &format!("{VIEW}Q 1\ns 0 0 0 1 7\n"));
+    let e = scene::load_with(&d.join("n.nff"), &lenient)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains(":7:11: expected an entity keyword, found the number '7'"),
+        "{e}"
+    );
 }

@@ -23,7 +23,8 @@ fn read_nff_through(path: &Path, bytes: usize) -> Scene {
     let mut prims = Collect::default();
     let base = path.parent().unwrap();
     let lx = Lexer::with_buffer(input, &name, bytes);
-    let mut scene = nff::read(lx, base, &mut prims).unwrap_or_else(|e| panic!("{e}"));
+    let mut scene =
+        nff::read(lx, base, &mut prims, &Default::default()).unwrap_or_else(|e| panic!("{e}"));
     prims.into_scene(&mut scene);
     scene
 }
