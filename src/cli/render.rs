@@ -14,7 +14,7 @@ use gpurt::{agreement, atomic, film, frame};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{Aov, Overlay, RenderArgs};
-use super::{cancel_on_signals, print_note, print_warnings};
+use super::{cancel_on_signals, print_note, print_threads, print_warnings};
 
 /// `gpurt SCENE [-o OUT]`.
 pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
@@ -82,6 +82,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             },
         };
         print_note(&found, args.verbose || args.stats);
+        print_threads(args.verbose || args.stats);
         match found.gpu {
             Some(ctx) => {
                 device = Some(ctx.clone());
