@@ -55,7 +55,7 @@ fn main() -> ExitCode {
             ExitCode::from(130)
         }
         Err(e) => {
-            eprintln!("gpurt: {e}");
+            cli::report::print_error(&e, "");
             ExitCode::from(2)
         }
     }

@@ -458,9 +458,15 @@ mod tests {
             let cli = Cli::try_parse_from(args).expect("parses");
             assert_eq!(cli.threads, Some(3), "{args:?}");
         }
-        assert_eq!(Cli::try_parse_from(["gpurt", "s.nff"]).unwrap().threads, None);
+        assert_eq!(
+            Cli::try_parse_from(["gpurt", "s.nff"]).unwrap().threads,
+            None
+        );
         for bad in ["0", "-2", "1025", "x"] {
-            assert!(Cli::try_parse_from(["gpurt", "s.nff", "-j", bad]).is_err(), "{bad}");
+            assert!(
+                Cli::try_parse_from(["gpurt", "s.nff", "-j", bad]).is_err(),
+                "{bad}"
+            );
         }
     }
 

@@ -68,7 +68,13 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     let outcome = outcome?;
     print_warnings(&outcome.warnings);
     for (scene, e) in &outcome.failed {
-        eprintln!("gpurt: {}: skipped: {e}", scene.display());
+        // Most errors start with the scene's name already; the others get it.
+        let named = e.to_string().starts_with(&scene.display().to_string());
+        if named {
+            super::report::print_error(e, " (skipped)");
+        } else {
+            eprintln!("gpurt: {}: {e} (skipped)", scene.display());
+        }
     }
     if args.verbose || args.stats || !outcome.failed.is_empty() {
         let secs = start.elapsed().as_secs_f64();

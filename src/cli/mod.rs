@@ -6,6 +6,7 @@
 pub mod args;
 pub mod farm;
 pub mod render;
+pub mod report;
 pub mod shell;
 pub mod tools;
 

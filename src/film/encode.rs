@@ -66,7 +66,7 @@ impl Format {
                 match ext {
                     Some(ext) => format!(
                         "unsupported image extension '.{}'",
-                        crate::scene::lex::escape_controls(&ext)
+                        crate::error::escape(ext.as_bytes())
                     ),
                     None => "no image file extension".to_string(),
                 },

@@ -266,12 +266,19 @@ fn image_error(path: &Path, e: image::ImageError) -> Error {
 /// Reads and decodes an image, recognising the format by content (falling back to the
 /// extension).
 fn decode(path: &Path) -> Result<DynamicImage> {
-    image::ImageReader::open(path)
+    let reader = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, e))?
         .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?
-        .decode()
-        .map_err(|e| image_error(path, e))
+        .map_err(|e| Error::io(path, e))?;
+    if reader.format().is_none() {
+        let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
+        return Err(Error::Image(format!(
+            "{}: not an image by its content nor by its extension (images: {})",
+            path.display(),
+            supported.join(", ")
+        )));
+    }
+    reader.decode().map_err(|e| image_error(path, e))
 }
 
 /// Loads an image as 8-bit RGB for diffing. PNG, PPM and BMP are taken as stored (alpha is
