@@ -26,12 +26,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         }
         many => {
             eprintln!(
-                "gpurt: one scene is rendered at a time, but {} were given ({}); give --out-dir DIR to render them all",
-                many.len(),
+                "gpurt: {}: {} scenes, but one is rendered at a time; give --out-dir DIR to render them all",
                 many.iter()
                     .map(|p| p.display().to_string())
                     .collect::<Vec<_>>()
-                    .join(", ")
+                    .join(", "),
+                many.len()
             );
             return Ok(ExitCode::from(2));
         }

@@ -80,7 +80,11 @@ fn small_messages_name_what_was_given() {
     let d = workdir("small-messages");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     std::fs::create_dir(d.join("renders")).unwrap();
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["ball.nff", "ball.nff"],
+            "gpurt: ball.nff, ball.nff: 2 scenes, but one is rendered at a time; give --out-dir DIR",
+        ),
         (
             &["ball.nff", "--spp", "-1"],
             "error: invalid value '-1' for '--spp <SPP>': -1 is not in 1..=4096",
@@ -243,7 +247,7 @@ fn two_scenes_are_refused_with_a_clear_message() {
     let o = gpurt(&["a.nff", "b.nff", "--backend", "cpu"], &d);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("one scene is rendered at a time"),
+        stderr(&o).contains("2 scenes, but one is rendered at a time"),
         "{}",
         stderr(&o)
     );
