@@ -7,6 +7,7 @@
 //! colours are held to (`material`) are beside it.
 
 mod include;
+mod keywords;
 mod material;
 mod view;
 
@@ -22,6 +23,7 @@ use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, Triangle, nff_default_camera, unit,
 };
 use crate::scene::triangulate::triangulate;
+use keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
@@ -39,24 +41,6 @@ pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
     };
     p.run()?;
     Ok(p.scene)
-}
-
-/// The statements (entity keywords) of the format, ours included.
-const STATEMENTS: [&str; 14] = [
-    "v", "b", "l", "dl", "al", "am", "f", "c", "s", "p", "pp", "pl", "aabb", "mesh",
-];
-
-/// The keyword `word` is most probably a misspelling of, if any: of three letters or more,
-/// and close to it (Jaro similarity 0.8 or more; shorter keywords are too alike to tell).
-fn closest<'k>(word: &[u8], keywords: &[&'k str]) -> Option<&'k str> {
-    let word = std::str::from_utf8(word).ok().filter(|w| w.len() >= 3)?;
-    keywords
-        .iter()
-        .filter(|k| k.len() >= 3)
-        .map(|k| (strsim::jaro(word, k), *k))
-        .filter(|(score, _)| *score >= 0.8)
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, k)| k)
 }
 
 struct Parser<'a> {
@@ -150,7 +134,7 @@ impl Parser<'_> {
                 }
                 _ => {
                     let meant = closest(tok.text, &STATEMENTS)
-                        .or_else(|| closest(tok.text, &view::VIEW_KEYWORDS).map(|_| "v"));
+                        .or_else(|| closest(tok.text, &VIEW_KEYWORDS).map(|_| "v"));
                     let hint = match meant {
                         Some("v") => "; a view keyword belongs in a 'v' block".to_string(),
                         Some(k) => format!("; did you mean '{k}'?"),

@@ -2,23 +2,12 @@
 //! and our `aperture` and `focal`), checked for what would make no image. Apart from the
 //! statement loop because it is a small grammar of its own.
 
-use super::{Parser, STATEMENTS, closest};
+use super::Parser;
+use super::keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 use crate::error::Result;
 use crate::limits::MAX_IMAGE_SIDE;
 use crate::scene::lex::{Token, parse_f32};
 use crate::scene::model::nff_default_camera;
-
-/// The keywords of a `v` block.
-pub(super) const VIEW_KEYWORDS: [&str; 8] = [
-    "from",
-    "at",
-    "up",
-    "angle",
-    "hither",
-    "resolution",
-    "aperture",
-    "focal",
-];
 
 impl Parser<'_> {
     pub(super) fn view(&mut self, vtok: &Token) -> Result<()> {
