@@ -1,4 +1,4 @@
-//! Large generated scenes for the memory benchmarks (`benches/memory.sh`), none of them
+//! Large generated scenes for the memory benchmarks (`benches/scene-memory.sh`), none of them
 //! from the SPD, so that the readers and the tree are measured on scenes they were not
 //! tuned on:
 //!

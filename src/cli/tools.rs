@@ -14,7 +14,7 @@ use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
 use super::args::{BenchArgs, DiffArgs, ViewArgs};
-use super::print_warnings;
+use super::{print_threads, print_warnings};
 
 /// `gpurt info SCENE [--json] [--lenient]`.
 pub fn info(path: &Path, json: bool, read: &ReadOptions) -> gpurt::Result<ExitCode> {
@@ -83,6 +83,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         },
     )?;
     print_warnings(&warnings);
+    print_threads(args.stats);
     window::run(
         buffers,
         ViewOptions {
@@ -93,6 +94,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             depth: args.depth,
             ambient: args.ambient,
             seed: args.seed,
+            shading: args.shading,
             backend: args.backend,
             adapter: args.adapter,
             script,
@@ -111,6 +113,7 @@ pub fn bench(args: BenchArgs) -> gpurt::Result<ExitCode> {
         sizes: args.sizes,
         spps: args.spp,
         depth: args.depth,
+        shading: args.shading,
         frames: args.frames,
         backend: args.backend,
         adapter: args.adapter,

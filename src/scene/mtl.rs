@@ -12,10 +12,10 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 use super::io;
-use super::lex::{Lexer, Token, escape_controls};
+use super::lex::{Lexer, Token};
 use super::model::{Material, MaterialId};
 use super::sink::MeshOut;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, escape};
 use crate::limits::MAX_SHINE;
 
 /// A library's materials by name (a later `newmtl` of a name replaces the earlier).
@@ -220,7 +220,7 @@ impl ObjMaterials {
                         lx.name(),
                         at.line,
                         at.col,
-                        escape_controls(&name)
+                        escape(name.as_bytes())
                     ));
                     continue;
                 }
@@ -249,7 +249,7 @@ impl ObjMaterials {
                     lx.name(),
                     t.line,
                     t.col,
-                    escape_controls(&name)
+                    escape(name.as_bytes())
                 ));
                 self.unknown.push(name);
             }

@@ -12,7 +12,7 @@ use std::fmt::Display;
 
 mod window;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, escape};
 use crate::limits::MAX_TOKEN_BYTES;
 use crate::scene::io::Input;
 pub use crate::scene::number::parse_f32;
@@ -21,26 +21,12 @@ pub use window::{BOM, LINE_KEPT, Token};
 
 fn show_bytes(b: &[u8]) -> String {
     const MAX: usize = 40;
-    let s = escape_controls(&String::from_utf8_lossy(&b[..b.len().min(MAX)]));
+    let s = escape(&b[..b.len().min(MAX)]);
     if b.len() > MAX {
         format!("'{s}...'")
     } else {
         format!("'{s}'")
     }
-}
-
-/// Text from an input file, made safe to print: control characters (an ESC sequence would
-/// recolour the terminal) are written as escapes (`\u{1b}`, `\t`); the rest is kept.
-pub fn escape_controls(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
 }
 
 /// The buffer the input is read through. Large enough that refills cost nothing next to
@@ -137,7 +123,7 @@ impl<'a> Lexer<'a> {
         })
     }
 
-    /// Error at a token.
+    /// Error at a token, with the token's line (`Excerpt`) as far as the buffer holds it.
     pub fn error_at(&self, tok: &Token, msg: impl Into<String>) -> Error {
         self.win.error_at(tok, msg)
     }
@@ -174,7 +160,7 @@ impl<'a> Lexer<'a> {
     /// to point just past it when the line ends too early.
     pub fn number_on_line(&mut self, last: &mut Token, what: &str) -> Result<f32> {
         let Some(t) = self.token_on_line(last.line)? else {
-            let end = Token::position(last.line, last.end_col());
+            let end = last.after();
             return Err(self.error_at(&end, format!("expected {what}, found end of line")));
         };
         *last = t;

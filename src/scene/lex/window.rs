@@ -6,7 +6,7 @@
 
 use std::io::Read;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Excerpt, Result};
 use crate::scene::io::{Input, read_error};
 
 /// One whitespace-separated token and where it starts (1-based line and column). Its
@@ -20,13 +20,27 @@ pub struct Token {
     pub(super) len: u32,
 }
 
+/// The stream offset of a `Token::position`, which has none.
+const NOWHERE: u64 = u64::MAX;
+
 impl Token {
-    /// A position without text, for messages that point between tokens.
+    /// A position without text, for messages that point between tokens; its message
+    /// quotes no line.
     pub fn position(line: u32, col: u32) -> Token {
         Token {
             line,
             col,
-            at: 0,
+            at: NOWHERE,
+            len: 0,
+        }
+    }
+
+    /// The place just past the token (where a statement cut short ends).
+    pub fn after(&self) -> Token {
+        Token {
+            line: self.line,
+            col: self.end_col(),
+            at: self.at.saturating_add(u64::from(self.len)),
             len: 0,
         }
     }
@@ -43,6 +57,9 @@ pub const BOM: &[u8] = b"\xEF\xBB\xBF";
 /// Bytes of the current line kept in the buffer before the token being read, so that a
 /// message can quote the line (a longer line is quoted from nearer the token).
 pub const LINE_KEPT: usize = 4 << 10;
+
+/// The least room a refill reads into without first dropping what was read before.
+const MIN_READ: usize = 16 << 10;
 
 /// Bytes that end a token: ASCII whitespace (including vertical tab and form feed) and `#`.
 const fn delimiters() -> [bool; 256] {
@@ -114,11 +131,32 @@ impl<'a> Window<'a> {
             line: tok.line,
             col: tok.col,
             msg: msg.into(),
+            excerpt: self.excerpt(tok).map(Box::new),
         }
     }
 
+    /// `tok`'s line as the buffer holds it: from its start (or from `LINE_KEPT` bytes
+    /// before the token, marked as cut, for a longer line) to its end or as far as has
+    /// been read. `None` where the buffer no longer holds the token's place.
+    fn excerpt(&self, tok: &Token) -> Option<Excerpt> {
+        let i = usize::try_from(tok.at.checked_sub(self.base)?).ok()?;
+        if tok.at == NOWHERE || i > self.end {
+            return None;
+        }
+        let line_start = tok.at.saturating_sub(u64::from(tok.col) - 1);
+        let from = (line_start.max(self.base) - self.base) as usize;
+        let len = (tok.len as usize).min(self.end - i);
+        let mut x = Excerpt::of_line(&self.buf[from..self.end], i - from, len);
+        if line_start < self.base && !x.text.starts_with("...") {
+            x.text.insert_str(0, "...");
+            x.span = x.span.start + 3..x.span.end + 3;
+        }
+        Some(x)
+    }
+
     /// Reads more input after `end`, first dropping the bytes before buffer index `keep`
-    /// (but the current line's start when it is near). False at the end of the input.
+    /// (but the current line's start when it is near) when the room after `end` is
+    /// short. False at the end of the input.
     fn refill(&mut self, keep: usize) -> Result<bool> {
         if self.eof {
             return Ok(false);
@@ -128,7 +166,10 @@ impl<'a> Window<'a> {
             Some(l) if (l as usize) <= keep && keep - l as usize <= near => l as usize,
             _ => keep,
         };
-        if from > 0 {
+        // Bytes already read stay while there is room to read after them, so that a
+        // message about an earlier token (the `v` of a degenerate view) can still quote
+        // its line: a file that fits the buffer is never moved.
+        if from > 0 && self.buf.len() - self.end < MIN_READ {
             self.buf.copy_within(from..self.end, 0);
             self.end -= from;
             self.pos -= from;

@@ -7,9 +7,9 @@
 use glam::Vec3;
 
 use super::{Parser, keyword};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, escape};
 use crate::scene::io::{self, FileKind};
-use crate::scene::lex::{Token, escape_controls};
+use crate::scene::lex::Token;
 use crate::scene::mesh::{self, MeshTransform, Placed};
 use crate::scene::sink::MeshOut;
 
@@ -61,7 +61,7 @@ impl Parser<'_> {
                 &ptok,
                 format!(
                     "mesh file '{}' must end in .stl or .obj (optionally .gz)",
-                    escape_controls(rel)
+                    escape(rel.as_bytes())
                 ),
             ));
         }
@@ -77,7 +77,7 @@ impl Parser<'_> {
                 &ptok,
                 format!(
                     "cannot read mesh file '{}': {why}",
-                    escape_controls(&path.display().to_string())
+                    escape(path.as_os_str().as_encoded_bytes())
                 ),
             )
         };
@@ -99,7 +99,7 @@ impl Parser<'_> {
         if placed == 0 {
             self.warn(
                 tok,
-                &format!("mesh '{}' has no triangles", escape_controls(rel)),
+                &format!("mesh '{}' has no triangles", escape(rel.as_bytes())),
             );
         }
         Ok(())

@@ -7,6 +7,7 @@
 //! colours are held to (`material`) are beside it.
 
 mod include;
+mod keywords;
 mod material;
 mod view;
 
@@ -24,6 +25,7 @@ use crate::scene::model::{
 use crate::scene::palette::Palette;
 use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
+use keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 
 /// Parses NFF text (gzip-compressed or not). `name` is used in messages; `base` is the
 /// directory `mesh` paths are relative to.
@@ -60,11 +62,6 @@ pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> 
     p.run()?;
     Ok(p.scene)
 }
-
-/// The entity keywords (where `--lenient` stops skipping).
-const KEYWORDS: [&[u8]; 14] = [
-    b"v", b"b", b"l", b"dl", b"al", b"am", b"f", b"c", b"s", b"p", b"pp", b"pl", b"aabb", b"mesh",
-];
 
 /// A token's bytes copied out of the lexer when they are short enough to be a keyword
 /// (the longest, `resolution`, has 10), so that the statement can read on; empty otherwise.
@@ -173,9 +170,20 @@ impl Parser<'_> {
                 }
                 _ if self.lenient => self.skip_unknown(&tok)?,
                 _ => {
+                    let text = self.lx.text(&tok);
+                    let meant = closest(text, &STATEMENTS)
+                        .or_else(|| closest(text, &VIEW_KEYWORDS).map(|_| "v"));
+                    let hint = match meant {
+                        Some("v") => "; a view keyword belongs in a 'v' block".to_string(),
+                        Some(k) => format!("; did you mean '{k}'?"),
+                        None => String::new(),
+                    };
                     return Err(self.lx.error_at(
                         &tok,
-                        format!("expected an entity keyword, found {}", self.lx.show(&tok)),
+                        format!(
+                            "expected an entity keyword, found {}{hint}",
+                            self.lx.show(&tok)
+                        ),
                     ));
                 }
             }
@@ -205,8 +213,8 @@ impl Parser<'_> {
         let mut line = tok.line;
         while let Some(t) = self.lx.peek()? {
             let text = self.lx.text(&t);
-            let (word, len) = keyword(text);
-            if KEYWORDS.contains(&&word[..len]) || (t.line != line && parse_f32(text).is_none()) {
+            let known = STATEMENTS.iter().any(|k| k.as_bytes() == text);
+            if known || (t.line != line && parse_f32(text).is_none()) {
                 break;
             }
             line = t.line;

@@ -2,10 +2,11 @@
 //! and our `aperture` and `focal`), checked for what would make no image. Apart from the
 //! statement loop because it is a small grammar of its own.
 
+use super::keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 use super::{Parser, keyword};
 use crate::error::Result;
 use crate::limits::MAX_IMAGE_SIDE;
-use crate::scene::lex::Token;
+use crate::scene::lex::{Token, parse_f32};
 use crate::scene::model::nff_default_camera;
 
 impl Parser<'_> {
@@ -15,10 +16,30 @@ impl Parser<'_> {
         let mut resolution = None;
         while let Some(t) = self.lx.peek()? {
             let (word, len) = keyword(self.lx.text(&t));
-            match &word[..len] {
-                b"from" | b"at" | b"up" | b"angle" | b"hither" | b"resolution" | b"aperture"
-                | b"focal" => {}
-                _ => break,
+            if !VIEW_KEYWORDS.iter().any(|k| k.as_bytes() == &word[..len]) {
+                // The view ends at the next statement; a word that is neither a statement
+                // nor a number, where the view still lacks a keyword or is close to one
+                // (`angel 40`), is a mistyped view keyword, named where it stands.
+                let text = self.lx.text(&t);
+                let required_missing =
+                    [&from, &at, &up].iter().any(|v| v.is_none()) || angle.is_none();
+                let statement = STATEMENTS.iter().any(|k| k.as_bytes() == text);
+                let meant = closest(text, &VIEW_KEYWORDS);
+                if !statement && parse_f32(text).is_none() && (required_missing || meant.is_some())
+                {
+                    let hint = meant
+                        .map(|k| format!("; did you mean '{k}'?"))
+                        .unwrap_or_default();
+                    return Err(self.lx.error_at(
+                        &t,
+                        format!(
+                            "expected a view keyword ({}), found {}{hint}",
+                            VIEW_KEYWORDS.join(", "),
+                            self.lx.show(&t)
+                        ),
+                    ));
+                }
+                break;
             }
             self.lx.next_token()?;
             match &word[..len] {

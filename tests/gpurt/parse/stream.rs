@@ -264,3 +264,39 @@ fn the_summary_counts_and_bounds_what_the_scene_holds() {
     assert!(summary.scene.spheres.is_empty() && summary.scene.triangles.is_empty());
     assert_eq!(summary.scene.materials, whole.materials);
 }
+
+/// A parse error quotes its line through any buffer: whole where the buffer holds the
+/// line, from `...` where a small buffer has dropped the line's start; an error at a token
+/// read long before (the `v` of a degenerate view) quotes it too.
+#[test]
+fn errors_quote_their_line_through_any_buffer() {
+    let excerpt = |src: &str, bytes: usize| {
+        let lx = Lexer::with_buffer(Input::bytes(src.as_bytes()), "t.nff", bytes);
+        match nff::read(
+            lx,
+            Path::new("."),
+            &mut Collect::default(),
+            &Default::default(),
+        ) {
+            Err(gpurt::Error::Parse {
+                excerpt: Some(x), ..
+            }) => x,
+            other => panic!("{bytes}: {other:?}"),
+        }
+    };
+    let bad = format!("{VIEW}s 0 0 zero 1\n");
+    for bytes in [64, 4096, 1 << 20] {
+        let x = excerpt(&bad, bytes);
+        assert_eq!(x.text, "s 0 0 zero 1", "{bytes}");
+        assert_eq!(&x.text[x.span.clone()], "zero", "{bytes}");
+    }
+    let x = excerpt(&bad, 8);
+    assert!(x.text.starts_with("..."), "{x:?}");
+    assert_eq!(&x.text[x.span.clone()], "zero", "{x:?}");
+    let degenerate = format!(
+        "v\nfrom 1 2 3\nat 1 2 3\nup 0 0 1\nangle 45\n{}",
+        "# c\n".repeat(5000)
+    );
+    let x = excerpt(&degenerate, 1 << 20);
+    assert_eq!((x.text.as_str(), x.span.clone()), ("v", 0..1));
+}
