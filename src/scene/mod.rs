@@ -18,6 +18,7 @@ pub mod mtl;
 pub mod nff;
 pub mod number;
 pub mod obj;
+pub mod options;
 pub mod palette;
 pub mod sink;
 pub mod stl;
@@ -31,22 +32,13 @@ pub use model::{
     BoxPrim, Camera, Cone, Light, Material, MaterialId, Mesh, Plane, Scene, Sphere, Triangle,
     nff_default_camera, unit,
 };
+pub use options::ReadOptions;
 pub use sink::{Collect, Sink};
 
 use crate::error::Result;
 use io::FileKind;
 use palette::Palette;
 use sink::MeshOut;
-
-/// How the readers read: what a caller (the command line, a binding over the library)
-/// chooses about input they would otherwise refuse.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ReadOptions {
-    /// An NFF keyword gpurt does not know (`Q`, `fp`, `obj`, from other tracers' dialects)
-    /// is skipped, with what follows it up to the next keyword gpurt knows, and one
-    /// warning each, instead of ending the read with an error.
-    pub lenient: bool,
-}
 
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an
 /// automatic camera, light, material and ground plane.

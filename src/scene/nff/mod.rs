@@ -17,11 +17,11 @@ use glam::Vec3;
 
 use crate::error::Result;
 use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
-use crate::scene::ReadOptions;
 use crate::scene::lex::{Lexer, Token, parse_f32};
 use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, nff_default_camera, unit,
 };
+use crate::scene::options::ReadOptions;
 use crate::scene::palette::Palette;
 use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
