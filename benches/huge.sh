@@ -5,10 +5,14 @@
 # by the release gpurt, on the CPU and on the GPU (whatever adapter wgpu finds: lavapipe
 # on a machine without one). Prints a markdown table of parse, build and render times,
 # wall time and peak memory per primitive, then how each grows from one size to the next.
-# A render that fails or times out keeps its error text in the table.
+# A render that fails or times out keeps its error text in the table. With BASELINE naming
+# another gpurt binary (an older build), each render is also made by that one, right after
+# the new one's, and the table has both side by side ("gpurt": new, old).
 #
 #   benches/huge.sh
 #   MOUNT="8 9" BALLS="5" BACKENDS=cpu SIZE=128 TIMEOUT=300 benches/huge.sh
+#   BASELINE=/path/to/old/gpurt benches/huge.sh
+#   GPURT=/path/to/gpurt SPD=/path/to/spd benches/huge.sh   (given builds, nothing built)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 MOUNT=${MOUNT-8 9 10 11}
@@ -16,9 +20,13 @@ BALLS=${BALLS-5 6 7}
 BACKENDS=${BACKENDS:-cpu gpu}
 SIZE=${SIZE:-256}
 TIMEOUT=${TIMEOUT:-900}
-(cd "$ROOT" && cargo build --release --quiet --bin gpurt --example spd)
-GPURT="$ROOT/target/release/gpurt"
-SPD="$ROOT/target/release/examples/spd"
+if [ -z "${GPURT:-}" ] || [ -z "${SPD:-}" ]; then
+    (cd "$ROOT" && cargo build --release --quiet --bin gpurt --example spd)
+fi
+GPURT=${GPURT:-$ROOT/target/release/gpurt}
+SPD=${SPD:-$ROOT/target/release/examples/spd}
+BINS=("new $GPURT")
+[ -n "${BASELINE:-}" ] && BINS+=("old $BASELINE")
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 ROWS="$WORK/rows.tsv"
@@ -41,6 +49,8 @@ for scene in "${scenes[@]}"; do
     gen=$(awk -v a="$t0" -v b="$(date +%s.%N)" 'BEGIN { printf "%.2f", b - a }')
     mb=$(awk -v n="$(stat -c %s "$nff")" 'BEGIN { printf "%.1f", n / 1e6 }')
     for backend in $BACKENDS; do
+      for bin in "${BINS[@]}"; do
+        read -r tag GPURT <<<"$bin"
         log="$WORK/$name-$backend.log"
         rc=0
         /usr/bin/time -f "%e %M" -o "$WORK/time" timeout "$TIMEOUT" "$GPURT" "$nff" \
@@ -63,11 +73,12 @@ for scene in "${scenes[@]}"; do
             note="$(sed -n 's/^gpu *//p' "$log" | head -n 1); shader $(secs shader "$log") s"
         fi
         prims=$(awk '$1 == "scene" { print $2 + $(NF - 3) }' "$log")
-        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$backend" \
+        printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$backend" \
             "${prims:-}" "$mb" "$gen" "$(secs parse "$log")" "$(secs build "$log")" \
             "$(secs "$ran" "$log")" "$(rays "$ran" "$log")" "$wall" \
-            "$(awk '$1 == "peak" { print $3; exit }' "$log")" "$rss_kib" "$note" >>"$ROWS"
-        echo "done: $name $backend (rc $rc, ${wall} s)" >&2
+            "$(awk '$1 == "peak" { print $3; exit }' "$log")" "$rss_kib" "$note" "$tag" >>"$ROWS"
+        echo "done: $name $backend $tag (rc $rc, ${wall} s)" >&2
+      done
     done
     rm -f "$nff" "$WORK/$name"-*.png
 done
@@ -78,15 +89,15 @@ echo
 awk -F '\t' '
 function num(x, f) { return x == "" ? "-" : sprintf(f, x) }
 BEGIN {
-    print "| scene | backend | prims | file MB | gen s | parse s | build s | build µs/prim | render s | rays | wall s | peak MiB | peak bytes/prim | note |"
-    print "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+    print "| scene | backend | gpurt | prims | file MB | gen s | parse s | build s | build µs/prim | render s | rays | wall s | peak MiB | peak bytes/prim | note |"
+    print "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|"
 }
 {
     peak = $11 != "" ? $11 * 1048576 : $12 * 1024
     us = ($3 > 0 && $7 != "") ? num($7 * 1e6 / $3, "%.2f") : "-"
     per = $3 > 0 ? num(peak / $3, "%.0f") : "-"
-    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2,
-        ($3 == "" ? "-" : $3), $4, num($5, "%.1f"), num($6, "%.2f"), num($7, "%.2f"), us,
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2,
+        $14, ($3 == "" ? "-" : $3), $4, num($5, "%.1f"), num($6, "%.2f"), num($7, "%.2f"), us,
         num($8, "%.2f"), ($9 == "" ? "-" : $9), num($10, "%.1f"), num(peak / 1048576, "%.0f"),
         per, $13
 }' "$ROWS"
@@ -97,18 +108,18 @@ echo
 awk -F '\t' '
 function r(a, b) { return (a > 0 && b != "") ? sprintf("%.2f", b / a) : "-" }
 BEGIN {
-    print "| scenes | backend | prims × | parse × | build × | render × | wall × | peak × |"
-    print "|---|---|---:|---:|---:|---:|---:|---:|"
+    print "| scenes | backend | gpurt | prims × | parse × | build × | render × | wall × | peak × |"
+    print "|---|---|---|---:|---:|---:|---:|---:|---:|"
 }
 $13 ~ /^(exit|timed out|ran on)/ { next }
 {
     split($1, n, "-")
-    key = n[1] SUBSEP $2
+    key = n[1] SUBSEP $2 SUBSEP $14
     peak = $11 != "" ? $11 * 1048576 : $12 * 1024
     if (key in last) {
         split(last[key], p, "\t")
-        printf "| %s → %s | %s | %s | %s | %s | %s | %s | %s |\n", p[1], $1, $2, r(p[3], $3),
-            r(p[6], $6), r(p[7], $7), r(p[8], $8), r(p[10], $10), r(p[14], peak)
+        printf "| %s → %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", p[1], $1, $2, $14, r(p[3], $3),
+            r(p[6], $6), r(p[7], $7), r(p[8], $8), r(p[10], $10), r(p[15], peak)
     }
     last[key] = $0 "\t" peak
 }' "$ROWS"

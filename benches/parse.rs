@@ -1,6 +1,8 @@
 //! Scene reading throughput on the two largest shared SPD scenes, in decompressed bytes per
-//! second: `nff::parse` on bytes already in memory, and `scene::load` from disk (gzip
-//! decompression included). `cargo bench --bench parse`; skips when ../shared is missing.
+//! second: `nff::parse` on bytes already in memory, `scene::load` from disk (gzip
+//! decompression included) into a `Scene`, and `scene::load_flat`, from disk straight into
+//! the renderers' records as the command line reads. `cargo bench --bench parse`; skips
+//! when ../shared is missing.
 
 use std::hint::black_box;
 use std::path::Path;
@@ -35,6 +37,9 @@ fn parse(c: &mut Criterion) {
         });
         g.bench_function(BenchmarkId::new("scene::load", name), |b| {
             b.iter(|| scene::load(black_box(&path)).expect("scene loads"))
+        });
+        g.bench_function(BenchmarkId::new("scene::load_flat", name), |b| {
+            b.iter(|| scene::load_flat(black_box(&path)).expect("scene loads"))
         });
     }
     g.finish();

@@ -1,5 +1,6 @@
-//! Heap memory at each stage of getting a scene ready, per primitive: reading the file,
-//! parsing it, packing it (BVH build and flattening) and rendering a small CPU frame.
+//! Heap memory at each stage of getting a scene ready, per primitive: reading the file
+//! straight into the renderers' records (as `run::prepare` does), packing it (BVH build,
+//! the records put in leaf order) and rendering a small CPU frame.
 //! Counts every allocation through a wrapping global allocator, so the figures are the
 //! program's own heap, without the binary, thread stacks or allocator slack that the
 //! process's peak resident memory (`--stats`) also holds.
@@ -82,12 +83,14 @@ fn main() -> gpurt::Result<()> {
         return image_stages(path, &size, Path::new(&out));
     }
     let t = Instant::now();
-    let scene = gpurt::scene::load(path)?;
-    stage("read + parse", t);
-    let prims = scene.bounded_count().max(1);
+    let scene = gpurt::scene::load_flat(path)?;
+    stage("read + parse into records", t);
+    let prims = scene.counts().iter().sum::<usize>().max(1);
+    let c = &scene.scene.camera;
+    let samples = u64::from(c.width) * u64::from(c.height);
     let t = Instant::now();
-    let buffers = gpurt::pack::pack(scene)?;
-    stage("pack (BVH build, flatten)", t);
+    let buffers = gpurt::pack::pack_flat(scene, samples)?;
+    stage("pack (BVH build, leaf order)", t);
     let opts = gpurt::frame::RenderOptions {
         width: 64,
         height: 64,
@@ -128,7 +131,9 @@ fn image_stages(path: &Path, size: &str, out: &Path) -> gpurt::Result<()> {
         rows.push((name.to_string(), t.elapsed(), peak, CURRENT.load(Relaxed)));
     };
     let t = Instant::now();
-    let prepared = gpurt::run::prepare(path, None, |_| u64::from(w) * u64::from(h))?;
+    let prepared = gpurt::run::prepare(path, None, &Default::default(), |_| {
+        u64::from(w) * u64::from(h)
+    })?;
     stage("read, parse, pack", t);
     let opts = gpurt::frame::RenderOptions {
         width: w,

@@ -12,7 +12,7 @@ use crate::film::Format;
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
 use crate::run;
-use crate::scene::Camera;
+use crate::scene::{Camera, ReadOptions};
 use crate::session::{CpuRenderer, GpuSession, Renderer};
 
 /// The name an image of `scene` gets: its file name without `.gz` and the scene's own
@@ -57,6 +57,8 @@ pub struct BatchOptions {
     pub overrides: Overrides,
     /// A `v` block that replaces every scene's camera.
     pub view: Option<PathBuf>,
+    /// How every scene is read (`--lenient`).
+    pub read: ReadOptions,
 }
 
 /// What a batch did.
@@ -110,7 +112,9 @@ fn render_one(
 ) -> Result<(u64, Vec<String>)> {
     let options =
         |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&opts.overrides);
-    let prepared = run::prepare(scene, opts.view.as_deref(), |c| options(c).samples())?;
+    let prepared = run::prepare(scene, opts.view.as_deref(), &opts.read, |c| {
+        options(c).samples()
+    })?;
     let buffers = Arc::new(prepared.buffers);
     let options = options(&buffers.camera);
     let frame = frame::globals(&buffers, &options);

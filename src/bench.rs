@@ -27,7 +27,7 @@ use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVER
 use crate::outln;
 use crate::pack;
 use crate::run;
-use crate::scene::Camera;
+use crate::scene::{Camera, ReadOptions};
 use crate::session::{self, Backend, Missing};
 
 /// What to measure.
@@ -44,6 +44,8 @@ pub struct BenchConfig {
     /// `session::choose` picks.
     pub backend: Backend,
     pub adapter: Option<String>,
+    /// How every scene is read (`--lenient`).
+    pub read: ReadOptions,
 }
 
 /// One row of the table: one scene at one size and sample count.
@@ -168,7 +170,8 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                 let prepared = match builds.iter().position(wanted) {
                     Some(i) => &builds[i],
                     None => {
-                        let b = run::prepare(path, None, |c| with_camera(c).samples())?;
+                        let b =
+                            run::prepare(path, None, &config.read, |c| with_camera(c).samples())?;
                         eprintln!(
                             "  {name}: BVH built at {} quality for {width}x{height}, {spp} spp",
                             b.buffers.bvh_quality.name()

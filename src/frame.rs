@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::gpu_types::*;
 use crate::limits::{DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP};
 use crate::pack::SceneBuffers;
-use crate::scene::Camera;
+use crate::scene::{Camera, auto};
 
 /// How to render: everything that is not the scene.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,8 +115,10 @@ pub struct Overrides {
 }
 
 /// Per-render constants: the camera basis of shading.md and the options.
+/// A bare mesh's camera is framed again for the options' size (`auto::fitted`).
 pub fn globals(buffers: &SceneBuffers, opts: &RenderOptions) -> GpuGlobals {
-    globals_from(buffers, &buffers.camera, opts)
+    let camera = auto::fitted(&buffers.camera, opts.width, opts.height);
+    globals_from(buffers, &camera, opts)
 }
 
 /// `globals` seen from another camera than the scene's (the viewer's).

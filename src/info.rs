@@ -5,7 +5,7 @@ use glam::Vec3;
 use serde_json::{Value, json};
 
 use crate::limits::DEFAULT_AMBIENT;
-use crate::scene::{Light, Scene};
+use crate::scene::{FlatScene, Light};
 
 /// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the
 /// `0.05000000074505806` its f64 widening prints); null when not finite.
@@ -56,9 +56,10 @@ fn light(l: &Light) -> Value {
 
 /// The whole scene description: camera, image, background and ambient light, bounds,
 /// counts per primitive kind (after triangulation), every light and material with its
-/// parameters, and the reader's warnings.
-pub fn to_json(s: &Scene) -> Value {
-    let b = s.bounds();
+/// parameters, and the reader's warnings. From a scene read as `scene::summary` reads
+/// it (or any `FlatScene`).
+pub fn to_json(f: &FlatScene) -> Value {
+    let (s, b, [spheres, triangles, cones, boxes]) = (&f.scene, f.bounds(), f.counts());
     let c = &s.camera;
     let bounds = if b.is_empty() {
         Value::Null
@@ -95,21 +96,21 @@ pub fn to_json(s: &Scene) -> Value {
         "ambient": colour(s.ambient),
         "ambient_used": vec3(s.ambient.unwrap_or(Vec3::splat(DEFAULT_AMBIENT))),
         "bounds": bounds,
-        "spheres": s.spheres.len(),
-        "triangles": s.triangles.len(),
+        "spheres": spheres,
+        "triangles": triangles,
         "planes": s.planes.len(),
-        "cones": s.cones.len(),
-        "boxes": s.boxes.len(),
+        "cones": cones,
+        "boxes": boxes,
         "lights": s.lights.iter().map(light).collect::<Vec<_>>(),
         "materials": materials,
         "warnings": s.warnings,
     })
 }
 
-pub fn to_text(s: &Scene) -> String {
+pub fn to_text(f: &FlatScene) -> String {
     use std::fmt::Write;
+    let (s, b, [spheres, triangles, cones, boxes]) = (&f.scene, f.bounds(), f.counts());
     let c = &s.camera;
-    let b = s.bounds();
     let v = |v: glam::Vec3| format!("{} {} {}", v.x, v.y, v.z);
     let mut o = String::new();
     let _ = writeln!(o, "scene       {}", s.name);
@@ -150,12 +151,8 @@ pub fn to_text(s: &Scene) -> String {
     }
     let _ = writeln!(
         o,
-        "primitives  {} spheres, {} triangles, {} planes, {} cones, {} boxes",
-        s.spheres.len(),
-        s.triangles.len(),
+        "primitives  {spheres} spheres, {triangles} triangles, {} planes, {cones} cones, {boxes} boxes",
         s.planes.len(),
-        s.cones.len(),
-        s.boxes.len()
     );
     let _ = writeln!(o, "lights      {}", s.lights.len());
     for l in &s.lights {

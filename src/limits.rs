@@ -23,15 +23,27 @@ pub const MAX_DEPTH: u32 = 16;
 /// Ambient light when neither the scene (`am`) nor the caller sets one (shading.md).
 pub const DEFAULT_AMBIENT: f32 = 0.1;
 
-/// Upper bound on a decompressed file: guards against gzip bombs.
+/// Upper bound on a gzip file's decompressed bytes: guards against gzip bombs. The
+/// readers stream, so a bomb no longer costs memory, but it would cost time (a plain
+/// file is as long as it is on disk, and has no limit).
 pub const MAX_FILE_BYTES: u64 = 4 << 30;
 
-/// Decompressed bytes `scene::io::decompress` holds before it knows the whole size: past
-/// this, it counts the rest without keeping it, and decompresses again into a buffer of the
-/// exact size only if the whole is within the limit. A gzip bomb then costs at most this
-/// (and the doubling of a growing buffer) on its way to being refused, instead of the
-/// limit; files up to this size (every shared scene) are decompressed once.
-pub const HELD_BYTES: u64 = 64 << 20;
+/// Longest token the text readers take (a number, keyword or path is far shorter): a
+/// longer one, such as a binary file read as text, is an error, not a growing buffer.
+pub const MAX_TOKEN_BYTES: usize = 64 << 10;
+
+/// Most bounded primitives (spheres, triangles, cones, boxes) a scene may hold: well
+/// within every index of the packed layout, and about 27 GB at the peak of its loading.
+pub const MAX_PRIMITIVES: usize = 1 << 28;
+
+/// Most vertices of one polygon (NFF `p`, `pp`; an OBJ face), held until it is
+/// triangulated: where the rest of the file's length is unknown (gzip), a lying count is
+/// caught here instead of by the vertices running out.
+pub const MAX_POLYGON_VERTICES: u32 = 1 << 20;
+
+/// Most vertex positions, and most normals, an OBJ file may define: they are held until
+/// the file ends, since a face may refer to any of them.
+pub const MAX_MESH_VERTICES: usize = 1 << 28;
 
 /// Largest light, ambient and background colour component; larger ones are held to it with
 /// a warning. Material colours, Kd, Ks and T are held to [0, 1]. Within these ranges every

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use clap::Parser;
 use gpurt::Error;
+use gpurt::scene::ReadOptions;
 
 use cli::args::{Cli, Command};
 use cli::{farm, render, shell, tools};
@@ -37,7 +38,11 @@ fn main() -> ExitCode {
     let result = match args.command {
         Some(Command::Completions { shell }) => shell::completions(shell),
         Some(Command::Man) => shell::man(),
-        Some(Command::Info { scene, json }) => tools::info(&scene, json),
+        Some(Command::Info {
+            scene,
+            json,
+            lenient,
+        }) => tools::info(&scene, json, &ReadOptions { lenient }),
         Some(Command::Diff(diff)) => tools::diff(diff),
         Some(Command::Bench(bench)) => tools::bench(bench),
         Some(Command::View(view)) => tools::view(view, launch),

@@ -10,7 +10,8 @@ use crate::bvh::{self, FlatBvh};
 use crate::error::{Error, Result};
 use crate::gpu_types::*;
 use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
-use crate::scene::{self, Bounded, Bounds, Camera, Light, Scene};
+use crate::scene::flat::{self, FlatScene};
+use crate::scene::{Bounds, Camera, Light, Scene, Sink};
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
 /// surface, along the geometric normal; shading.md leaves the constant to us. It must clear
@@ -48,15 +49,6 @@ pub struct SceneBuffers {
     gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
 }
 
-/// The three normals scaled to unit length, or `None` when one has no direction.
-fn unit3([a, b, c]: [Vec3; 3]) -> Option<[Vec3; 3]> {
-    Some([scene::unit(a)?, scene::unit(b)?, scene::unit(c)?])
-}
-
-fn kind_tag(kind: u32, material: u32) -> u32 {
-    kind << PRIM_KIND_SHIFT | material
-}
-
 /// Flattens a scene for one frame of the camera's own resolution at `DEFAULT_SPP` samples
 /// per pixel (the default options, `RenderOptions::for_camera`).
 pub fn pack(scene: Scene) -> Result<SceneBuffers> {
@@ -66,10 +58,20 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
 }
 
 /// Flattens a scene, consuming it, with the BVH a render of `samples` camera samples
-/// should get (`bvh::Quality::for_work`): its primitives are freed once packed, before
-/// the BVH is built, so that the largest scenes do not hold two copies of their geometry
-/// at the peak. Fails only on scenes beyond the layout's limits.
+/// should get (`bvh::Quality::for_work`): its primitives are moved into records kind by
+/// kind (`FlatScene::from_scene`), then packed as `pack_flat` packs a scene read straight
+/// into records. Fails only on scenes beyond the layout's limits.
 pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
+    pack_flat(FlatScene::from_scene(scene), samples)
+}
+
+/// Packs a scene read into records (`scene::load_flat`), consuming it: the BVH is built
+/// over the records' bounds, worked out from them a group at a time; the records are put
+/// in the tree's leaf order in place, and the triangles' turned into edges. Nothing is
+/// copied whole, so the peak is the records, the tree and the builder's share of one
+/// group (`bvh::build_chunk`).
+pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
+    let FlatScene { scene, prims } = flat;
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
         msg,
@@ -81,67 +83,15 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
             PRIM_MATERIAL_MASK
         )));
     }
-    let count = scene.bounded_count();
-    let mut prims = Vec::with_capacity(count);
-    let mut aabbs = Vec::with_capacity(count);
-    let mut tri_normals = Vec::new();
-    for p in scene.bounded_prims() {
-        aabbs.push(bvh::aabb(p.bounds()));
-        prims.push(match p {
-            Bounded::Sphere(s) => GpuPrim {
-                p0: s.center,
-                f0: s.radius,
-                tag: kind_tag(PRIM_SPHERE, s.material.0),
-                ..Default::default()
-            },
-            Bounded::Triangle(t) => {
-                // Unit normals or none: one without a direction would make the interpolated
-                // shading normal 0 / 0 and the pixel NaN, so such a triangle is shaded flat.
-                let slot = match t.n.as_deref().copied().and_then(unit3) {
-                    Some([n0, n1, n2]) => {
-                        tri_normals.push(GpuTriNormals {
-                            n0,
-                            n1,
-                            n2,
-                            ..Default::default()
-                        });
-                        (tri_normals.len() - 1) as f32
-                    }
-                    None => -1.0,
-                };
-                GpuPrim {
-                    p0: t.v[0],
-                    p1: t.v[1] - t.v[0],
-                    f1: slot,
-                    p2: t.v[2] - t.v[0],
-                    tag: kind_tag(PRIM_TRIANGLE, t.material.0),
-                    ..Default::default()
-                }
-            }
-            Bounded::Cone(c) => GpuPrim {
-                p0: c.base,
-                f0: c.base_radius,
-                p1: c.apex,
-                f1: c.apex_radius,
-                tag: kind_tag(PRIM_CONE, c.material.0),
-                ..Default::default()
-            },
-            Bounded::Box(b) => GpuPrim {
-                p0: b.min,
-                p1: b.max,
-                tag: kind_tag(PRIM_BOX, b.material.0),
-                ..Default::default()
-            },
-        });
-    }
-    if tri_normals.len() > 1 << 24 {
+    if prims.normals() > 1 << 24 {
         return Err(too_big(format!(
             "{} triangles with shading normals exceed the limit of 2^24",
-            tri_normals.len()
+            prims.normals()
         )));
     }
-    let bounds = scene.bounds();
-    let epsilon = epsilon(&scene);
+    let bounds = prims.bounds();
+    let epsilon = epsilon(bounds, &scene.camera);
+    let (mut records, tri_normals) = prims.into_records();
     let planes = scene
         .planes
         .iter()
@@ -165,19 +115,24 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
         })
         .collect();
     let lights = pack_lights(&scene.lights);
-    let (camera, background, ambient) = (scene.camera.clone(), scene.background, scene.ambient);
-    drop(scene);
-    let quality = bvh::Quality::for_work(aabbs.len(), samples);
+    let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
+    let quality = bvh::Quality::for_work(records.len(), samples);
     let FlatBvh {
         nodes,
         order,
         depth,
-    } = bvh::build(&aabbs, quality);
-    drop(aabbs);
-    let prims = order.iter().map(|&i| prims[i as usize]).collect();
+    } = bvh::build_with(
+        records.len(),
+        |i| bvh::aabb(flat::record_bounds(&records[i as usize])),
+        quality,
+    );
+    let mut nodes = nodes;
+    nodes.shrink_to_fit();
+    permute(&mut records, order);
+    flat::to_edges(&mut records);
     Ok(SceneBuffers {
         nodes,
-        prims,
+        prims: records,
         tri_normals,
         planes,
         materials,
@@ -192,6 +147,31 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
         wide: OnceLock::new(),
         gpu_wide: OnceLock::new(),
     })
+}
+
+/// Puts `v` in the order `order` gives (`v[i]` becomes the old `v[order[i]]`) in place,
+/// cycle by cycle, using `order` itself to mark the positions done: a second copy of the
+/// primitives would double the peak of the largest scenes.
+fn permute<T: Copy>(v: &mut [T], mut order: Vec<u32>) {
+    const DONE: u32 = u32::MAX;
+    debug_assert_eq!(v.len(), order.len());
+    for start in 0..v.len() {
+        if order[start] == DONE {
+            continue;
+        }
+        let first = v[start];
+        let mut i = start;
+        loop {
+            let from = order[i] as usize;
+            order[i] = DONE;
+            if from == start {
+                v[i] = first;
+                break;
+            }
+            v[i] = v[from];
+            i = from;
+        }
+    }
 }
 
 /// `SceneBuffers::trace_stack` for a scene's materials; the CPU twin checks its own
@@ -323,12 +303,11 @@ impl SceneBuffers {
     }
 }
 
-/// The secondary-ray offset: `EPSILON_REL` times the bounds diagonal (or the viewing
-/// distance for a scene of planes only).
-pub fn epsilon(scene: &Scene) -> f32 {
-    let b = scene.bounds();
+/// The secondary-ray offset: `EPSILON_REL` times the diagonal of the bounds `b` (or the
+/// viewing distance for a scene of planes only).
+pub fn epsilon(b: Bounds, camera: &Camera) -> f32 {
     let size = if b.is_empty() {
-        (scene.camera.at - scene.camera.from).length()
+        (camera.at - camera.from).length()
     } else {
         b.extent().length()
     };

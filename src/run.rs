@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
-use crate::scene::{self, Camera};
+use crate::scene::{self, Camera, ReadOptions};
 use crate::session::Renderer;
 
 /// A scene read and packed, with the time each step took and the reader's warnings (the
@@ -24,21 +24,24 @@ pub struct Prepared {
 
 /// Reads and packs the scene at `path`, with the camera of the NFF `v` block in `view`
 /// when one is given (a view found in `gpurt view`, printed with its C key), for a
-/// render of `samples(camera)` camera samples (which picks the BVH's build quality).
+/// render of `samples(camera)` camera samples (which picks the BVH's build quality), read
+/// as `read` says (`--lenient`).
 pub fn prepare(
     path: &Path,
     view: Option<&Path>,
+    read: &ReadOptions,
     samples: impl FnOnce(&Camera) -> u64,
 ) -> Result<Prepared> {
     let t0 = Instant::now();
-    let mut scene = scene::load(path)?;
+    // Read straight into the renderers' records: the scene is never held twice.
+    let mut flat = scene::load_flat_with(path, read)?;
     if let Some(view) = view {
-        scene.camera = scene::load(view)?.camera;
+        flat.scene.camera = scene::summary(view)?.scene.camera;
     }
     let t1 = Instant::now();
-    let warnings = std::mem::take(&mut scene.warnings);
-    let samples = samples(&scene.camera);
-    let buffers = pack::pack_for(scene, samples)?;
+    let warnings = std::mem::take(&mut flat.scene.warnings);
+    let samples = samples(&flat.scene.camera);
+    let buffers = pack::pack_flat(flat, samples)?;
     Ok(Prepared {
         buffers,
         warnings,

@@ -7,7 +7,7 @@
 //! at `offset`, a split axis for near-first ordering) and reports the primitive order, so
 //! `pack` can lay primitives out leaf by leaf with no indirection.
 //!
-//! Scenes of more than `BUILD_CHUNK` primitives are first cut by object median, and obvhs
+//! Scenes of more than `build_chunk` primitives are first cut by object median, and obvhs
 //! builds each group, which bounds the builder's memory. The traversal stack has a fixed
 //! size (`TRAVERSAL_STACK`); a tree deeper than that is rebuilt with a median split, whose
 //! depth is at most log2(n) + 1 and so always fits.
@@ -82,18 +82,27 @@ pub const HIGH_QUALITY_SAMPLES_PER_PRIM: u64 = 32;
 
 /// Builds a BVH over primitive bounds. An empty input gives an empty tree.
 pub fn build(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
-    if aabbs.is_empty() {
+    build_with(aabbs.len(), |i| aabbs[i as usize], quality)
+}
+
+/// Builds a BVH over `count` primitives whose bounds `aabb` gives by index: the bounds
+/// are worked out as they are needed, a group at a time, so that a large scene's are never
+/// held all at once (`pack` computes them from its primitives).
+pub fn build_with(count: usize, aabb: impl Fn(u32) -> Aabb, quality: Quality) -> FlatBvh {
+    if count == 0 {
         return FlatBvh::default();
     }
-    let flat = if aabbs.len() <= BUILD_CHUNK {
-        build_group(aabbs, quality)
+    let chunk = build_chunk(count);
+    let flat = if count <= chunk {
+        let aabbs: Vec<Aabb> = (0..count as u32).map(&aabb).collect();
+        build_group(&aabbs, quality)
     } else {
-        median_split(aabbs, BUILD_CHUNK, quality)
+        median_split(count, &aabb, chunk, quality)
     };
     if flat.depth < TRAVERSAL_STACK {
         flat
     } else {
-        median_leaves(aabbs)
+        median_leaves(count, &aabb)
     }
 }
 
@@ -101,16 +110,16 @@ pub fn build(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
 /// coincident.
 fn build_group(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
     if mostly_coincident(aabbs) {
-        median_leaves(aabbs)
+        median_leaves(aabbs.len(), &|i| aabbs[i as usize])
     } else {
         flatten(&build_obvhs(aabbs, quality), aabbs)
     }
 }
 
 /// A balanced tree by object median splits all the way down to leaves.
-fn median_leaves(aabbs: &[Aabb]) -> FlatBvh {
+fn median_leaves(count: usize, aabb: &impl Fn(u32) -> Aabb) -> FlatBvh {
     // Groups of MAX_LEAF_PRIMS are leaves, so obvhs (and its quality) is never called.
-    median_split(aabbs, MAX_LEAF_PRIMS as usize, Quality::Medium)
+    median_split(count, aabb, MAX_LEAF_PRIMS as usize, Quality::Medium)
 }
 
 /// Whether one box repeats a thousand times or more, judged on up to 1024 boxes spread
@@ -135,13 +144,22 @@ fn mostly_coincident(aabbs: &[Aabb]) -> bool {
     most >= 16 && most * step >= MANY
 }
 
-/// Most primitives one obvhs build takes. Its builder holds about 230 bytes a primitive
-/// while it runs (two node arrays and the sort keys, then the tree's own nodes), more
-/// than the finished scene (about 70); larger scenes are cut by object median into
-/// groups of at most this many, each built by obvhs in turn, so that peak stays a fixed
-/// 120 MB or so instead of growing with the scene (mount-11: 139 bytes a primitive at the
-/// peak of the whole load; docs/bvh.md).
-pub const BUILD_CHUNK: usize = 1 << 19;
+/// Most primitives one obvhs build takes in a scene of `count`. Its builder holds about
+/// 230 bytes a primitive while it runs (two node arrays and the sort keys, then the
+/// tree's own nodes), more than the finished scene (about 90 with the CPU's wide tree);
+/// larger scenes are cut by object median into groups of at most this many, each built
+/// by obvhs in turn. A sixteenth of the scene keeps the builder's share near 15 bytes a
+/// primitive at the peak of the load, which the records, the tree and the builder's
+/// group make (docs/bvh.md); a scene of up to `BUILD_CHUNK_MIN` is built whole (the
+/// builder's 15 MB do not count), and no group is larger than `BUILD_CHUNK_MAX`, where
+/// the top levels' median splits have long stopped mattering.
+pub fn build_chunk(count: usize) -> usize {
+    (count / 16).clamp(BUILD_CHUNK_MIN, BUILD_CHUNK_MAX)
+}
+
+/// The smallest and largest groups of `build_chunk`.
+pub const BUILD_CHUNK_MIN: usize = 1 << 16;
+pub const BUILD_CHUNK_MAX: usize = 1 << 19;
 
 /// Scenes up to this many primitives always get obvhs' most thorough build: at about 2 us
 /// a primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
@@ -236,9 +254,14 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
 /// A tree by object median on the widest centroid axis down to ranges of at most `chunk`
 /// primitives: leaves where `chunk` is `MAX_LEAF_PRIMS` (a balanced tree, depth <= log2(n)
 /// + 1), else subtrees built by obvhs, each over its own range.
-fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
+fn median_split(
+    count: usize,
+    aabb: &impl Fn(u32) -> Aabb,
+    chunk: usize,
+    quality: Quality,
+) -> FlatBvh {
     let bound = |i: u32| {
-        let b = &aabbs[i as usize];
+        let b = aabb(i);
         Bounds {
             min: b.min.into(),
             max: b.max.into(),
@@ -246,18 +269,18 @@ fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
     };
     let centre = |i: u32| bound(i).center();
     let mut out = FlatBvh {
-        order: (0..aabbs.len() as u32).collect(),
+        order: (0..count as u32).collect(),
         ..FlatBvh::default()
     };
     // (range start, range end, output node to patch, depth)
-    let mut stack = vec![(0usize, aabbs.len(), None::<usize>, 1usize)];
+    let mut stack = vec![(0usize, count, None::<usize>, 1usize)];
     while let Some((lo, hi, patch, depth)) = stack.pop() {
         let here = out.nodes.len();
         if let Some(p) = patch {
             out.nodes[p].offset = here as u32;
         }
         if hi - lo > MAX_LEAF_PRIMS as usize && hi - lo <= chunk {
-            append_subtree(&mut out, aabbs, lo..hi, depth, quality);
+            append_subtree(&mut out, aabb, lo..hi, depth, quality);
             continue;
         }
         out.depth = out.depth.max(depth);
@@ -296,13 +319,13 @@ fn median_split(aabbs: &[Aabb], chunk: usize, quality: Quality) -> FlatBvh {
 /// leaves hold them.
 fn append_subtree(
     out: &mut FlatBvh,
-    aabbs: &[Aabb],
+    aabb: &impl Fn(u32) -> Aabb,
     range: std::ops::Range<usize>,
     depth: usize,
     quality: Quality,
 ) {
     let ids = out.order[range.clone()].to_vec();
-    let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabbs[i as usize]).collect();
+    let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabb(i)).collect();
     let sub = build_group(&sub_aabbs, quality);
     drop(sub_aabbs);
     let base = out.nodes.len() as u32;
@@ -380,7 +403,7 @@ mod tests {
             for quality in [Quality::Medium, Quality::High] {
                 check(&build(&b, quality), &b);
             }
-            let m = median_leaves(&b);
+            let m = median_leaves(b.len(), &|i| b[i as usize]);
             check(&m, &b);
             assert!(m.depth <= (n as f64).log2().ceil() as usize + 1);
         }
@@ -402,14 +425,14 @@ mod tests {
         deepest
     }
 
-    /// Cut into groups built by obvhs (small groups here, as `BUILD_CHUNK` does for
+    /// Cut into groups built by obvhs (small groups here, as `build_chunk` does for
     /// millions of primitives): still every primitive once, bounds that contain, and the
     /// depth it reports.
     #[test]
     fn trees_built_in_groups_are_well_formed() {
         for (n, chunk) in [(5, 4), (1000, 64), (5000, 300), (4097, 4096)] {
             let b = unit_boxes(n);
-            let t = median_split(&b, chunk, Quality::Medium);
+            let t = median_split(b.len(), &|i| b[i as usize], chunk, Quality::Medium);
             check(&t, &b);
             assert_eq!(t.depth, walked_depth(&t), "{n} boxes in groups of {chunk}");
             assert!(t.nodes.len() < 2 * n, "{} nodes", t.nodes.len());

@@ -56,32 +56,47 @@ fn area(n: &GpuNode) -> f32 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
-/// A binary node standing as a child of a wide node, and, for an inner one, the index of
-/// the wide node that stands for it in turn.
-#[derive(Clone, Copy)]
-struct Lane {
-    binary: u32,
-    wide: u32,
+/// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
+/// `offset`) into nodes of up to `width` children, root first: each inner node takes its
+/// children, then repeatedly replaces its largest inner child by that child's two
+/// children while a lane is free. Each wide node starts as `empty` and gets its lanes from
+/// `set(node, lane, binary child, wide node standing for it when it is inner)`; `None`
+/// when `set` refuses one. The nodes are written in place as they are found, into an
+/// array of the exact size (counted by a first pass that writes nothing), so that the
+/// collapse holds nothing but the tree it makes.
+fn collapse<N: Copy>(
+    nodes: &[GpuNode],
+    width: usize,
+    empty: N,
+    set: impl FnMut(&mut N, usize, &GpuNode, u32) -> bool,
+) -> Option<Vec<N>> {
+    let count = collapse_into(nodes, width, Vec::new(), (), |_, _, _, _| true)?.len();
+    collapse_into(nodes, width, Vec::with_capacity(count), empty, set)
 }
 
-/// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
-/// `offset`) into nodes of up to `width` children, root first, as the lanes of each:
-/// each inner node takes its children, then repeatedly replaces its largest inner child
-/// by that child's two children while a lane is free.
-fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
+/// `collapse` into `wide` (empty, with the capacity wanted).
+fn collapse_into<N: Copy>(
+    nodes: &[GpuNode],
+    width: usize,
+    mut wide: Vec<N>,
+    empty: N,
+    mut set: impl FnMut(&mut N, usize, &GpuNode, u32) -> bool,
+) -> Option<Vec<N>> {
     if nodes.is_empty() {
-        return Vec::new();
+        return Some(wide);
     }
-    let mut wide = vec![Vec::new()];
+    wide.push(empty);
     // (wide node to fill, binary node it stands for)
     let mut todo = vec![(0usize, 0u32)];
+    let mut kids: Vec<u32> = Vec::with_capacity(width + 1);
     while let Some((w, i)) = todo.pop() {
         let n = &nodes[i as usize];
-        let mut kids: Vec<u32> = if n.count() > 0 {
-            vec![i] // a tree that is one leaf
+        kids.clear();
+        if n.count() > 0 {
+            kids.push(i); // a tree that is one leaf
         } else {
-            vec![i + 1, n.offset]
-        };
+            kids.extend([i + 1, n.offset]);
+        }
         while kids.len() < width {
             let open = kids
                 .iter()
@@ -92,44 +107,37 @@ fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
             kids.swap_remove(j);
             kids.extend([k + 1, nodes[k as usize].offset]);
         }
-        let lanes = kids
-            .into_iter()
-            .map(|k| {
-                let mut lane = Lane { binary: k, wide: 0 };
-                if nodes[k as usize].count() == 0 {
-                    lane.wide = wide.len() as u32;
-                    todo.push((wide.len(), k));
-                    wide.push(Vec::new());
-                }
-                lane
-            })
-            .collect();
-        wide[w] = lanes;
+        for (lane, &k) in kids.iter().enumerate() {
+            let c = &nodes[k as usize];
+            let mut inner = 0;
+            if c.count() == 0 {
+                inner = wide.len() as u32;
+                todo.push((wide.len(), k));
+                wide.push(empty);
+            }
+            if !set(&mut wide[w], lane, c, inner) {
+                return None;
+            }
+        }
     }
-    wide
+    Some(wide)
 }
 
 /// The CPU renderer's eight-wide tree over the binary `nodes`.
 pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
-    collapse(nodes, WIDTH)
-        .into_iter()
-        .map(|lanes| {
-            let mut node = WideNode::empty();
-            for (lane, Lane { binary, wide }) in lanes.into_iter().enumerate() {
-                let c = &nodes[binary as usize];
-                for axis in 0..3 {
-                    node.lo[axis][lane / 4][lane % 4] = c.min[axis];
-                    node.hi[axis][lane / 4][lane % 4] = c.max[axis];
-                }
-                (node.child[lane], node.count[lane]) = if c.count() > 0 {
-                    (c.offset, c.count())
-                } else {
-                    (wide, 0)
-                };
-            }
-            node
-        })
-        .collect()
+    let set = |node: &mut WideNode, lane: usize, c: &GpuNode, wide: u32| {
+        for axis in 0..3 {
+            node.lo[axis][lane / 4][lane % 4] = c.min[axis];
+            node.hi[axis][lane / 4][lane % 4] = c.max[axis];
+        }
+        (node.child[lane], node.count[lane]) = if c.count() > 0 {
+            (c.offset, c.count())
+        } else {
+            (wide, 0)
+        };
+        true
+    };
+    collapse(nodes, WIDTH, WideNode::empty(), set).expect("every lane is taken")
 }
 
 /// The binary `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them
@@ -139,32 +147,28 @@ pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
 /// children waiting, and its pushes write up to two slots past those it keeps), a leaf of
 /// more than four primitives, a first primitive beyond the entry's 29 bits, or no tree.
 pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
-    let wide = collapse(nodes, 4);
-    if wide.is_empty() {
-        return None;
-    }
-    let mut out = Vec::with_capacity(wide.len());
-    for lanes in &wide {
-        let mut node = GpuWideNode {
-            lo: [Vec4::INFINITY; 3],
-            hi: [Vec4::NEG_INFINITY; 3],
-            entry: [WIDE_EMPTY; 4],
-        };
-        for (lane, &Lane { binary, wide }) in lanes.iter().enumerate() {
-            let c = &nodes[binary as usize];
-            for axis in 0..3 {
-                node.lo[axis][lane] = c.min[axis];
-                node.hi[axis][lane] = c.max[axis];
-            }
-            node.entry[lane] = match c.count() {
-                0 => wide,
-                count @ 1..=4 if c.offset < (1 << 29) - 1 => {
-                    WIDE_LEAF | c.offset << WIDE_FIRST_SHIFT | (count - 1)
-                }
-                _ => return None,
-            };
+    let empty = GpuWideNode {
+        lo: [Vec4::INFINITY; 3],
+        hi: [Vec4::NEG_INFINITY; 3],
+        entry: [WIDE_EMPTY; 4],
+    };
+    let set = |node: &mut GpuWideNode, lane: usize, c: &GpuNode, wide: u32| {
+        for axis in 0..3 {
+            node.lo[axis][lane] = c.min[axis];
+            node.hi[axis][lane] = c.max[axis];
         }
-        out.push(node);
+        node.entry[lane] = match c.count() {
+            0 => wide,
+            count @ 1..=4 if c.offset < (1 << 29) - 1 => {
+                WIDE_LEAF | c.offset << WIDE_FIRST_SHIFT | (count - 1)
+            }
+            _ => return false,
+        };
+        true
+    };
+    let out = collapse(nodes, 4, empty, set)?;
+    if out.is_empty() {
+        return None;
     }
     // Entries waiting when the walk reaches each node: the sum over its ancestors of the
     // children each left waiting (at most its children less the one entered).
@@ -175,10 +179,11 @@ pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
         if need > TRAVERSAL_STACK {
             return None;
         }
-        let lanes = &wide[w];
-        for lane in lanes {
-            if nodes[lane.binary as usize].count() == 0 {
-                todo.push((lane.wide as usize, waiting + lanes.len() - 1));
+        let entries = &out[w].entry;
+        let lanes = entries.iter().filter(|&&e| e != WIDE_EMPTY).count();
+        for &e in entries {
+            if e != WIDE_EMPTY && e & WIDE_LEAF == 0 {
+                todo.push((e as usize, waiting + lanes - 1));
             }
         }
     }

@@ -12,7 +12,7 @@ use gpurt::gpu_types as gt;
 use gpurt::limits::{
     DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS,
 };
-use gpurt::scene::Camera;
+use gpurt::scene::{Camera, ReadOptions};
 use gpurt::session::Backend;
 
 #[derive(Parser)]
@@ -44,6 +44,11 @@ pub enum Command {
         /// One JSON object instead of text.
         #[arg(long)]
         json: bool,
+        /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
+        /// with what follows each up to the next known keyword, warning of each, instead of
+        /// refusing the file.
+        #[arg(long)]
+        lenient: bool,
     },
     /// Compare two images: max/mean difference, PSNR, pixels over 2/255, FLIP mean.
     /// Exits 1 when they differ beyond the limits (by default the GPU-vs-CPU ones: at most
@@ -117,6 +122,11 @@ pub struct BenchArgs {
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
     #[arg(long)]
     pub adapter: Option<String>,
+    /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
+    /// with what follows each up to the next known keyword, warning of each, instead of
+    /// refusing the file.
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 #[derive(clap::Args)]
@@ -170,6 +180,20 @@ pub struct ViewArgs {
     /// On exit, print the time to the first picture, frame times and tracing rates.
     #[arg(long)]
     pub stats: bool,
+    /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
+    /// with what follows each up to the next known keyword, warning of each, instead of
+    /// refusing the file.
+    #[arg(long)]
+    pub lenient: bool,
+}
+
+impl ViewArgs {
+    /// How the scene is read.
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            lenient: self.lenient,
+        }
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -311,9 +335,21 @@ pub struct RenderArgs {
     /// Print timings, rays traced, Mrays/s and peak memory.
     #[arg(long)]
     pub stats: bool,
+    /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
+    /// with what follows each up to the next known keyword, warning of each, instead of
+    /// refusing the file.
+    #[arg(long)]
+    pub lenient: bool,
 }
 
 impl RenderArgs {
+    /// How the scenes are read.
+    pub fn read_options(&self) -> ReadOptions {
+        ReadOptions {
+            lenient: self.lenient,
+        }
+    }
+
     /// What the flags set over a scene's camera and the defaults.
     pub fn overrides(&self) -> Overrides {
         Overrides {

@@ -56,6 +56,7 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
         &BatchOptions {
             overrides: args.overrides(),
             view: args.view.clone(),
+            read: args.read_options(),
         },
         found.gpu,
         &|scene| {
@@ -122,9 +123,12 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
     let cancel = cancel_on_signals();
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(scene, args.view.as_deref(), |camera| {
-        args.options(camera).samples() / u64::from(shard.count)
-    })?;
+    } = run::prepare(
+        scene,
+        args.view.as_deref(),
+        &args.read_options(),
+        |camera| args.options(camera).samples() / u64::from(shard.count),
+    )?;
     print_warnings(&warnings);
     let buffers = Arc::new(buffers);
     let opts = args.options(&buffers.camera);

@@ -55,9 +55,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         warnings,
         parse_time,
         build_time,
-    } = run::prepare(scene_path, args.view.as_deref(), |camera| {
-        args.options(camera).samples()
-    })?;
+    } = run::prepare(
+        scene_path,
+        args.view.as_deref(),
+        &args.read_options(),
+        |camera| args.options(camera).samples(),
+    )?;
     print_warnings(&warnings);
     let opts = args.options(&buffers.camera);
     let globals = frame::globals(&buffers, &opts);

@@ -9,15 +9,16 @@ use std::time::Instant;
 use gpurt::bench::{self, BenchConfig};
 use gpurt::compare::{self, Thresholds};
 use gpurt::run::{self, Prepared};
+use gpurt::scene::ReadOptions;
 use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
 use super::args::{BenchArgs, DiffArgs, ViewArgs};
 use super::{print_threads, print_warnings};
 
-/// `gpurt info SCENE [--json]`.
-pub fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
-    let s = gpurt::scene::load(path)?;
+/// `gpurt info SCENE [--json] [--lenient]`.
+pub fn info(path: &Path, json: bool, read: &ReadOptions) -> gpurt::Result<ExitCode> {
+    let s = gpurt::scene::summary_with(path, read)?;
     if json {
         outln!("{}", gpurt::info::to_json(&s));
     } else {
@@ -68,14 +69,19 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         .transpose()?;
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(&args.scene, args.view.as_deref(), |camera| {
-        // Quick to the first image: the build that suits one frame at the window's size.
-        let (w, h) = (
-            args.width.unwrap_or(camera.width),
-            args.height.unwrap_or(camera.height),
-        );
-        u64::from(w) * u64::from(h)
-    })?;
+    } = run::prepare(
+        &args.scene,
+        args.view.as_deref(),
+        &args.read_options(),
+        |camera| {
+            // Quick to the first image: the build that suits one frame at the window's size.
+            let (w, h) = (
+                args.width.unwrap_or(camera.width),
+                args.height.unwrap_or(camera.height),
+            );
+            u64::from(w) * u64::from(h)
+        },
+    )?;
     print_warnings(&warnings);
     print_threads(args.stats);
     window::run(
@@ -111,6 +117,9 @@ pub fn bench(args: BenchArgs) -> gpurt::Result<ExitCode> {
         frames: args.frames,
         backend: args.backend,
         adapter: args.adapter,
+        read: ReadOptions {
+            lenient: args.lenient,
+        },
     })?;
     Ok(ExitCode::SUCCESS)
 }

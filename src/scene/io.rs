@@ -1,12 +1,15 @@
 //! Reading a scene file's bytes: which reader a file is for (`FileKind`, from its
-//! extension), the whole file read with a size limit, and gzip decompression that refuses
-//! bombs while holding little of them. Apart from the readers, which take bytes and know
-//! nothing of files; `load` and the NFF `mesh` include call it.
+//! extension), and the file opened as a stream (`open`), decompressed as it is read when
+//! it is gzip. The readers pull from that stream through a buffer of fixed size
+//! (`lex::Lexer`, the binary STL reader), so that no file is ever held whole: memory
+//! grows with what the scene holds, not with the file. Apart from the readers, which
+//! know nothing of files.
 
-use std::path::Path;
+use std::io::{self, BufRead, BufReader, Read};
+use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::limits::{HELD_BYTES, MAX_FILE_BYTES};
+use crate::limits::MAX_FILE_BYTES;
 
 /// What a file holds, from its extension (after stripping `.gz`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -33,9 +36,37 @@ impl FileKind {
     }
 }
 
-/// Reads a file whole, decompressing it when it starts with the gzip magic bytes.
-pub fn read_file(path: &Path) -> Result<Vec<u8>> {
-    use std::io::Read;
+/// A file's bytes as a stream, decompressed when the file is gzip, and their number when
+/// it is known before reading (a plain file's size, the length of bytes in memory; not a
+/// gzip file's, whose trailer may lie).
+pub struct Input<'a> {
+    pub reader: Box<dyn Read + 'a>,
+    pub len: Option<u64>,
+}
+
+impl<'a> Input<'a> {
+    /// Bytes already in memory, read as a file with those contents would be: decompressed
+    /// when they start with the gzip magic bytes.
+    pub fn bytes(bytes: &'a [u8]) -> Input<'a> {
+        if bytes.starts_with(&GZIP_MAGIC) {
+            Input {
+                reader: Box::new(Gunzip::new(bytes, MAX_FILE_BYTES)),
+                len: None,
+            }
+        } else {
+            Input {
+                reader: Box::new(bytes),
+                len: Some(bytes.len() as u64),
+            }
+        }
+    }
+}
+
+const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
+
+/// Opens a scene file for reading, through a gzip decoder when it starts with the gzip
+/// magic bytes (every member, as gzip does). Refuses what is not a regular file.
+pub fn open(path: &Path) -> Result<Input<'static>> {
     let not_a_file = |what: &str| Error::Scene {
         file: path.display().to_string(),
         msg: format!("is {what}, not a regular file"),
@@ -49,72 +80,140 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>> {
     if !meta.is_file() {
         return Err(not_a_file("a device, fifo or socket"));
     }
-    let mut raw = Vec::with_capacity(meta.len().min(MAX_FILE_BYTES) as usize);
-    // Bounded even so: a file that grows while it is read stops at the limit.
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_FILE_BYTES + 1).read_to_end(&mut raw))
-        .map_err(|e| Error::io(path, e))?;
-    if raw.len() as u64 > MAX_FILE_BYTES {
-        return Err(Error::Scene {
-            file: path.display().to_string(),
-            msg: format!("is larger than {} GiB", MAX_FILE_BYTES >> 30),
-        });
-    }
-    decompress(raw, path, MAX_FILE_BYTES)
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    // Small: the readers have their own buffers, and reads larger than this one go
+    // around it.
+    let mut file = BufReader::with_capacity(64 << 10, file);
+    let head = file.fill_buf().map_err(|e| Error::io(path, e))?;
+    Ok(if head.starts_with(&GZIP_MAGIC) {
+        Input {
+            reader: Box::new(Gunzip::new(file, MAX_FILE_BYTES)),
+            len: None,
+        }
+    } else {
+        Input {
+            reader: Box::new(file),
+            len: Some(meta.len()),
+        }
+    })
 }
 
-/// `raw` as `read_file` returns it for a file at `path`: decompressed when it starts with
-/// the gzip magic bytes (every member, as gzip does), unchanged otherwise. A file that
-/// decompresses to more than `limit` bytes is an error (`read_file` uses `MAX_FILE_BYTES`),
-/// found holding at most `HELD_BYTES` of it.
-pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
-    if !raw.starts_with(&[0x1f, 0x8b]) {
-        return Ok(raw);
-    }
-    let io = |e| Error::io(path, e);
-    // The gzip trailer ends with the decompressed size mod 2^32 (ISIZE): exact for the usual
-    // one-member file, so the output is allocated once instead of doubling its way up (which
-    // would hold up to twice the scene's bytes at the peak). Deflate cannot expand more than
-    // about 1032:1, which bounds a lying trailer.
-    let isize = raw.len().checked_sub(4).map_or(0, |i| {
-        u32::from_le_bytes(raw[i..].try_into().unwrap()) as u64
-    });
-    let held = limit.min(HELD_BYTES);
-    let hint = isize.min(raw.len() as u64 * 1032).min(held);
-    let mut out = Vec::with_capacity(hint as usize + 64);
-    let mut total = inflate(&raw, &mut out, held + 1).map_err(io)?;
-    if total > held {
-        // Larger than is held before the size is known: count it all first.
-        total = inflate(&raw, &mut std::io::sink(), limit + 1).map_err(io)?;
-        if total <= limit {
-            out = Vec::with_capacity(total as usize);
-            inflate(&raw, &mut out, total).map_err(io)?;
+/// The error a reader reports when reading `name`'s bytes failed: the file's own
+/// (`Error::Io`), or its decompressed size past the limit (`Error::Scene`).
+pub fn read_error(name: &str, e: io::Error) -> Error {
+    match e
+        .get_ref()
+        .and_then(|inner| inner.downcast_ref::<TooLarge>())
+    {
+        Some(TooLarge(limit)) => {
+            let msg = if *limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {
+                format!("decompresses to more than {} GiB", limit >> 30)
+            } else {
+                format!("decompresses to more than {limit} bytes")
+            };
+            Error::Scene {
+                file: name.to_string(),
+                msg,
+            }
         }
+        None => Error::io(PathBuf::from(name), e),
     }
-    if total > limit {
-        let msg = if limit >= 1 << 30 && limit.is_multiple_of(1 << 30) {
-            format!("decompresses to more than {} GiB", limit >> 30)
-        } else {
-            format!("decompresses to more than {limit} bytes")
-        };
-        return Err(Error::Scene {
-            file: path.display().to_string(),
-            msg,
-        });
-    }
+}
+
+/// Reads a file whole, decompressed. For tools and tests: the renderer itself streams.
+pub fn read_file(path: &Path) -> Result<Vec<u8>> {
+    let mut input = open(path)?;
+    let mut out = Vec::with_capacity(input.len.unwrap_or(0) as usize);
+    input
+        .reader
+        .read_to_end(&mut out)
+        .map_err(|e| read_error(&path.display().to_string(), e))?;
     Ok(out)
 }
 
-/// Writes the gzip members of `raw` to `out`, member after member as gzip does, stopping
-/// after `room` bytes; returns the bytes written. Zero bytes after the last member are
-/// padding (tape blocks, `dd`), which `gzip -t` accepts too.
-fn inflate(raw: &[u8], out: &mut impl std::io::Write, room: u64) -> std::io::Result<u64> {
-    use std::io::Read;
-    let (mut rest, mut written) = (raw, 0);
-    while written < room && !rest.iter().all(|&b| b == 0) {
-        let mut member = flate2::bufread::GzDecoder::new(rest);
-        written += std::io::copy(&mut (&mut member).take(room - written), out)?;
-        rest = member.into_inner();
+/// `raw` as `read_file` returns it for a file at `path` with those contents: decompressed
+/// when it starts with the gzip magic bytes, unchanged otherwise. A file that decompresses
+/// to more than `limit` bytes is an error (files are held to `MAX_FILE_BYTES`).
+pub fn decompress(raw: Vec<u8>, path: &Path, limit: u64) -> Result<Vec<u8>> {
+    if !raw.starts_with(&GZIP_MAGIC) {
+        return Ok(raw);
     }
-    Ok(written)
+    let mut out = Vec::new();
+    Gunzip::new(&raw[..], limit)
+        .read_to_end(&mut out)
+        .map_err(|e| read_error(&path.display().to_string(), e))?;
+    Ok(out)
+}
+
+/// The payload of the error `Gunzip` returns past its limit (`read_error` names it).
+#[derive(Debug)]
+struct TooLarge(u64);
+
+impl std::fmt::Display for TooLarge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "decompresses to more than {} bytes", self.0)
+    }
+}
+
+impl std::error::Error for TooLarge {}
+
+/// Every gzip member of a stream, one after another as gzip reads them, stopping with an
+/// error past `limit` decompressed bytes: a gzip bomb no longer costs memory (nothing is
+/// held), but it would cost time. Zero bytes after the last member are padding (tape
+/// blocks, `dd`), which `gzip -t` accepts too.
+struct Gunzip<R: BufRead> {
+    /// The member being read; `None` once the stream has ended.
+    member: Option<flate2::bufread::GzDecoder<R>>,
+    total: u64,
+    limit: u64,
+}
+
+impl<R: BufRead> Gunzip<R> {
+    fn new(raw: R, limit: u64) -> Self {
+        Gunzip {
+            member: Some(flate2::bufread::GzDecoder::new(raw)),
+            total: 0,
+            limit,
+        }
+    }
+}
+
+impl<R: BufRead> Read for Gunzip<R> {
+    fn read(&mut self, out: &mut [u8]) -> io::Result<usize> {
+        while let Some(member) = &mut self.member {
+            let n = member.read(out)?;
+            if n > 0 || out.is_empty() {
+                self.total += n as u64;
+                if self.total > self.limit {
+                    return Err(io::Error::other(TooLarge(self.limit)));
+                }
+                return Ok(n);
+            }
+            // The member ended: another follows, or padding, or nothing.
+            let mut raw = self.member.take().expect("a member").into_inner();
+            let mut padded = false;
+            loop {
+                let rest = raw.fill_buf()?;
+                match rest.iter().position(|&b| b != 0) {
+                    None if rest.is_empty() => return Ok(0),
+                    None => {
+                        let n = rest.len();
+                        raw.consume(n);
+                        padded = true;
+                    }
+                    Some(0) if !padded => {
+                        self.member = Some(flate2::bufread::GzDecoder::new(raw));
+                        break;
+                    }
+                    Some(_) => {
+                        return Err(io::Error::new(
+                            io::ErrorKind::InvalidData,
+                            "invalid gzip header (bytes after the zero padding)",
+                        ));
+                    }
+                }
+            }
+        }
+        Ok(0)
+    }
 }

@@ -1,22 +1,45 @@
-//! Mesh files (STL, OBJ) as triangle lists, and the transform the `mesh` statement applies.
+//! Mesh files (STL, OBJ) read into a sink, and the transform the `mesh` statement applies
+//! to them on their way in (`Placed`).
 
 use glam::{Mat3, Vec3};
 
-use super::io::FileKind;
-use super::model::{Mesh, Triangle, unit};
+use super::bounds::Bounds;
+use super::io::{FileKind, Input};
+use super::lex::Lexer;
+use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
+use super::palette::Palette;
+use super::sink::{Collect, MeshOut, Sink};
 use super::{obj, stl};
 use crate::error::Result;
 
-/// Parses a mesh file's bytes (already decompressed) into triangles with material 0.
-pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
+/// Reads a mesh file's triangles into `out` as they are read (`name` in messages).
+pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Result<()> {
     match kind {
-        FileKind::Stl => Ok(Mesh {
-            triangles: stl::parse(bytes, name)?,
-            warnings: Vec::new(),
-        }),
-        FileKind::Obj => obj::parse_with_warnings(bytes, name),
+        FileKind::Stl => stl::read(input, name, out.sink, out.default),
+        FileKind::Obj => obj::read(Lexer::from_input(input, name), out),
         FileKind::Nff => unreachable!("NFF is not a mesh format"),
     }
+}
+
+/// Parses a mesh file's bytes (gzip-compressed or not) into triangles with material 0;
+/// an OBJ's materials are not read.
+pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
+    let mut tris = Collect::default();
+    let mut warnings = Vec::new();
+    let mut out = MeshOut {
+        sink: &mut tris,
+        warnings: &mut warnings,
+        materials: &mut Vec::new(),
+        palette: &mut Palette::default(),
+        default: MaterialId(0),
+        mtl: false,
+        dir: None,
+    };
+    read(Input::bytes(bytes), kind, name, &mut out)?;
+    Ok(Mesh {
+        triangles: tris.into_triangles(),
+        warnings,
+    })
 }
 
 /// `mesh PATH translate x y z rotate rx ry rz scale s`: applied scale, then rotation about
@@ -49,21 +72,90 @@ impl MeshTransform {
     }
 
     pub fn apply(&self, tris: &mut [Triangle]) {
+        let Some(m) = self.matrices() else { return };
+        for t in tris {
+            let (v, n) = m.place(t.v, t.n.as_deref().copied());
+            t.v = v;
+            t.n = n.map(Box::new);
+        }
+    }
+
+    /// The matrices that place points and normals; `None` for the identity.
+    fn matrices(&self) -> Option<Placement> {
         if *self == MeshTransform::default() {
-            return;
+            return None;
         }
         let m = self.linear();
-        // Normals transform by the inverse transpose (non-uniform scale bends them).
-        let nm = m.inverse().transpose();
-        for t in tris {
-            t.v = t.v.map(|p| m * p + self.translate);
-            // A normal the transform leaves without a direction makes the triangle flat.
-            t.n = t.n.take().and_then(|n| {
-                let unit = |v| unit(nm * v);
-                let [a, b, c] = *n;
-                Some(Box::new([unit(a)?, unit(b)?, unit(c)?]))
-            });
+        Some(Placement {
+            m,
+            // Normals transform by the inverse transpose (non-uniform scale bends them).
+            nm: m.inverse().transpose(),
+            translate: self.translate,
+        })
+    }
+}
+
+#[derive(Clone, Copy)]
+struct Placement {
+    m: Mat3,
+    nm: Mat3,
+    translate: Vec3,
+}
+
+impl Placement {
+    fn place(&self, v: [Vec3; 3], n: Option<[Vec3; 3]>) -> ([Vec3; 3], Option<[Vec3; 3]>) {
+        let v = v.map(|p| self.m * p + self.translate);
+        // A normal the transform leaves without a direction makes the triangle flat.
+        let n = n.and_then(|[a, b, c]| {
+            let unit = |v| unit(self.nm * v);
+            Some([unit(a)?, unit(b)?, unit(c)?])
+        });
+        (v, n)
+    }
+}
+
+/// A mesh on its way into a scene: every triangle transformed.
+pub struct Placed<'a> {
+    sink: &'a mut dyn Sink,
+    placement: Option<Placement>,
+    /// Triangles placed.
+    pub placed: usize,
+}
+
+impl<'a> Placed<'a> {
+    pub fn new(sink: &'a mut dyn Sink, xf: &MeshTransform) -> Self {
+        Placed {
+            sink,
+            placement: xf.matrices(),
+            placed: 0,
         }
+    }
+}
+
+impl Sink for Placed<'_> {
+    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId) {
+        let (v, n) = match &self.placement {
+            Some(p) => p.place(v, n),
+            None => (v, n),
+        };
+        self.placed += 1;
+        self.sink.triangle(v, n, material);
+    }
+    // Mesh files hold triangles only.
+    fn sphere(&mut self, s: Sphere) {
+        self.sink.sphere(s);
+    }
+    fn cone(&mut self, c: Cone) {
+        self.sink.cone(c);
+    }
+    fn cuboid(&mut self, b: BoxPrim) {
+        self.sink.cuboid(b);
+    }
+    fn count(&self) -> usize {
+        self.sink.count()
+    }
+    fn bounds(&self) -> Bounds {
+        self.sink.bounds()
     }
 }
 

@@ -1,45 +1,109 @@
 //! Scenes: the data model (`model`, plain data produced by the readers and consumed by
 //! `pack`), its bounds, reading files (`io`), and the readers.
 //!
-//! Readers (`nff`, `stl`, `obj`) take text or bytes plus a display name for error
-//! messages; `load` reads a file from disk (gzip-aware) and picks the reader by extension.
+//! The readers (`nff`, `stl`, `obj`) read a stream (`io::Input`: a file, or bytes in
+//! memory) and give every bounded primitive to a `Sink` the moment it is read: into a
+//! `Scene` (`load`), or straight into the renderers' records (`load_flat`), so that a
+//! scene of any size is read holding nothing twice. `load*` open a file (gzip-aware) and
+//! pick the reader by extension.
 
 pub mod auto;
 pub mod bounds;
+pub mod flat;
 pub mod io;
 pub mod lex;
 pub mod mesh;
 pub mod model;
+pub mod mtl;
 pub mod nff;
+pub mod number;
 pub mod obj;
+pub mod options;
+pub mod palette;
+pub mod sink;
 pub mod stl;
 pub mod triangulate;
 
 use std::path::Path;
 
 pub use bounds::{Bounded, Bounds};
+pub use flat::{Flat, FlatScene};
 pub use model::{
     BoxPrim, Camera, Cone, Light, Material, MaterialId, Mesh, Plane, Scene, Sphere, Triangle,
     nff_default_camera, unit,
 };
+pub use options::ReadOptions;
+pub use sink::{Collect, Sink};
 
 use crate::error::Result;
-use io::{FileKind, read_file};
+use io::FileKind;
+use palette::Palette;
+use sink::MeshOut;
 
 /// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an
 /// automatic camera, light, material and ground plane.
 pub fn load(path: &Path) -> Result<Scene> {
-    let bytes = read_file(path)?;
+    load_with(path, &ReadOptions::default())
+}
+
+/// `load` with reading options.
+pub fn load_with(path: &Path, opts: &ReadOptions) -> Result<Scene> {
+    let mut prims = Collect::default();
+    let mut scene = read(path, &mut prims, opts)?;
+    prims.into_scene(&mut scene);
+    Ok(scene)
+}
+
+/// Loads a scene file as `load` does, its bounded primitives straight into the records
+/// the renderers read (`pack::pack_flat` builds its tree).
+pub fn load_flat(path: &Path) -> Result<FlatScene> {
+    load_flat_with(path, &ReadOptions::default())
+}
+
+/// `load_flat` with reading options.
+pub fn load_flat_with(path: &Path, opts: &ReadOptions) -> Result<FlatScene> {
+    let mut prims = Flat::new();
+    let scene = read(path, &mut prims, opts)?;
+    Ok(FlatScene { scene, prims })
+}
+
+/// What `load` would give, but for the bounded primitives, which are only counted and
+/// bounded: what `gpurt info` prints, in memory that does not grow with the scene.
+pub fn summary(path: &Path) -> Result<FlatScene> {
+    summary_with(path, &ReadOptions::default())
+}
+
+/// `summary` with reading options.
+pub fn summary_with(path: &Path, opts: &ReadOptions) -> Result<FlatScene> {
+    let mut prims = Flat::counting();
+    let scene = read(path, &mut prims, opts)?;
+    Ok(FlatScene { scene, prims })
+}
+
+/// Reads the scene file at `path`, its bounded primitives into `sink`; returns the rest.
+/// A bare mesh's faces get the materials of its OBJ's `.mtl` libraries, the neutral grey
+/// (material 0) where they name none.
+pub fn read(path: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scene> {
+    let input = io::open(path)?;
     let name = path.display().to_string();
+    let dir = path.parent().unwrap_or(Path::new("."));
     match FileKind::of(path) {
-        FileKind::Nff => {
-            let base = path.parent().unwrap_or(Path::new("."));
-            nff::parse(&bytes, &name, base)
-        }
+        FileKind::Nff => nff::read(lex::Lexer::from_input(input, &name), dir, sink, opts),
         kind => {
-            let mesh = mesh::parse_mesh(&bytes, kind, &name)?;
-            let mut scene = auto::scene_for_mesh(&name, mesh.triangles)?;
-            scene.warnings.extend(mesh.warnings);
+            let mut scene = Scene::new(&name, nff_default_camera());
+            let mut palette = Palette::default();
+            let grey = palette.id(&mut scene.materials, Material::NEUTRAL_GREY);
+            let mut out = MeshOut {
+                sink,
+                warnings: &mut scene.warnings,
+                materials: &mut scene.materials,
+                palette: &mut palette,
+                default: grey,
+                mtl: true,
+                dir: Some(dir),
+            };
+            mesh::read(input, kind, &name, &mut out)?;
+            auto::frame_mesh(&mut scene, sink.bounds())?;
             Ok(scene)
         }
     }

@@ -29,6 +29,10 @@ pub struct Camera {
     pub aperture: f32,
     /// Thin-lens focal distance; `None` means `|at - from|`. Extension `focal d`.
     pub focal: Option<f32>,
+    /// The box (min, max) this camera frames, for a bare mesh (`auto`): a render of
+    /// another resolution frames it again for its own aspect ratio. `None` for a view
+    /// the scene gives.
+    pub fit: Option<[Vec3; 2]>,
 }
 
 /// The camera a scene has before its `v` is read.
@@ -43,6 +47,7 @@ pub fn nff_default_camera() -> Camera {
         height: 512,
         aperture: 0.0,
         focal: None,
+        fit: None,
     }
 }
 

@@ -1,6 +1,12 @@
-//! Wavefront OBJ reader: positions (`v`), normals (`vn`) and faces (`f`); polygons are
-//! triangulated by our ear clipper. Every other statement (`vt`, `o`, `g`, `s`, `usemtl`,
-//! `mtllib`, `l`, `p`, ...) is skipped: materials come from the `mesh` statement's `f`.
+//! Wavefront OBJ reader: positions (`v`), normals (`vn`), faces (`f`) and their materials
+//! (`mtllib`, `usemtl`: `mtl`); polygons are triangulated by our ear clipper. Every other
+//! statement (`vt`, `o`, `g`, `s`, `l`, `p`, ...) is skipped.
+//!
+//! Read as a stream: a face goes to the sink as soon as it is read, when every corner
+//! refers to a vertex already defined. A face may refer to vertices defined later, so the
+//! first one that does not is held, and every face after it, until the file ends (the
+//! triangles keep the file's order either way); the positions and normals are held to
+//! the end.
 //!
 //! Written on our tokenizer rather than with `tobj` for two reasons: errors point at a line
 //! and column like every other reader's, and a face whose corners lack `vn` indices must get
@@ -8,13 +14,18 @@
 
 use glam::Vec3;
 
-use super::lex::{Lexer, Token, parse_f32};
+use super::lex::{Lexer, Token};
 use super::model::{MaterialId, Mesh, Triangle, unit};
+use super::mtl::ObjMaterials;
+use super::palette::Palette;
+use super::sink::{Collect, MeshOut};
 use super::triangulate::triangulate;
 use crate::error::Result;
+use crate::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
 
 /// One face corner: 0-based position and normal indices (not yet checked against the
 /// arrays, since a face may refer to vertices defined later), and where it was written.
+#[derive(Clone, Copy)]
 struct Corner {
     v: i64,
     n: Option<i64>,
@@ -27,149 +38,196 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
     parse_with_warnings(bytes, name).map(|m| m.triangles)
 }
 
-/// The triangles of an OBJ file, and a warning for each face dropped because it has fewer
-/// than three corners or no area (as the NFF reader warns of degenerate polygons).
+/// The triangles of an OBJ file (material 0; its `.mtl` materials are not read), and a
+/// warning for each face dropped because it has fewer than three corners or no area (as
+/// the NFF reader warns of degenerate polygons).
 pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
-    let mut lx = Lexer::new(bytes, name);
-    let mut positions: Vec<Vec3> = Vec::new();
-    let mut normals: Vec<Vec3> = Vec::new();
-    let mut corners: Vec<Corner> = Vec::new();
-    // Start of each face in `corners`.
-    let mut faces: Vec<usize> = Vec::new();
+    let mut tris = Collect::default();
+    let mut warnings = Vec::new();
+    let mut out = MeshOut {
+        sink: &mut tris,
+        warnings: &mut warnings,
+        materials: &mut Vec::new(),
+        palette: &mut Palette::default(),
+        default: MaterialId(0),
+        mtl: false,
+        dir: None,
+    };
+    read(Lexer::new(bytes, name), &mut out)?;
+    Ok(Mesh {
+        triangles: tris.into_triangles(),
+        warnings,
+    })
+}
 
-    while let Some(t) = lx.next_token() {
+/// Reads an OBJ file's triangles into `out`, each with the material its `usemtl` names
+/// (`out.default` without one), and a warning for each face dropped.
+pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
+    let mut materials = ObjMaterials::default();
+    let mut material = out.default;
+    let mut r = Reader {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        held: Vec::new(),
+        faces: Vec::new(),
+        face: Vec::new(),
+        poly: Vec::new(),
+        poly_n: Vec::new(),
+        idx: Vec::new(),
+    };
+    while let Some(t) = lx.next_token()? {
         let line = t.line;
         let mut last = t;
-        match t.text {
+        let text = lx.text(&t);
+        let vertex = text == b"v";
+        match text {
             b"v" | b"vn" => {
-                let what = if t.text == b"v" {
-                    "vertex coordinate"
+                let (what, defined) = if vertex {
+                    ("vertex coordinate", r.positions.len())
                 } else {
-                    "normal coordinate"
+                    ("normal coordinate", r.normals.len())
                 };
+                if defined >= MAX_MESH_VERTICES {
+                    let what = if vertex { "vertices" } else { "normals" };
+                    return Err(lx.error_at(
+                        &t,
+                        format!("more than {MAX_MESH_VERTICES} {what} (the limit)"),
+                    ));
+                }
                 let mut p = [0.0f32; 3];
                 for c in &mut p {
-                    *c = number_on_line(&mut lx, &mut last, what)?;
+                    *c = lx.number_on_line(&mut last, what)?;
                 }
-                if t.text == b"v" {
-                    positions.push(Vec3::from(p));
+                if vertex {
+                    r.positions.push(Vec3::from(p));
                 } else {
-                    normals.push(Vec3::from(p));
+                    r.normals.push(Vec3::from(p));
                 }
                 // `v x y z w` and `v x y z r g b` (vertex colours): the rest is ignored.
-                skip_line(&mut lx, line);
+                lx.skip_line(line)?;
             }
             b"f" | b"fo" => {
-                faces.push(corners.len());
-                while let Some(c) = token_on_line(&mut lx, line) {
-                    corners.push(corner(&lx, &c, positions.len(), normals.len())?);
+                r.face.clear();
+                while let Some(c) = lx.token_on_line(line)? {
+                    if r.face.len() as u32 >= MAX_POLYGON_VERTICES {
+                        return Err(lx.error_at(
+                            &c,
+                            format!(
+                                "a face with more than {MAX_POLYGON_VERTICES} corners (the limit)"
+                            ),
+                        ));
+                    }
+                    let corner = corner(&lx, &c, r.positions.len(), r.normals.len())?;
+                    r.face.push(corner);
+                }
+                if out.sink.count() >= MAX_PRIMITIVES {
+                    return Err(lx.error_at(
+                        &t,
+                        format!("more than {MAX_PRIMITIVES} triangles (the limit)"),
+                    ));
+                }
+                if r.faces.is_empty() && r.face.iter().all(|c| r.defined(c)) {
+                    let face = std::mem::take(&mut r.face);
+                    r.emit(&face, material, &lx, out)?;
+                    r.face = face;
+                } else {
+                    r.faces.push((r.held.len(), material));
+                    r.held.extend_from_slice(&r.face);
                 }
             }
-            _ => skip_line(&mut lx, line),
+            b"mtllib" if out.mtl => materials.mtllib(&mut lx, &t, out)?,
+            b"usemtl" if out.mtl => material = materials.usemtl(&mut lx, &t, out)?,
+            _ => lx.skip_line(line)?,
         }
     }
+    // The faces held for vertices defined after them, in order.
+    let (held, faces) = (std::mem::take(&mut r.held), std::mem::take(&mut r.faces));
+    for (k, &(start, material)) in faces.iter().enumerate() {
+        let end = faces.get(k + 1).map_or(held.len(), |&(e, _)| e);
+        r.emit(&held[start..end], material, &lx, out)?;
+    }
+    Ok(())
+}
 
-    let at = |c: &Corner, msg: String| {
-        lx.error_at(
-            &Token {
-                text: b"",
-                line: c.line,
-                col: c.col,
-            },
-            msg,
-        )
-    };
-    let mut tris = Vec::new();
-    let mut warnings = Vec::new();
-    let mut poly = Vec::new();
-    let mut poly_n = Vec::new();
-    let mut idx = Vec::new();
-    for (k, &start) in faces.iter().enumerate() {
-        let end = faces.get(k + 1).copied().unwrap_or(corners.len());
-        let face = &corners[start..end];
-        poly.clear();
-        poly_n.clear();
+struct Reader {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    /// Corners of the faces held until the end, and where each face starts in it with
+    /// its material.
+    held: Vec<Corner>,
+    faces: Vec<(usize, MaterialId)>,
+    // Scratch buffers reused by every face.
+    face: Vec<Corner>,
+    poly: Vec<Vec3>,
+    poly_n: Vec<Vec3>,
+    idx: Vec<[u32; 3]>,
+}
+
+impl Reader {
+    /// Whether the corner's vertex (and normal) are defined by now.
+    fn defined(&self, c: &Corner) -> bool {
+        let ok = |i: i64, n: usize| usize::try_from(i).is_ok_and(|i| i < n);
+        ok(c.v, self.positions.len()) && c.n.is_none_or(|n| ok(n, self.normals.len()))
+    }
+
+    /// Triangulates a face of `material` and gives its triangles to `out`'s sink, or warns
+    /// that it is dropped.
+    fn emit(
+        &mut self,
+        face: &[Corner],
+        material: MaterialId,
+        lx: &Lexer,
+        out: &mut MeshOut,
+    ) -> Result<()> {
+        let at = |c: &Corner, msg: String| lx.error_at(&Token::position(c.line, c.col), msg);
+        self.poly.clear();
+        self.poly_n.clear();
         for c in face {
-            let p = usize::try_from(c.v).ok().and_then(|i| positions.get(i));
+            let p = usize::try_from(c.v)
+                .ok()
+                .and_then(|i| self.positions.get(i));
             let Some(&p) = p else {
                 return Err(at(
                     c,
                     format!(
                         "face corner refers to a vertex that does not exist (the file has {})",
-                        positions.len()
+                        self.positions.len()
                     ),
                 ));
             };
-            poly.push(p);
+            self.poly.push(p);
             if let Some(n) = c.n {
-                let Some(&n) = usize::try_from(n).ok().and_then(|i| normals.get(i)) else {
+                let Some(&n) = usize::try_from(n).ok().and_then(|i| self.normals.get(i)) else {
                     return Err(at(
                         c,
                         format!(
                             "face corner refers to a normal that does not exist (the file has {})",
-                            normals.len()
+                            self.normals.len()
                         ),
                     ));
                 };
-                poly_n.push(unit(n).unwrap_or(Vec3::ZERO));
+                self.poly_n.push(unit(n).unwrap_or(Vec3::ZERO));
             }
         }
+        let (poly, poly_n) = (&self.poly, &self.poly_n);
         // Shading normals only when every corner has a usable one; otherwise flat.
         let smooth = poly_n.len() == poly.len() && poly_n.iter().all(|n| n.length_squared() > 0.0);
-        idx.clear();
-        if poly.len() < 3 || !triangulate(&poly, &mut idx) {
+        self.idx.clear();
+        if poly.len() < 3 || !triangulate(poly, &mut self.idx) {
             let (line, col) = face.first().map_or((0, 0), |c| (c.line, c.col));
-            warnings.push(format!(
-                "{name}:{line}:{col}: degenerate face with {} corners dropped",
+            out.warnings.push(format!(
+                "{}:{line}:{col}: degenerate face with {} corners dropped",
+                lx.name(),
                 poly.len()
             ));
-            continue;
+            return Ok(());
         }
-        for &[a, b, c] in &idx {
+        for &[a, b, c] in &self.idx {
             let ix = [a, b, c].map(|i| i as usize);
-            tris.push(Triangle {
-                v: ix.map(|i| poly[i]),
-                n: smooth.then(|| Box::new(ix.map(|i| poly_n[i]))),
-                material: MaterialId(0),
-            });
+            let n = smooth.then(|| ix.map(|i| poly_n[i]));
+            out.sink.triangle(ix.map(|i| poly[i]), n, material);
         }
-    }
-    Ok(Mesh {
-        triangles: tris,
-        warnings,
-    })
-}
-
-/// The next token if it is on `line` (OBJ statements end at the end of their line).
-fn token_on_line<'a>(lx: &mut Lexer<'a>, line: u32) -> Option<Token<'a>> {
-    match lx.peek() {
-        Some(t) if t.line == line => lx.next_token(),
-        _ => None,
-    }
-}
-
-fn skip_line(lx: &mut Lexer, line: u32) {
-    while token_on_line(lx, line).is_some() {}
-}
-
-/// A finite number on the current line; `last` is the statement's latest token, used to
-/// point just past it when the line ends too early.
-fn number_on_line<'a>(lx: &mut Lexer<'a>, last: &mut Token<'a>, what: &str) -> Result<f32> {
-    let Some(t) = token_on_line(lx, last.line) else {
-        let end = Token {
-            text: b"",
-            line: last.line,
-            col: last.col + last.text.len() as u32,
-        };
-        return Err(lx.error_at(&end, format!("expected {what}, found end of line")));
-    };
-    *last = t;
-    match parse_f32(t.text) {
-        Some(v) if v.is_finite() => Ok(v),
-        _ => Err(lx.error_at(
-            &t,
-            format!("expected {what} (a finite number), found {}", t.show()),
-        )),
+        Ok(())
     }
 }
 
@@ -181,11 +239,11 @@ fn corner(lx: &Lexer, t: &Token, n_pos: usize, n_nrm: usize) -> Result<Corner> {
             t,
             format!(
                 "expected a face corner (v, v/vt, v//vn or v/vt/vn with non-zero integers), found {}",
-                t.show()
+                lx.show(t)
             ),
         )
     };
-    let mut parts = t.text.split(|&b| b == b'/');
+    let mut parts = lx.text(t).split(|&b| b == b'/');
     let resolve = |s: &[u8], defined: usize| -> Option<i64> {
         let i: i64 = std::str::from_utf8(s).ok()?.parse().ok()?;
         match i {

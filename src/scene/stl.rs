@@ -6,18 +6,59 @@
 //! the binary `84 + 50 * count`, and it holds no control bytes (a binary file with a `solid`
 //! header and a wrong count is then still reported as a broken binary file). Non-zero facet
 //! normals are kept as the triangle's shading normal.
+//!
+//! Both forms are read as a stream. Which one a file is, is told from its first
+//! `HEAD_BYTES` (all of a file that short, so the rule above holds exactly) and its size
+//! when that is known before reading (a plain file; a gzip file's is not): a longer file
+//! that starts like ASCII text is read as ASCII, and control bytes further on are then an
+//! error at their line and column.
+
+use std::io::{BufReader, Read};
 
 use glam::Vec3;
 
+use super::io::Input;
 use super::lex::Lexer;
 use super::model::{MaterialId, Triangle, unit};
+use super::sink::{Collect, Sink};
 use crate::error::{Error, Result};
+use crate::limits::MAX_PRIMITIVES;
 
+/// The triangles of an STL file's bytes (gzip-compressed or not).
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
-    if binary_size_matches(bytes) || !starts_with_solid(bytes) || !looks_like_text(bytes) {
-        parse_binary(bytes, name)
+    let mut tris = Collect::default();
+    read(Input::bytes(bytes), name, &mut tris, MaterialId(0))?;
+    Ok(tris.into_triangles())
+}
+
+/// How much of a file's start is looked at to tell binary from ASCII.
+const HEAD_BYTES: usize = 64 << 10;
+
+/// Reads an STL file's triangles, of `material`, into `sink` as they are read.
+pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink, material: MaterialId) -> Result<()> {
+    let io = |e| super::io::read_error(name, e);
+    let mut head = Vec::with_capacity(HEAD_BYTES);
+    (&mut input.reader)
+        .take(HEAD_BYTES as u64)
+        .read_to_end(&mut head)
+        .map_err(io)?;
+    // All of the file when it is shorter than what was asked for.
+    let len = input
+        .len
+        .or((head.len() < HEAD_BYTES).then_some(head.len() as u64));
+    let binary = len.is_some_and(|len| binary_size_matches(&head, len))
+        || !starts_with_solid(&head)
+        || !looks_like_text(&head);
+    let rest = std::io::Cursor::new(head).chain(input.reader);
+    if binary {
+        let rest = BufReader::with_capacity(256 << 10, rest);
+        read_binary(rest, len, name, sink, material)
     } else {
-        parse_ascii(bytes, name)
+        let input = Input {
+            reader: Box::new(rest),
+            len,
+        };
+        read_ascii(Lexer::from_input(input, name), sink, material)
     }
 }
 
@@ -29,9 +70,10 @@ fn looks_like_text(b: &[u8]) -> bool {
         .all(|&c| c >= 0x20 || matches!(c, b'\t' | b'\n' | b'\r' | 0x0b | 0x0c))
 }
 
-fn binary_size_matches(b: &[u8]) -> bool {
-    b.len() >= 84
-        && 84 + 50 * u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64 == b.len() as u64
+/// Whether a file of `len` bytes that starts with `head` has the binary size for the
+/// count in its header.
+fn binary_size_matches(head: &[u8], len: u64) -> bool {
+    head.len() >= 84 && 84 + 50 * u32::from_le_bytes(head[80..84].try_into().unwrap()) as u64 == len
 }
 
 fn starts_with_solid(b: &[u8]) -> bool {
@@ -43,97 +85,142 @@ fn starts_with_solid(b: &[u8]) -> bool {
     b[start..].starts_with(b"solid")
 }
 
-fn facet_normal(n: Vec3) -> Option<Box<[Vec3; 3]>> {
-    unit(n).map(|n| Box::new([n; 3]))
+fn facet_normal(n: Vec3) -> Option<[Vec3; 3]> {
+    unit(n).map(|n| [n; 3])
 }
 
-fn parse_binary(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
-    let err = |offset: usize, msg: String| Error::Binary {
+/// Fills `buf` from `r` as far as it goes: the bytes read (fewer only at the end).
+fn read_full(r: &mut impl Read, buf: &mut [u8]) -> std::io::Result<usize> {
+    let mut n = 0;
+    while n < buf.len() {
+        match r.read(&mut buf[n..]) {
+            Ok(0) => break,
+            Ok(k) => n += k,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(n)
+}
+
+/// A binary STL, its size `len` when known before reading: a size that disagrees with
+/// the header's count is reported before any triangle is read, as for a file in memory;
+/// otherwise where the stream shows it.
+fn read_binary(
+    mut r: impl Read,
+    len: Option<u64>,
+    name: &str,
+    sink: &mut dyn Sink,
+    material: MaterialId,
+) -> Result<()> {
+    let err = |offset: u64, msg: String| Error::Binary {
         file: name.to_string(),
-        offset: offset as u64,
+        offset,
         msg,
     };
-    if b.len() < 84 {
+    let io = |e| super::io::read_error(name, e);
+    let mut header = [0u8; 84];
+    let got = read_full(&mut r, &mut header).map_err(io)?;
+    if got < 84 {
         return Err(err(
-            b.len(),
+            got as u64,
             format!(
-                "expected an 84-byte binary STL header, found {} bytes (and no ASCII 'solid')",
-                b.len()
+                "expected an 84-byte binary STL header, found {got} bytes (and no ASCII 'solid')"
             ),
         ));
     }
-    let count = u32::from_le_bytes(b[80..84].try_into().unwrap()) as u64;
+    let count = u32::from_le_bytes(header[80..84].try_into().unwrap()) as u64;
     let need = 84 + 50 * count;
-    let len = b.len() as u64;
-    if len < need {
-        // Truncated (or a count that is too large): point at where the data stops.
+    // Truncated (or a count that is too large): point at where the data stops.
+    let truncated = |len: u64| {
         let whole = (len - 84) / 50;
-        return Err(err(
-            b.len(),
+        err(
+            len,
             format!(
                 "file ends inside triangle {} of {count}: the header's count needs {need} bytes, the file has {len}",
                 whole + 1
             ),
-        ));
-    }
-    if len > need {
-        // A count that is too small: point at the count itself.
-        return Err(err(
+        )
+    };
+    // A count that is too small: point at the count itself.
+    let too_long = |len: u64| {
+        err(
             80,
             format!("header says {count} triangles ({need} bytes), but the file has {len} bytes"),
+        )
+    };
+    match len {
+        Some(len) if len < need => return Err(truncated(len)),
+        Some(len) if len > need => return Err(too_long(len)),
+        _ => {}
+    }
+    if sink.count() as u64 + count > MAX_PRIMITIVES as u64 {
+        return Err(err(
+            80,
+            format!("header says {count} triangles, more than the limit of {MAX_PRIMITIVES}"),
         ));
     }
-    let f = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
-    let v3 = |o: usize| Vec3::new(f(o), f(o + 4), f(o + 8));
-    let mut tris = Vec::with_capacity(count as usize);
-    for i in 0..count as usize {
+    let f = |b: &[u8], o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
+    let v3 = |b: &[u8], o: usize| Vec3::new(f(b, o), f(b, o + 4), f(b, o + 8));
+    let mut rec = [0u8; 50];
+    for i in 0..count {
+        let got = read_full(&mut r, &mut rec).map_err(io)?;
         let o = 84 + 50 * i;
-        let v = [v3(o + 12), v3(o + 24), v3(o + 36)];
+        if got < 50 {
+            return Err(truncated(o + got as u64));
+        }
+        let v = [v3(&rec, 12), v3(&rec, 24), v3(&rec, 36)];
         if !v.iter().all(|p| p.is_finite()) {
             return Err(err(
                 o + 12,
                 format!("triangle {} has a non-finite vertex", i + 1),
             ));
         }
-        tris.push(Triangle {
-            v,
-            n: facet_normal(v3(o)),
-            material: MaterialId(0),
-        });
+        sink.triangle(v, facet_normal(v3(&rec, 0)), material);
     }
-    Ok(tris)
+    // A stream whose size was not known may go on past the count.
+    let extra = std::io::copy(&mut r, &mut std::io::sink()).map_err(io)?;
+    if extra > 0 {
+        return Err(too_long(need + extra));
+    }
+    Ok(())
 }
 
-fn parse_ascii(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
-    let mut lx = Lexer::new(b, name);
-    let mut tris = Vec::new();
+fn read_ascii(mut lx: Lexer, sink: &mut dyn Sink, material: MaterialId) -> Result<()> {
     // Keywords are ASCII literals; quoting them is only done when there is an error.
     let expect = |lx: &mut Lexer, word: &'static str| -> Result<()> {
         let t = lx.expect_token(&format_args!("'{word}'"))?;
-        if t.text == word.as_bytes() {
+        if lx.text(&t) == word.as_bytes() {
             Ok(())
         } else {
-            Err(lx.error_at(&t, format!("expected '{word}', found {}", t.show())))
+            Err(lx.error_at(&t, format!("expected '{word}', found {}", lx.show(&t))))
         }
     };
-    let skip_rest_of_line = |lx: &mut Lexer, line: u32| {
-        while lx.peek().is_some_and(|t| t.line == line) {
-            lx.next_token();
+    let skip_rest_of_line = |lx: &mut Lexer, line: u32| -> Result<()> {
+        while lx.peek()?.is_some_and(|t| t.line == line) {
+            lx.next_token()?;
         }
+        Ok(())
     };
-    while let Some(t) = lx.next_token() {
-        if t.text != b"solid" {
-            return Err(lx.error_at(&t, format!("expected 'solid', found {}", t.show())));
+    while let Some(t) = lx.next_token()? {
+        if lx.text(&t) != b"solid" {
+            return Err(lx.error_at(&t, format!("expected 'solid', found {}", lx.show(&t))));
         }
-        skip_rest_of_line(&mut lx, t.line); // the solid's name
+        skip_rest_of_line(&mut lx, t.line)?; // the solid's name
         loop {
             let t = lx.expect_token("'facet' or 'endsolid'")?;
-            match t.text {
+            match lx.text(&t) {
                 b"endsolid" => {
-                    skip_rest_of_line(&mut lx, t.line);
+                    skip_rest_of_line(&mut lx, t.line)?;
                     break;
                 }
                 b"facet" => {
+                    if sink.count() >= MAX_PRIMITIVES {
+                        return Err(lx.error_at(
+                            &t,
+                            format!("more than {MAX_PRIMITIVES} triangles (the limit)"),
+                        ));
+                    }
                     expect(&mut lx, "normal")?;
                     let n = lx.vec3("facet normal")?;
                     expect(&mut lx, "outer")?;
@@ -145,22 +232,18 @@ fn parse_ascii(b: &[u8], name: &str) -> Result<Vec<Triangle>> {
                     }
                     expect(&mut lx, "endloop")?;
                     expect(&mut lx, "endfacet")?;
-                    tris.push(Triangle {
-                        v,
-                        n: facet_normal(n),
-                        material: MaterialId(0),
-                    });
+                    sink.triangle(v, facet_normal(n), material);
                 }
                 _ => {
                     return Err(lx.error_at(
                         &t,
-                        format!("expected 'facet' or 'endsolid', found {}", t.show()),
+                        format!("expected 'facet' or 'endsolid', found {}", lx.show(&t)),
                     ));
                 }
             }
         }
     }
-    Ok(tris)
+    Ok(())
 }
 
 /// Encodes triangles as binary STL (used by tests and to write example meshes).

@@ -214,6 +214,7 @@ mod tests {
             height: 300,
             aperture: 0.0,
             focal: None,
+            fit: None,
         })
     }
 

@@ -27,6 +27,7 @@ use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu_types::GpuGlobals;
 use crate::limits::MAX_SPP;
 use crate::pack::SceneBuffers;
+use crate::scene::auto;
 use crate::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
 use crate::{film, outln};
 
@@ -126,9 +127,14 @@ struct App {
 
 impl App {
     fn new(buffers: SceneBuffers, opts: ViewOptions, proxy: EventLoopProxy<Result<Pass>>) -> Self {
-        let mut camera = OrbitCamera::new(buffers.camera.clone());
-        camera.camera.width = opts.width.unwrap_or(camera.camera.width);
-        camera.camera.height = opts.height.unwrap_or(camera.camera.height);
+        let c = &buffers.camera;
+        let (width, height) = (
+            opts.width.unwrap_or(c.width),
+            opts.height.unwrap_or(c.height),
+        );
+        // A bare mesh is framed again for the window's shape.
+        let mut camera = OrbitCamera::new(auto::fitted(c, width, height));
+        (camera.camera.width, camera.camera.height) = (width, height);
         let script = opts.script.clone().unwrap_or_default().into();
         App {
             buffers: Arc::new(buffers),

@@ -3,6 +3,7 @@
 //! module graph.
 
 mod architecture;
+mod bare;
 mod bvh;
 mod cli;
 mod common;

@@ -1,36 +1,40 @@
-//! The `mesh PATH [translate ..] [rotate ..] [scale ..]` statement: an STL or OBJ file
-//! read (relative to the scene's directory, gzip-aware), transformed and given the current
-//! material. The only statement that opens another file, so the only one that needs `io`.
+//! The `mesh PATH [translate ..] [rotate ..] [scale ..] [nomtl]` statement: an STL or OBJ
+//! file read (relative to the scene's directory, gzip-aware) and transformed; its faces get
+//! the materials an OBJ's `usemtl` names, and the current material where it names none
+//! (or everywhere, with `nomtl`). The only statement that opens another file, so the only
+//! one that needs `io`.
 
 use glam::Vec3;
 
-use super::Parser;
-use crate::error::escape;
-use crate::error::{Error, Result};
-use crate::scene::io::{FileKind, read_file};
+use super::{Parser, keyword};
+use crate::error::{Error, Result, escape};
+use crate::scene::io::{self, FileKind};
 use crate::scene::lex::Token;
-use crate::scene::mesh::{self, MeshTransform};
+use crate::scene::mesh::{self, MeshTransform, Placed};
+use crate::scene::sink::MeshOut;
 
 impl Parser<'_> {
     pub(super) fn mesh(&mut self, tok: &Token) -> Result<()> {
         let ptok = self.lx.expect_token("mesh file path")?;
-        let raw = String::from_utf8_lossy(ptok.text);
+        let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
         let rel = raw.trim_matches('"');
         let mut xf = MeshTransform::default();
-        while let Some(t) = self.lx.peek() {
-            match t.text {
+        let mut mtl = true;
+        while let Some(t) = self.lx.peek()? {
+            let (word, len) = keyword(self.lx.text(&t));
+            match &word[..len] {
                 b"translate" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     xf.translate = self.lx.vec3("mesh translation")?;
                 }
                 b"rotate" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     xf.rotate_deg = self.lx.vec3("mesh rotation in degrees")?;
                 }
                 b"scale" => {
-                    self.lx.next_token();
+                    self.lx.next_token()?;
                     let s = self.lx.number("mesh scale")?;
-                    xf.scale = if self.lx.peek_is_number() {
+                    xf.scale = if self.lx.peek_is_number()? {
                         Vec3::new(
                             s,
                             self.lx.number("mesh scale y")?,
@@ -42,6 +46,10 @@ impl Parser<'_> {
                     if xf.scale.cmpeq(Vec3::ZERO).any() {
                         return Err(self.lx.error_at(&t, "mesh scale must not be zero"));
                     }
+                }
+                b"nomtl" => {
+                    self.lx.next_token()?;
+                    mtl = false;
                 }
                 _ => break,
             }
@@ -57,7 +65,9 @@ impl Parser<'_> {
                 ),
             ));
         }
-        let bytes = read_file(&path).map_err(|e| {
+        let material = self.current_material();
+        // What keeps the file from being read is reported at the path in the scene.
+        let cannot_read = |e: Error| {
             let why = match e {
                 Error::Io { source, .. } => source.to_string(),
                 Error::Scene { msg, .. } => msg,
@@ -70,22 +80,28 @@ impl Parser<'_> {
                     escape(path.as_os_str().as_encoded_bytes())
                 ),
             )
-        })?;
-        let mesh = mesh::parse_mesh(&bytes, kind, &path.display().to_string())?;
-        self.scene.warnings.extend(mesh.warnings);
-        let mut tris = mesh.triangles;
-        if tris.is_empty() {
+        };
+        let input = io::open(&path).map_err(cannot_read)?;
+        let name = path.display().to_string();
+        let mut placed = Placed::new(&mut *self.sink, &xf);
+        let mut out = MeshOut {
+            sink: &mut placed,
+            warnings: &mut self.scene.warnings,
+            materials: &mut self.scene.materials,
+            palette: &mut self.palette,
+            default: material,
+            mtl,
+            dir: path.parent(),
+        };
+        let read = mesh::read(input, kind, &name, &mut out);
+        let placed = placed.placed;
+        read.map_err(cannot_read)?;
+        if placed == 0 {
             self.warn(
                 tok,
                 &format!("mesh '{}' has no triangles", escape(rel.as_bytes())),
             );
         }
-        let material = self.current_material();
-        xf.apply(&mut tris);
-        for t in &mut tris {
-            t.material = material;
-        }
-        self.scene.triangles.append(&mut tris);
         Ok(())
     }
 }

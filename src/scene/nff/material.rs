@@ -52,15 +52,7 @@ impl Parser<'_> {
     }
 
     fn intern(&mut self, m: Material) -> MaterialId {
-        let key = [
-            m.color.x, m.color.y, m.color.z, m.kd, m.ks, m.shine, m.t, m.ior,
-        ]
-        .map(f32::to_bits);
-        let materials = &mut self.scene.materials;
-        *self.material_ids.entry(key).or_insert_with(|| {
-            materials.push(m);
-            MaterialId(materials.len() as u32 - 1)
-        })
+        self.palette.id(&mut self.scene.materials, m)
     }
 
     pub(super) fn fill(&mut self, tok: &Token) -> Result<()> {

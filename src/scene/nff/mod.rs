@@ -11,30 +11,50 @@ mod keywords;
 mod material;
 mod view;
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use glam::Vec3;
 
 use crate::error::Result;
-use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT};
+use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
 use crate::scene::lex::{Lexer, Token, parse_f32};
 use crate::scene::model::{
-    BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, Triangle, nff_default_camera, unit,
+    BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, nff_default_camera, unit,
 };
+use crate::scene::options::ReadOptions;
+use crate::scene::palette::Palette;
+use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
 use keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 
-/// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
-/// relative to.
+/// Parses NFF text (gzip-compressed or not). `name` is used in messages; `base` is the
+/// directory `mesh` paths are relative to.
 pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
+    parse_with(src, name, base, &ReadOptions::default())
+}
+
+/// `parse` with reading options (`--lenient`).
+pub fn parse_with(src: &[u8], name: &str, base: &Path, opts: &ReadOptions) -> Result<Scene> {
+    let mut prims = Collect::default();
+    let mut scene = read(Lexer::new(src, name), base, &mut prims, opts)?;
+    prims.into_scene(&mut scene);
+    Ok(scene)
+}
+
+/// Reads NFF from `lx`, giving every bounded primitive to `sink` as it is read; returns
+/// the rest of the scene (camera, lights, materials, planes, warnings), whose vectors of
+/// bounded primitives are empty.
+pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scene> {
+    let name = lx.name();
     let mut p = Parser {
-        lx: Lexer::new(src, name),
+        lx,
         base,
+        sink,
+        lenient: opts.lenient,
         scene: Scene::new(name, nff_default_camera()),
         have_view: false,
         material: None,
-        material_ids: HashMap::new(),
+        palette: Palette::default(),
         verts: Vec::new(),
         normals: Vec::new(),
         tris: Vec::new(),
@@ -43,15 +63,29 @@ pub fn parse(src: &[u8], name: &str, base: &Path) -> Result<Scene> {
     Ok(p.scene)
 }
 
+/// A token's bytes copied out of the lexer when they are short enough to be a keyword
+/// (the longest, `resolution`, has 10), so that the statement can read on; empty otherwise.
+fn keyword(text: &[u8]) -> ([u8; 16], usize) {
+    let mut word = [0; 16];
+    if text.len() > word.len() {
+        return (word, 0);
+    }
+    word[..text.len()].copy_from_slice(text);
+    (word, text.len())
+}
+
 struct Parser<'a> {
     lx: Lexer<'a>,
     base: &'a Path,
+    sink: &'a mut dyn Sink,
+    /// Unknown keywords are skipped with a warning (`ReadOptions::lenient`).
+    lenient: bool,
     scene: Scene,
     have_view: bool,
     /// The current material (`None` until the first `f` or the first primitive).
     material: Option<MaterialId>,
     /// Exact duplicates share one id (SPD repeats `f` lines for every object).
-    material_ids: HashMap<[u32; 8], MaterialId>,
+    palette: Palette,
     // Scratch buffers reused by every polygon.
     verts: Vec<Vec3>,
     normals: Vec<Vec3>,
@@ -61,9 +95,10 @@ struct Parser<'a> {
 impl Parser<'_> {
     fn run(&mut self) -> Result<()> {
         let mut first = true;
-        while let Some(tok) = self.lx.next_token() {
+        while let Some(tok) = self.lx.next_token()? {
             let is_first = std::mem::replace(&mut first, false);
-            match tok.text {
+            let (word, len) = keyword(self.lx.text(&tok));
+            match &word[..len] {
                 b"v" => self.view(&tok)?,
                 b"b" => {
                     let c = self.lx.vec3("background colour")?;
@@ -95,7 +130,7 @@ impl Parser<'_> {
                     self.scene.ambient = Some(self.hold3(&tok, "ambient colour", c, MAX_LIGHT));
                 }
                 b"f" => self.fill(&tok)?,
-                b"c" => self.cone()?,
+                b"c" => self.cone(&tok)?,
                 b"s" => {
                     let center = self.lx.vec3("sphere centre")?;
                     let radius = self.lx.number("sphere radius")?;
@@ -103,7 +138,8 @@ impl Parser<'_> {
                     if radius == 0.0 {
                         self.warn(&tok, "sphere of radius 0 dropped");
                     } else {
-                        self.scene.spheres.push(Sphere {
+                        self.room(&tok, 1)?;
+                        self.sink.sphere(Sphere {
                             center,
                             radius: radius.abs(),
                             material,
@@ -113,7 +149,7 @@ impl Parser<'_> {
                 b"p" => self.polygon(&tok, false)?,
                 b"pp" => self.polygon(&tok, true)?,
                 b"pl" => self.plane(&tok)?,
-                b"aabb" => self.aabb()?,
+                b"aabb" => self.aabb(&tok)?,
                 b"mesh" => self.mesh(&tok)?,
                 b"nff" if is_first => {
                     return Err(self.lx.error_at(
@@ -121,20 +157,22 @@ impl Parser<'_> {
                         "this is a Sense8 NFF file (starts with 'nff'), not Haines' NFF",
                     ));
                 }
-                _ if parse_f32(tok.text).is_some() => {
+                _ if parse_f32(self.lx.text(&tok)).is_some() => {
                     // Usually a light in the `l x y z intensity r g b` variant, or a count
                     // that is smaller than the numbers that follow it.
                     return Err(self.lx.error_at(
                         &tok,
                         format!(
                             "expected an entity keyword, found the number {} (too many numbers for the entity before it?)",
-                            tok.show()
+                            self.lx.show(&tok)
                         ),
                     ));
                 }
+                _ if self.lenient => self.skip_unknown(&tok)?,
                 _ => {
-                    let meant = closest(tok.text, &STATEMENTS)
-                        .or_else(|| closest(tok.text, &VIEW_KEYWORDS).map(|_| "v"));
+                    let text = self.lx.text(&tok);
+                    let meant = closest(text, &STATEMENTS)
+                        .or_else(|| closest(text, &VIEW_KEYWORDS).map(|_| "v"));
                     let hint = match meant {
                         Some("v") => "; a view keyword belongs in a 'v' block".to_string(),
                         Some(k) => format!("; did you mean '{k}'?"),
@@ -142,7 +180,10 @@ impl Parser<'_> {
                     };
                     return Err(self.lx.error_at(
                         &tok,
-                        format!("expected an entity keyword, found {}{hint}", tok.show()),
+                        format!(
+                            "expected an entity keyword, found {}{hint}",
+                            self.lx.show(&tok)
+                        ),
                     ));
                 }
             }
@@ -160,21 +201,55 @@ impl Parser<'_> {
         self.scene.warnings.push(w);
     }
 
+    /// `--lenient`: an unknown keyword and what follows it up to the next keyword are
+    /// skipped, with a warning naming it. The next keyword is one gpurt knows, or a word
+    /// that starts a line (another foreign statement: `obj teapot.obj` takes a word).
+    fn skip_unknown(&mut self, tok: &Token) -> Result<()> {
+        let msg = format!(
+            "unknown keyword {} skipped, with what follows it up to the next keyword",
+            self.lx.show(tok)
+        );
+        self.warn(tok, &msg);
+        let mut line = tok.line;
+        while let Some(t) = self.lx.peek()? {
+            let text = self.lx.text(&t);
+            let known = STATEMENTS.iter().any(|k| k.as_bytes() == text);
+            if known || (t.line != line && parse_f32(text).is_none()) {
+                break;
+            }
+            line = t.line;
+            self.lx.next_token()?;
+        }
+        Ok(())
+    }
+
+    /// Refuses a statement that would take the scene past `MAX_PRIMITIVES`.
+    fn room(&self, tok: &Token, more: usize) -> Result<()> {
+        if self.sink.count() + more > MAX_PRIMITIVES {
+            return Err(self.lx.error_at(
+                tok,
+                format!("the scene has more than {MAX_PRIMITIVES} bounded primitives (the limit)"),
+            ));
+        }
+        Ok(())
+    }
+
     fn optional_colour(&mut self, what: &str) -> Result<Option<Vec3>> {
-        if self.lx.peek_is_number() {
+        if self.lx.peek_is_number()? {
             Ok(Some(self.lx.vec3(what)?))
         } else {
             Ok(None)
         }
     }
 
-    fn cone(&mut self) -> Result<()> {
+    fn cone(&mut self, tok: &Token) -> Result<()> {
         let base = self.lx.vec3("cone base centre")?;
         let base_radius = self.lx.number("cone base radius")?;
         let apex = self.lx.vec3("cone apex centre")?;
         let apex_radius = self.lx.number("cone apex radius")?;
         let material = self.current_material();
-        self.scene.cones.push(Cone {
+        self.room(tok, 1)?;
+        self.sink.cone(Cone {
             base,
             base_radius: base_radius.abs(),
             apex,
@@ -195,13 +270,19 @@ impl Parser<'_> {
         // Each vertex needs at least 3 (or 6) one-character numbers and separators: a count
         // the rest of the file cannot hold is a lie, reported before anything is allocated.
         let min_bytes = n as u64 * if patch { 12 } else { 6 };
-        if min_bytes > self.lx.remaining() as u64 + 1 {
+        if let Some(rest) = self.lx.remaining().filter(|&rest| min_bytes > rest + 1) {
             return Err(self.lx.error_at(
                 &ntok,
                 format!(
-                    "{kind} vertex count {n} is more than the rest of the file can hold ({} bytes)",
-                    self.lx.remaining()
+                    "{kind} vertex count {n} is more than the rest of the file can hold ({rest} bytes)"
                 ),
+            ));
+        }
+        // Where the rest is unknown (gzip), the vertices are held only up to a limit.
+        if n > MAX_POLYGON_VERTICES {
+            return Err(self.lx.error_at(
+                &ntok,
+                format!("{kind} vertex count {n} is above the limit of {MAX_POLYGON_VERTICES}"),
             ));
         }
         self.verts.clear();
@@ -239,14 +320,12 @@ impl Parser<'_> {
             self.warn(tok, &msg);
         }
         let smooth = patch && zero.is_none();
+        self.room(tok, self.tris.len())?;
         for &[a, b, c] in &self.tris {
             let (a, b, c) = (a as usize, b as usize, c as usize);
-            let n = smooth.then(|| Box::new([self.normals[a], self.normals[b], self.normals[c]]));
-            self.scene.triangles.push(Triangle {
-                v: [self.verts[a], self.verts[b], self.verts[c]],
-                n,
-                material,
-            });
+            let n = smooth.then(|| [self.normals[a], self.normals[b], self.normals[c]]);
+            let v = [self.verts[a], self.verts[b], self.verts[c]];
+            self.sink.triangle(v, n, material);
         }
         Ok(())
     }
@@ -270,7 +349,7 @@ impl Parser<'_> {
         Ok(())
     }
 
-    fn aabb(&mut self) -> Result<()> {
+    fn aabb(&mut self, tok: &Token) -> Result<()> {
         let mut lo = [0.0f32; 3];
         let mut hi = [0.0f32; 3];
         const WHAT: [[&str; 2]; 3] = [
@@ -285,7 +364,8 @@ impl Parser<'_> {
             hi[axis] = a.max(b);
         }
         let material = self.current_material();
-        self.scene.boxes.push(BoxPrim {
+        self.room(tok, 1)?;
+        self.sink.cuboid(BoxPrim {
             min: Vec3::from(lo),
             max: Vec3::from(hi),
             material,

@@ -2,8 +2,8 @@
 //! and our `aperture` and `focal`), checked for what would make no image. Apart from the
 //! statement loop because it is a small grammar of its own.
 
-use super::Parser;
 use super::keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
+use super::{Parser, keyword};
 use crate::error::Result;
 use crate::limits::MAX_IMAGE_SIDE;
 use crate::scene::lex::{Token, parse_f32};
@@ -14,18 +14,18 @@ impl Parser<'_> {
         let mut cam = nff_default_camera();
         let (mut from, mut at, mut up, mut angle) = (None, None, None, None);
         let mut resolution = None;
-        while let Some(t) = self.lx.peek() {
-            if !VIEW_KEYWORDS.iter().any(|k| k.as_bytes() == t.text) {
+        while let Some(t) = self.lx.peek()? {
+            let (word, len) = keyword(self.lx.text(&t));
+            if !VIEW_KEYWORDS.iter().any(|k| k.as_bytes() == &word[..len]) {
                 // The view ends at the next statement; a word that is neither a statement
                 // nor a number, where the view still lacks a keyword or is close to one
                 // (`angel 40`), is a mistyped view keyword, named where it stands.
+                let text = self.lx.text(&t);
                 let required_missing =
                     [&from, &at, &up].iter().any(|v| v.is_none()) || angle.is_none();
-                let statement = STATEMENTS.iter().any(|k| k.as_bytes() == t.text);
-                let meant = closest(t.text, &VIEW_KEYWORDS);
-                if !statement
-                    && parse_f32(t.text).is_none()
-                    && (required_missing || meant.is_some())
+                let statement = STATEMENTS.iter().any(|k| k.as_bytes() == text);
+                let meant = closest(text, &VIEW_KEYWORDS);
+                if !statement && parse_f32(text).is_none() && (required_missing || meant.is_some())
                 {
                     let hint = meant
                         .map(|k| format!("; did you mean '{k}'?"))
@@ -35,19 +35,19 @@ impl Parser<'_> {
                         format!(
                             "expected a view keyword ({}), found {}{hint}",
                             VIEW_KEYWORDS.join(", "),
-                            t.show()
+                            self.lx.show(&t)
                         ),
                     ));
                 }
                 break;
             }
-            self.lx.next_token();
-            match t.text {
+            self.lx.next_token()?;
+            match &word[..len] {
                 b"from" => from = Some(self.lx.vec3("'from' coordinate")?),
                 b"at" => at = Some(self.lx.vec3("'at' coordinate")?),
                 b"up" => up = Some(self.lx.vec3("'up' coordinate")?),
                 b"angle" => {
-                    let a = self.lx.peek();
+                    let a = self.lx.peek()?;
                     let v = self.lx.number("view angle in degrees")?;
                     if !(v > 0.0 && v < 180.0) {
                         let a = a.expect("number was read");
@@ -79,7 +79,7 @@ impl Parser<'_> {
                 }
                 b"aperture" => cam.aperture = self.lx.number("lens aperture")?.abs(),
                 b"focal" => {
-                    let f = self.lx.peek();
+                    let f = self.lx.peek()?;
                     let d = self.lx.number("focal distance")?;
                     if d <= 0.0 {
                         let f = f.expect("number was read");

@@ -176,6 +176,73 @@ fn closed_stdout_ends_quietly() {
     assert!(d.join("heat.png").is_file());
 }
 
+#[test]
+fn lenient_reads_foreign_nff_for_info_and_renders_and_is_off_by_default() {
+    use crate::common::inputs::VIEW;
+    use crate::parse::materials::FOREIGN;
+    let d = workdir("lenient-cli");
+    std::fs::write(d.join("x.nff"), format!("{VIEW}{FOREIGN}")).unwrap();
+    // Off by default: the first foreign keyword is an error, exit 2, no image.
+    let o = gpurt(&["x.nff", "-o", "x.png", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("x.nff:6:1: expected an entity keyword, found 'Q'"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("x.png").exists());
+    // `info --lenient` counts what is read and lists every skip.
+    let o = gpurt(&["info", "x.nff", "--json", "--lenient"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+    assert_eq!(v["spheres"], 2, "{v}");
+    let warnings: Vec<&str> = v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| w.as_str().unwrap())
+        .collect();
+    let keywords: Vec<String> = warnings
+        .iter()
+        .map(|w| w.split('\'').nth(1).unwrap_or("").to_string())
+        .collect();
+    assert_eq!(keywords, ["Q", "fp", "obj", "Q"], "{warnings:?}");
+    assert!(
+        warnings[2].starts_with("x.nff:11:1: unknown keyword 'obj' skipped"),
+        "{warnings:?}"
+    );
+    // A render, and a batch, with it: the image, and the warnings on stderr.
+    for args in [
+        &["x.nff", "-o", "x.png"][..],
+        &["x.nff", "--out-dir", "out"][..],
+    ] {
+        let o = gpurt(
+            &[
+                args,
+                &[
+                    "--backend",
+                    "cpu",
+                    "--width",
+                    "32",
+                    "--height",
+                    "24",
+                    "--lenient",
+                ],
+            ]
+            .concat(),
+            &d,
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(
+            stderr(&o).matches("gpurt: warning: x.nff:").count(),
+            4,
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert!(d.join("x.png").exists() && d.join("out/x.png").exists());
+}
+
 /// `gpurt bench` under Blinn-Phong: both backends time the model asked for, say which,
 /// and trace the same rays (a mismatch would be a warning).
 #[test]

@@ -2,11 +2,14 @@
 //! bare meshes, checked against the shared SPD/P3D scenes, hand-written inputs for every
 //! error class, and random mutations that must never make a reader panic. One file a
 //! subject: `shared` (the SPD and P3D files), `statements` and `view` (NFF as it is read),
-//! `errors` (positions, limits, mutations), `mesh` (STL, OBJ, `mesh`, bare meshes), `gzip`.
+//! `errors` (positions, limits, mutations), `mesh` (STL, OBJ, `mesh`, bare meshes), `gzip`,
+//! `stream` (reading through a buffer of fixed size), `materials` (OBJ `.mtl`, `--lenient`).
 
 mod errors;
 mod gzip;
+pub mod materials;
 mod mesh;
 mod shared;
 mod statements;
+mod stream;
 mod view;

@@ -1,0 +1,13 @@
+//! How the readers read (`ReadOptions`): what a caller (the command line, a binding over
+//! the library) chooses about input they would otherwise refuse. A leaf of its own, so that
+//! the readers and `scene::load*` share it without importing each other.
+
+/// How the readers read: what a caller (the command line, a binding over the library)
+/// chooses about input they would otherwise refuse.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReadOptions {
+    /// An NFF keyword gpurt does not know (`Q`, `fp`, `obj`, from other tracers' dialects)
+    /// is skipped, with what follows it up to the next keyword gpurt knows, and one
+    /// warning each, instead of ending the read with an error.
+    pub lenient: bool,
+}
