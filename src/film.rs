@@ -212,6 +212,15 @@ pub fn quantize(c: f32) -> u8 {
     (c.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
+/// An 8-bit image as the bytes of a PNG file, for callers that show or send it rather
+/// than write it (the Python module's notebook display, the browser page).
+pub fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, ImageFormat::Png)
+        .map_err(|e| Error::Image(format!("PNG encoding: {e}")))?;
+    Ok(out.into_inner())
+}
+
 /// Writes an 8-bit image to `path` atomically, format chosen from the extension as in
 /// [`Film::save`] (an `exr` holds the values divided by 255). Used for heat maps.
 pub fn save_rgb8(img: &RgbImage, path: &Path) -> Result<()> {

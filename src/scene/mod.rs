@@ -30,15 +30,25 @@ use io::{FileKind, read_file};
 /// automatic camera, light, material and ground plane.
 pub fn load(path: &Path) -> Result<Scene> {
     let bytes = read_file(path)?;
-    let name = path.display().to_string();
-    match FileKind::of(path) {
-        FileKind::Nff => {
-            let base = path.parent().unwrap_or(Path::new("."));
-            nff::parse(&bytes, &name, base)
-        }
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse(
+        &bytes,
+        FileKind::of(path),
+        &path.display().to_string(),
+        base,
+    )
+}
+
+/// Reads a scene from a file's (decompressed) bytes with the reader for `kind`: what
+/// `load` does after reading, for callers that hold the bytes (a string in Python, a
+/// dropped file in the browser). `name` names the scene in messages; an NFF `mesh`
+/// include is looked for under `base`.
+pub fn parse(bytes: &[u8], kind: FileKind, name: &str, base: &Path) -> Result<Scene> {
+    match kind {
+        FileKind::Nff => nff::parse(bytes, name, base),
         kind => {
-            let mesh = mesh::parse_mesh(&bytes, kind, &name)?;
-            let mut scene = auto::scene_for_mesh(&name, mesh.triangles)?;
+            let mesh = mesh::parse_mesh(bytes, kind, name)?;
+            let mut scene = auto::scene_for_mesh(name, mesh.triangles)?;
             scene.warnings.extend(mesh.warnings);
             Ok(scene)
         }
