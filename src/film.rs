@@ -7,6 +7,7 @@
 
 use std::path::Path;
 
+#[cfg(feature = "native")]
 use rayon::prelude::*;
 
 use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
@@ -174,9 +175,12 @@ impl Accumulator {
     pub fn into_film(self) -> Film {
         let n = self.samples.max(1) as f32;
         let mut film = self.sums;
-        film.pixels
-            .par_chunks_mut(1 << 14)
-            .for_each(|chunk| chunk.iter_mut().for_each(|p| *p = p.map(|c| c / n)));
+        let divide = |chunk: &mut [[f32; 3]]| chunk.iter_mut().for_each(|p| *p = p.map(|c| c / n));
+        // One thread in the browser (no `native`): the same division, in order.
+        #[cfg(feature = "native")]
+        film.pixels.par_chunks_mut(1 << 14).for_each(divide);
+        #[cfg(not(feature = "native"))]
+        film.pixels.chunks_mut(1 << 14).for_each(divide);
         film
     }
 

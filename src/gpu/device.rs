@@ -9,6 +9,7 @@ use crate::error::{Error, Result};
 /// into `Error::Gpu` (never a silent black image). An out-of-memory error is the one
 /// reported when both come: a resource that could not be allocated is invalid, and every
 /// later use of it is a validation error that hides the cause.
+#[cfg(not(target_arch = "wasm32"))]
 pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T) -> Result<T> {
     let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
     let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -21,8 +22,17 @@ pub(crate) fn scoped<T>(device: &wgpu::Device, what: &str, f: impl FnOnce() -> T
     }
 }
 
+/// `scoped` in the browser, where a scope's errors arrive only after control has gone back
+/// to the page's event loop, and no thread may block for them: `f` runs unscoped, and the
+/// device's uncaptured-error handler (installed by the page, `web/`) reports what fails.
+#[cfg(target_arch = "wasm32")]
+pub(crate) fn scoped<T>(_: &wgpu::Device, _: &str, f: impl FnOnce() -> T) -> Result<T> {
+    Ok(f())
+}
+
 /// An error with its causes, on one line: wgpu's `Display` says "Validation Error" and
 /// then the same causes again, indented over several lines, so only its first line is kept.
+#[cfg(not(target_arch = "wasm32"))]
 fn error_chain(e: &dyn std::error::Error) -> String {
     let shown = e.to_string();
     let mut s = shown.lines().next().unwrap_or_default().to_string();
@@ -42,21 +52,24 @@ pub(crate) fn wait(device: &wgpu::Device) -> Result<()> {
         .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
 }
 
-/// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps.
-pub(crate) fn read_mapped<T>(
+/// Maps the first `bytes` of a readback buffer, hands them to `f`, unmaps. Natively the
+/// mapping is complete once the device has been waited for, and the await returns at
+/// once; in the browser, where waiting on the device does nothing, the await gives way to
+/// the page's event loop until the browser has mapped the buffer.
+pub(crate) async fn read_mapped_async<T>(
     device: &wgpu::Device,
     buffer: &wgpu::Buffer,
     bytes: u64,
     f: impl FnOnce(&[u8]) -> T,
 ) -> Result<T> {
     let slice = buffer.slice(..bytes);
-    let (tx, rx) = std::sync::mpsc::channel();
+    let (tx, rx) = futures_channel::oneshot::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
     // A lost device or a hung submission surfaces here as a poll error.
     wait(device)?;
-    rx.recv()
+    rx.await
         .map_err(|_| Error::Gpu("readback was never completed".into()))?
         .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
     let out = {
@@ -67,6 +80,17 @@ pub(crate) fn read_mapped<T>(
     };
     buffer.unmap();
     Ok(out)
+}
+
+/// `read_mapped_async` for a caller that may block (not the browser's).
+#[cfg(feature = "native")]
+pub(crate) fn read_mapped<T>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    f: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
+    pollster::block_on(read_mapped_async(device, buffer, bytes, f))
 }
 
 /// A buffer holding `contents`: `DeviceExt::create_buffer_init` without its panic. On a

@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::device::{buffer_init, read_mapped, scoped};
+use super::device::{buffer_init, read_mapped_async, scoped};
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
 use crate::film::Film;
@@ -19,7 +19,7 @@ pub(super) const RESUME_CHUNK: usize = 16384;
 /// Traces `samples` of the pixels (x | y << RESUME_Y_SHIFT) whose work did not fit one invocation,
 /// with the `resume` entry point, one dispatch after another until none is left, and adds
 /// them to `sums`. Returns their rays and how many were still cut short.
-pub(super) fn resume(
+pub(super) async fn resume(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &GpuScene,
@@ -97,9 +97,10 @@ pub(super) fn resume(
                 enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
                 queue.submit([enc.finish()]);
             })?;
-            let left: u32 = read_mapped(device, &pending_back, 4, |b| {
+            let left: u32 = read_mapped_async(device, &pending_back, 4, |b| {
                 bytemuck::pod_read_unaligned(b)
-            })?;
+            })
+            .await?;
             if left == 0 {
                 break;
             }
@@ -109,7 +110,7 @@ pub(super) fn resume(
             enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
             queue.submit([enc.finish()]);
         })?;
-        read_mapped(device, &state_back, state_bytes, |bytes| {
+        read_mapped_async(device, &state_back, state_bytes, |bytes| {
             let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
             for (&xy, st) in chunk.iter().zip(states) {
                 let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);
@@ -118,7 +119,8 @@ pub(super) fn resume(
                 rays += u64::from(st.rays);
                 cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
             }
-        })?;
+        })
+        .await?;
     }
     Ok((rays, cut_short))
 }
