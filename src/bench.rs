@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use crate::bvh;
 use crate::error::Result;
-use crate::frame::{self, Overrides, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
@@ -36,6 +36,8 @@ pub struct BenchConfig {
     pub sizes: Vec<(u32, u32)>,
     pub spps: Vec<u32>,
     pub depth: u32,
+    /// The highlight's model of every frame.
+    pub shading: Shading,
     /// Timed GPU frames per pass (after one warm-up frame).
     pub frames: u32,
     /// Which backends to time: `Gpu` needs an adapter, `Both` times both, `Auto` the one
@@ -134,6 +136,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
+    eprintln!("shading     {}", config.shading.name());
     outln!(
         "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
     );
@@ -154,6 +157,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     height: Some(height),
                     spp: Some(spp),
                     max_depth: Some(config.depth),
+                    shading: Some(config.shading),
                     ..Overrides::default()
                 };
                 let with_camera =

@@ -108,6 +108,7 @@ impl Frame<'_, '_> {
             ambient: ambient(self.ambient)?,
             aov: Some(aov_code(self.aov)?),
             seed: None,
+            shading: None,
         })
     }
 }
@@ -122,6 +123,7 @@ pub fn layer(base: &Overrides, top: &Overrides) -> Overrides {
         ambient: top.ambient.or(base.ambient),
         aov: top.aov.or(base.aov),
         seed: top.seed.or(base.seed),
+        shading: top.shading.or(base.shading),
     }
 }
 

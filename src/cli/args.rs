@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::film;
-use gpurt::frame::{Overrides, RenderOptions};
+use gpurt::frame::{Overrides, RenderOptions, Shading};
 use gpurt::gpu_types as gt;
 use gpurt::limits::{
     DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP,
@@ -88,6 +88,9 @@ pub struct BenchArgs {
     /// Maximum ray depth.
     #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub depth: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Timed GPU frames per pass; the median is reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub frames: u32,
@@ -127,6 +130,9 @@ pub struct ViewArgs {
     /// Seed of the sample hash.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
@@ -253,6 +259,9 @@ pub struct RenderArgs {
     /// Seed of the sample hash.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Which renderer traces the rays.
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some(
@@ -302,6 +311,7 @@ impl RenderArgs {
             ambient: self.ambient,
             aov: Some(self.aov.code().unwrap_or(gt::AOV_COLOR)),
             seed: Some(self.seed),
+            shading: Some(self.shading),
         }
     }
 
@@ -347,6 +357,20 @@ fn backends(
     });
     PossibleValuesParser::new(values)
         .map(|name| Backend::from_name(&name).expect("a backend's name"))
+}
+
+/// `--shading`'s parser: every model by its name, with the line `--help` shows for it.
+fn shadings() -> impl clap::builder::TypedValueParser<Value = Shading> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(Shading::ALL.map(|s| {
+        PossibleValue::new(s.name()).help(match s {
+            Shading::Phong => "Ks (R.L)^Shine, R the mirrored ray: NFF's model",
+            Shading::BlinnPhong => {
+                "Ks (N.H)^Shine, H halfway between the light and the viewer: the P3D course's"
+            }
+        })
+    }))
+    .map(|name| Shading::from_name(&name).expect("a shading model's name"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -405,5 +429,32 @@ mod tests {
             backend(&["gpurt", "bench", "s.nff"]).unwrap(),
             Backend::Both
         );
+    }
+
+    /// Renders, batches, shards, the viewer and bench all take `--shading`, Phong unless
+    /// told otherwise.
+    #[test]
+    fn every_command_that_shades_takes_the_model() {
+        let shading = |args: &[&str]| -> Shading {
+            let cli = Cli::try_parse_from(args).expect("parses");
+            match cli.command {
+                Some(Command::View(v)) => v.shading,
+                Some(Command::Bench(b)) => b.shading,
+                _ => cli.render.overrides().shading.expect("always set"),
+            }
+        };
+        for args in [
+            &["gpurt", "s.nff"][..],
+            &["gpurt", "a.nff", "b.nff", "--out-dir", "d"],
+            &["gpurt", "s.nff", "--shard", "0/2", "-o", "d"],
+            &["gpurt", "view", "s.nff"],
+            &["gpurt", "bench", "s.nff"],
+        ] {
+            assert_eq!(shading(args), Shading::Phong, "{args:?}");
+            for s in Shading::ALL {
+                let with = [args, &["--shading", s.name()]].concat();
+                assert_eq!(shading(&with), s, "{with:?}");
+            }
+        }
     }
 }

@@ -128,8 +128,15 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
         Some(ctx) => Box::new(GpuSession::new(ctx, buffers.clone())?),
         None => Box::new(CpuRenderer::new(buffers.clone())),
     };
+    // The shading model is named only when it is not Phong, so that a Phong shard's
+    // settings (and digest) are those of a gpurt that had no other model: shards from
+    // both merge.
+    let shading = match opts.shading {
+        frame::Shading::Phong => String::new(),
+        other => format!(", {} shading", other.name()),
+    };
     let settings = format!(
-        "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}, {backend}",
+        "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}{shading}, {backend}",
         opts.width, opts.height, opts.spp, opts.max_depth, globals.ambient, opts.seed, opts.aov
     );
     let (rows, samples) = match by {
@@ -146,6 +153,7 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
         height: opts.height,
         spp: opts.spp,
         aov: opts.aov,
+        shading: opts.shading,
         rows: rows.clone(),
         samples: samples.clone(),
     };

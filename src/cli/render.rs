@@ -155,8 +155,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     }
     if args.stats {
         eprintln!(
-            "image       {}x{}, {} spp, depth {}",
-            opts.width, opts.height, opts.spp, opts.max_depth
+            "image       {}x{}, {} spp, depth {}, {} shading",
+            opts.width,
+            opts.height,
+            opts.spp,
+            opts.max_depth,
+            opts.shading.name()
         );
         eprintln!(
             "scene       {} prims in BVH ({} nodes, depth {}), {} planes, {} lights",
