@@ -14,7 +14,7 @@ __version__: str
 
 _Backend = Literal["auto", "gpu", "cpu"]
 _Aov = Optional[Literal["color", "normal", "depth", "cost"]]
-_Shading = Optional[Literal["phong"]]
+_Shading = Optional[Literal["phong", "blinn-phong"]]
 _Ambient = Union[float, Sequence[float], None]
 _PathLike = Union[str, "os.PathLike[str]"]
 
@@ -85,6 +85,7 @@ class Renderer:
         depth: Optional[int] = None,
         ambient: _Ambient = None,
         aov: _Aov = None,
+        shading: _Shading = None,
         camera: Optional[_Camera] = None,
     ) -> Image:
         """Traces one frame, from the scene's camera or `camera`."""

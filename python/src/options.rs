@@ -3,7 +3,7 @@
 //! and the camera dict. Bad values raise ValueError, wrong types TypeError: never a panic.
 
 use glam::Vec3;
-use gpurt::frame::Overrides;
+use gpurt::frame::{Overrides, Shading};
 use gpurt::gpu_types::{AOV_COLOR, AOV_COST, AOV_DEPTH, AOV_NORMAL};
 use gpurt::limits::{MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
 use gpurt::scene::Camera;
@@ -75,15 +75,22 @@ pub fn backend(name: &str) -> PyResult<Backend> {
     }
 }
 
-/// `shading=`: the library has one shading model, the Phong model of the shading spec, so
-/// only None and "phong" are accepted until it has another.
-pub fn shading(name: Option<&str>) -> PyResult<()> {
-    match name {
-        None | Some("phong") => Ok(()),
-        Some(other) => Err(PyValueError::new_err(format!(
-            "shading must be None or 'phong' (the only model this build of gpurt has), got {other:?}"
-        ))),
-    }
+/// `shading=`: None keeps the default (Phong), else a model by the name `--shading` takes:
+/// "phong" or "blinn-phong".
+pub fn shading(name: Option<&str>) -> PyResult<Option<Shading>> {
+    let Some(name) = name else {
+        return Ok(None);
+    };
+    Shading::from_name(name).map(Some).ok_or_else(|| {
+        let names: Vec<String> = Shading::ALL
+            .iter()
+            .map(|s| format!("'{}'", s.name()))
+            .collect();
+        PyValueError::new_err(format!(
+            "shading must be None or one of {}, got {name:?}",
+            names.join(", ")
+        ))
+    })
 }
 
 /// What a render call sets over the scene's camera and the defaults.
@@ -95,6 +102,7 @@ pub struct Frame<'a, 'py> {
     pub depth: Option<i64>,
     pub ambient: Option<&'a Bound<'py, PyAny>>,
     pub aov: Option<&'a str>,
+    pub shading: Option<&'a str>,
 }
 
 impl Frame<'_, '_> {
@@ -108,7 +116,7 @@ impl Frame<'_, '_> {
             ambient: ambient(self.ambient)?,
             aov: Some(aov_code(self.aov)?),
             seed: None,
-            shading: None,
+            shading: shading(self.shading)?,
         })
     }
 }

@@ -44,8 +44,8 @@ impl Renderer {
     ///
     /// Reads (when `scene` is a path) and packs the scene for frames of this size (the
     /// scene's resolution by default) on `backend` ("auto", "gpu" or "cpu"). `spp`,
-    /// `depth` and `ambient` are the frames' defaults; `spp` also picks the BVH's build
-    /// quality, as on the command line.
+    /// `depth`, `ambient` and `shading` ("phong" or "blinn-phong") are the frames'
+    /// defaults; `spp` also picks the BVH's build quality, as on the command line.
     #[new]
     #[pyo3(signature = (scene, *, width=None, height=None, spp=None, depth=None, ambient=None,
                         backend="auto", shading=None))]
@@ -68,10 +68,10 @@ impl Renderer {
             depth,
             ambient,
             aov: None,
+            shading,
         };
         let mut base = frame.overrides()?;
         base.aov = None;
-        options::shading(shading)?;
         let backend = options::backend(backend)?;
         let scene = scene.load(py)?;
         let camera = scene.camera.clone();
@@ -88,14 +88,17 @@ impl Renderer {
         })
     }
 
-    /// render(*, spp=None, depth=None, ambient=None, aov=None, camera=None)
+    /// render(*, spp=None, depth=None, ambient=None, aov=None, shading=None, camera=None)
     /// --
     ///
     /// Traces one frame into a `gpurt.Image` (float32, (height, width, 3), linear).
     /// `camera` is a dict with any of `eye`, `look_at`, `up` (three numbers each) and `fov`
     /// (the vertical angle in degrees); what it leaves out is the scene's. Only the frame's
-    /// constants change between frames: the scene stays uploaded.
-    #[pyo3(signature = (*, spp=None, depth=None, ambient=None, aov=None, camera=None))]
+    /// constants change between frames: the scene stays uploaded. `shading` (None keeps
+    /// the renderer's) is "phong" or "blinn-phong".
+    #[pyo3(signature = (*, spp=None, depth=None, ambient=None, aov=None, shading=None,
+                        camera=None))]
+    #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
         py: Python<'py>,
@@ -103,6 +106,7 @@ impl Renderer {
         depth: Option<i64>,
         ambient: Option<&Bound<'py, PyAny>>,
         aov: Option<&str>,
+        shading: Option<&str>,
         camera: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let frame = Frame {
@@ -110,6 +114,7 @@ impl Renderer {
             depth,
             ambient,
             aov,
+            shading,
             ..Frame::default()
         };
         let overrides = options::layer(&self.base, &frame.overrides()?);

@@ -74,9 +74,7 @@ pub fn render_scene<'py>(
     scene: scene::Scene,
     frame: &Frame<'_, 'py>,
     backend: &str,
-    shading: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    options::shading(shading)?;
     let backend = options::backend(backend)?;
     let overrides = frame.overrides()?;
     let opts = RenderOptions::for_camera(&scene.camera).with_overrides(&overrides);
@@ -179,8 +177,9 @@ impl Scene {
             depth,
             ambient,
             aov,
+            shading,
         };
-        render_scene(py, self.scene.clone(), &frame, backend, shading)
+        render_scene(py, self.scene.clone(), &frame, backend)
     }
 
     fn __repr__(&self) -> String {
@@ -206,7 +205,8 @@ impl Scene {
 /// line's EXR of the same render holds. `None` keeps the scene's resolution and the
 /// defaults (1 sample per pixel, depth 5, the scene's ambient). `backend` is "auto" (the
 /// GPU when there is a hardware one, else the CPU), "gpu" or "cpu"; `aov` is None,
-/// "normal", "depth" or "cost"; `shading` is None or "phong". The GIL is released while
+/// "normal", "depth" or "cost"; `shading` is None (Phong), "phong" or "blinn-phong", the
+/// highlight's model as `--shading` takes it. The GIL is released while
 /// rendering, and Ctrl-C stops the render with KeyboardInterrupt.
 #[pyfunction]
 #[pyo3(signature = (scene, *, width=None, height=None, spp=None, depth=None, ambient=None,
@@ -231,13 +231,13 @@ pub fn render<'py>(
         depth,
         ambient,
         aov,
+        shading,
     };
     // Checked before the scene is read, so that a bad argument costs nothing.
     frame.overrides()?;
-    options::shading(shading)?;
     options::backend(backend)?;
     let scene = scene.load(py)?;
-    render_scene(py, scene, &frame, backend, shading)
+    render_scene(py, scene, &frame, backend)
 }
 
 /// info(path)

@@ -62,7 +62,6 @@ def test_a_missing_file_is_file_not_found():
         (dict(backend="both"), ValueError),
         (dict(backend="cuda"), ValueError),
         (dict(aov="wireframe"), ValueError),
-        (dict(shading="blinn-phong"), ValueError),
         (dict(shading="toon"), ValueError),
         (dict(colour=1), TypeError),
     ],
