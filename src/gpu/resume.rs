@@ -73,7 +73,9 @@ pub(super) async fn resume(
                 enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
                 gpu.run(enc);
             })?;
-            let left: u32 = gpu.read_async(&pending_back, 4, bytemuck::pod_read_unaligned).await?;
+            let left: u32 = gpu
+                .read_async(&pending_back, 4, bytemuck::pod_read_unaligned)
+                .await?;
             if left == 0 {
                 break;
             }

@@ -53,7 +53,8 @@ pub fn trace_samples(
 ) -> Result<u64> {
     let rows = 0..scene.cut.height;
     let gpu = Gpu::new(device, queue);
-    pollster::block_on(trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel))
+    let trace = trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel);
+    pollster::block_on(trace)
 }
 
 /// `trace_samples` for the image rows `rows` only (a shard of the image): the other
