@@ -1,7 +1,8 @@
 // The page: a scene from a file (dropped or opened) or from ?scene=URL, traced
 // progressively on the page's WebGPU device by the library (gpurt_web.wasm), drawn into a
 // 2D canvas from the library's 8-bit image. With ?scene=URL it renders once and puts the
-// result in <img id="gpurt-result"> (or the error in <pre id="gpurt-error">) for tests.
+// result in <img id="gpurt-result"> (or the error in <pre id="gpurt-error">) and the camera
+// as an NFF `v` block in <pre id="gpurt-view">, for tests.
 import init, { Session } from "./gpurt_web.js";
 
 const $ = (id) => document.getElementById(id);
@@ -76,7 +77,7 @@ function restart() {
 
 function applyOptions() {
   const n = (id) => parseInt($(id).value, 10) || 0;
-  session.set_options(n("width"), n("height"), n("spp"), n("depth"));
+  session.set_options(n("width"), n("height"), n("spp"), n("depth"), $("shading").value);
 }
 
 async function loadBytes(name, bytes) {
@@ -103,7 +104,7 @@ async function interactive() {
     drop.classList.remove("over");
     if (e.dataTransfer.files[0]) open(e.dataTransfer.files[0]);
   });
-  for (const id of ["width", "height", "spp", "depth"]) {
+  for (const id of ["width", "height", "spp", "depth", "shading"]) {
     $(id).addEventListener("change", () => {
       try { applyOptions(); restart(); } catch (e) { showError(e); }
     });
@@ -140,7 +141,9 @@ async function interactive() {
   status(`ready on ${session.adapter()}: open a scene`);
 }
 
-// ?scene=URL&width=W&height=H&spp=N&depth=D: one render, its result in the page.
+// ?scene=URL&width=W&height=H&spp=N&depth=D&shading=S: one render, its result in the page.
+// orbit=DX,DY, pan=DX,DY and dolly=N move the camera first, as those drags and wheel
+// notches would (in that order).
 async function scripted(params) {
   const url = params.get("scene");
   for (const id of ["width", "height", "spp", "depth"]) {
@@ -150,8 +153,24 @@ async function scripted(params) {
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   const name = decodeURIComponent(new URL(url, location.href).pathname.split("/").pop());
   await loadBytes(name, new Uint8Array(await response.arrayBuffer()));
+  // A <select> ignores a value it has no option for: the library checks the name.
+  if (params.has("shading")) {
+    const n = (id) => parseInt($(id).value, 10) || 0;
+    session.set_options(n("width"), n("height"), n("spp"), n("depth"), params.get("shading"));
+  }
+  const pair = (key) => params.get(key).split(",").map(Number);
+  if (params.has("orbit")) session.drag(...pair("orbit"), false);
+  if (params.has("pan")) session.drag(...pair("pan"), true);
+  if (params.has("dolly")) session.dolly(Number(params.get("dolly")));
   while (await session.step()) { /* every sample */ }
+  // A device error can arrive after the last readback: give it a turn of the event loop.
+  await new Promise((r) => setTimeout(r, 0));
+  session.check();
   draw();
+  const view = document.createElement("pre");
+  view.id = "gpurt-view";
+  view.textContent = session.view_block();
+  $("out").appendChild(view);
   const img = document.createElement("img");
   img.dataset.rays = String(session.rays());
   img.dataset.adapter = session.adapter();

@@ -10,7 +10,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 
 use gpurt::film::{self, Accumulator};
-use gpurt::frame::{self, Overrides, RenderOptions};
+use gpurt::frame::{self, Overrides, RenderOptions, Shading};
 use gpurt::gpu::{self, GpuContext, GpuRenderer, GpuScene};
 use gpurt::gpu_types::GpuGlobals;
 use gpurt::limits::{MAX_DEPTH, MAX_FILE_BYTES, MAX_IMAGE_SIDE, MAX_SPP};
@@ -21,6 +21,14 @@ use wasm_bindgen::prelude::*;
 
 fn js(e: impl std::fmt::Display) -> JsValue {
     JsValue::from_str(&e.to_string())
+}
+
+/// The device's error in `slot`, taken, as an error.
+fn reported(slot: &Mutex<Option<String>>) -> Result<(), JsValue> {
+    match slot.lock().expect("not poisoned").take() {
+        Some(e) => Err(js(e)),
+        None => Ok(()),
+    }
 }
 
 /// A scene read and packed, with the camera that moves over it.
@@ -37,7 +45,8 @@ pub struct Session {
     ctx: GpuContext,
     renderer: GpuRenderer,
     /// The first error the device reported outside a call's own checks (WebGPU reports
-    /// validation and out-of-memory errors asynchronously: see `gpu::device::scoped`).
+    /// validation and out-of-memory errors asynchronously: see the library's
+    /// `gpu::device::Device::scoped`).
     gpu_error: Arc<Mutex<Option<String>>>,
     loaded: Option<Loaded>,
     overrides: Overrides,
@@ -99,24 +108,34 @@ impl Session {
     }
 
     /// Sets the image size, samples per pixel and depth (0 keeps the scene's or the
-    /// default), and starts the image again.
+    /// default) and the highlight's model ("phong" or "blinn-phong", as `--shading`
+    /// takes it), and starts the image again.
     pub fn set_options(
         &mut self,
         width: u32,
         height: u32,
         spp: u32,
         depth: u32,
+        shading: &str,
     ) -> Result<(), JsValue> {
         let pick = |v: u32, what: &str, max: u32| match v {
             0 => Ok(None),
             v if v <= max => Ok(Some(v)),
             v => Err(js(format!("{what} must be 1 to {max}, got {v}"))),
         };
+        let shading = Shading::from_name(shading).ok_or_else(|| {
+            let names: Vec<&str> = Shading::ALL.iter().map(|s| s.name()).collect();
+            js(format!(
+                "shading must be one of {}, got {shading:?}",
+                names.join(", ")
+            ))
+        })?;
         self.overrides = Overrides {
             width: pick(width, "width", MAX_IMAGE_SIDE)?,
             height: pick(height, "height", MAX_IMAGE_SIDE)?,
             spp: pick(spp, "spp", MAX_SPP)?,
             max_depth: pick(depth, "depth", MAX_DEPTH)?,
+            shading: Some(shading),
             ..Overrides::default()
         };
         self.restart();
@@ -189,11 +208,16 @@ impl Session {
         let trace =
             gpu::trace_rows_async(device, queue, uploaded, rows, next, accum, &|_| {}, &never);
         let rays = trace.await.map_err(js)?;
-        if let Some(e) = self.gpu_error.lock().expect("not poisoned").take() {
-            return Err(js(e));
-        }
+        reported(&self.gpu_error)?;
         self.rays += rays;
         Ok(accum.samples < opts.spp)
+    }
+
+    /// The first error the device reported since the last check, as an error: WebGPU
+    /// reports some (a shader its compiler rejects) only after the work that met it has
+    /// been read back, so a finished image is checked once more before it is shown.
+    pub fn check(&self) -> Result<(), JsValue> {
+        reported(&self.gpu_error)
     }
 
     /// The image so far as RGBA bytes for a canvas: the 8-bit values the command line's
