@@ -74,7 +74,9 @@ def test_a_gpu_sweep_uploads_the_scene_once(gpu_available):
 
 
 def test_a_sweep_costs_frames_not_loads():
-    """Timing: 20 small frames of a large scene take less than loading it twice."""
+    """Timing: 20 small frames of a large scene take less than 5 loads of it, where a
+    renderer that read the scene again for each frame would take 20 (the margin is for a
+    machine other work shares: each small frame waits for the CPU's threads)."""
     scene = shared_scenes() / "spd" / "balls-5.nff.gz"
     start = time.perf_counter()
     r = gpurt.Renderer(scene, width=8, height=8, backend="cpu")
@@ -84,4 +86,4 @@ def test_a_sweep_costs_frames_not_loads():
         r.render(camera=dict(cam, look_at=(0, 0, 0)))
     sweep = time.perf_counter() - start
     assert r.frames_rendered == 20
-    assert sweep < 2 * load, f"20 frames took {sweep:.2f} s, one load {load:.2f} s"
+    assert sweep < 5 * load, f"20 frames took {sweep:.2f} s, one load {load:.2f} s"
