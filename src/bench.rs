@@ -137,10 +137,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
     eprintln!("shading     {}", config.shading.name());
-    outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
-    );
-    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    // The table's header waits for its first row, so that a scene that cannot be read
+    // is an error alone, not a header and then an error.
+    let mut header = true;
     for path in &config.scenes {
         // Each row traces the tree a render of its size and samples would get: one build
         // per BVH quality the rows need.
@@ -194,6 +193,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                         "gpurt: warning: {name} {width}x{height} {spp} spp: the GPU traced {} rays, the CPU {}",
                         g.full.rays, c.rays
                     );
+                }
+                if std::mem::take(&mut header) {
+                    print_header();
                 }
                 print_row(&Row {
                     scene: name.clone(),
@@ -286,6 +288,13 @@ fn cpu_row(buffers: &pack::SceneBuffers, globals: &GpuGlobals) -> Result<CpuRow>
         shadow: counts.shadow,
         secondary: counts.reflected + counts.refracted,
     })
+}
+
+fn print_header() {
+    outln!(
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
+    );
+    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
 }
 
 fn print_row(r: &Row) {

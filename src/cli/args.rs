@@ -10,7 +10,7 @@ use gpurt::film;
 use gpurt::frame::{Overrides, RenderOptions, Shading};
 use gpurt::gpu_types as gt;
 use gpurt::limits::{
-    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP,
+    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS,
 };
 use gpurt::scene::Camera;
 use gpurt::session::Backend;
@@ -20,13 +20,20 @@ use gpurt::session::Backend;
     name = "gpurt",
     version,
     about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes",
-    args_conflicts_with_subcommands = true
+    args_conflicts_with_subcommands = true,
+    // `--spp -1` is a value out of range, not an unknown flag `-1`.
+    allow_negative_numbers = true
 )]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
     #[command(flatten)]
     pub render: RenderArgs,
+    /// Threads that trace on the CPU and build BVHs, for renders, batches, the viewer's CPU
+    /// path and bench (default: one a core, or RAYON_NUM_THREADS). `-v` says how many.
+    #[arg(short = 'j', long, global = true, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS as i64))]
+    pub threads: Option<u32>,
 }
 
 #[derive(Subcommand)]
@@ -52,11 +59,17 @@ pub enum Command {
     },
     /// Open a window on a scene: ray traced progressively, with a wireframe preview that
     /// shares the ray tracer's camera. Without a display, says so and exits 2.
-    #[command(after_help = gpurt::view::controls::key_help())]
+    #[command(after_help = gpurt::view::controls::key_help(), allow_negative_numbers = true)]
     View(ViewArgs),
     /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
     /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
+    #[command(allow_negative_numbers = true)]
     Bench(BenchArgs),
+    /// Print the completion script for a shell, e.g. `gpurt completions bash >
+    /// ~/.local/share/bash-completion/completions/gpurt` (see the README for each shell).
+    Completions { shell: clap_complete::Shell },
+    /// Print the manual page (roff), e.g. `gpurt man > ~/.local/share/man/man1/gpurt.1`.
+    Man,
 }
 
 #[derive(clap::Args)]
@@ -429,6 +442,32 @@ mod tests {
             backend(&["gpurt", "bench", "s.nff"]).unwrap(),
             Backend::Both
         );
+    }
+
+    /// `-j`/`--threads` goes before or after any command, and the count is checked.
+    #[test]
+    fn the_thread_count_is_global() {
+        for args in [
+            &["gpurt", "-j", "3", "s.nff"][..],
+            &["gpurt", "s.nff", "--threads", "3"],
+            &["gpurt", "a.nff", "b.nff", "--out-dir", "d", "-j", "3"],
+            &["gpurt", "-j", "3", "view", "s.nff"],
+            &["gpurt", "view", "s.nff", "-j", "3"],
+            &["gpurt", "bench", "s.nff", "--threads", "3"],
+        ] {
+            let cli = Cli::try_parse_from(args).expect("parses");
+            assert_eq!(cli.threads, Some(3), "{args:?}");
+        }
+        assert_eq!(
+            Cli::try_parse_from(["gpurt", "s.nff"]).unwrap().threads,
+            None
+        );
+        for bad in ["0", "-2", "1025", "x"] {
+            assert!(
+                Cli::try_parse_from(["gpurt", "s.nff", "-j", bad]).is_err(),
+                "{bad}"
+            );
+        }
     }
 
     /// Renders, batches, shards, the viewer and bench all take `--shading`, Phong unless

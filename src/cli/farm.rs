@@ -16,7 +16,7 @@ use gpurt::{Error, atomic, film, frame};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{Aov, RenderArgs, ShardBy};
-use super::{cancel_on_signals, print_note, print_warnings};
+use super::{cancel_on_signals, print_note, print_threads, print_warnings};
 
 /// `gpurt SCENE... --out-dir DIR`: every scene into DIR, one device, failures skipped.
 pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
@@ -43,6 +43,7 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     let cancel = cancel_on_signals();
     let found = session::choose(args.backend, args.adapter.as_deref(), Missing::Cpu)?;
     print_note(&found, args.verbose || args.stats);
+    print_threads(args.verbose || args.stats);
     let bar = ProgressBar::new(scenes.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
@@ -67,7 +68,13 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     let outcome = outcome?;
     print_warnings(&outcome.warnings);
     for (scene, e) in &outcome.failed {
-        eprintln!("gpurt: {}: skipped: {e}", scene.display());
+        // Most errors start with the scene's name already; the others get it.
+        let named = e.to_string().starts_with(&scene.display().to_string());
+        if named {
+            super::report::print_error(e, " (skipped)");
+        } else {
+            eprintln!("gpurt: {}: {e} (skipped)", scene.display());
+        }
     }
     if args.verbose || args.stats || !outcome.failed.is_empty() {
         let secs = start.elapsed().as_secs_f64();

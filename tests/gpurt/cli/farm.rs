@@ -27,10 +27,10 @@ fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() 
     );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(
-        err.contains("gpurt: broken.nff: skipped: broken.nff:3:1: "),
-        "{err}"
-    );
+    // Named once, where the error is, with its line under it.
+    assert!(err.contains("gpurt: broken.nff:3:1: "), "{err}");
+    assert!(err.contains(" (skipped)\n  |\n3 | "), "{err}");
+    assert_eq!(err.matches("broken.nff").count(), 1, "{err}");
     assert!(err.contains("2 of 3 scenes rendered"), "{err}");
     assert!(!d.join("out/broken.png").exists());
     // Each image is the one a render of its scene alone writes, to the byte.
