@@ -338,7 +338,9 @@ def main():
             (local / "bad.nff").write_text(BAD)
             want = cli(local / "bad.nff", "-o", OUT / "bad.png", check=False)
             assert want.returncode == 2
-            message = want.stderr.strip().removeprefix("gpurt: ").removeprefix(str(local) + "/")
+            # The first line; the command line draws the source line and a caret under it.
+            first = want.stderr.strip().splitlines()[0]
+            message = first.removeprefix("gpurt: ").removeprefix(str(local) + "/")
             dom = dump(f"{base}?scene=scenes/bad.nff&width=8&height=8")
             err = re.search(r'<pre id="gpurt-error">(.*?)</pre>', dom, re.S)
             assert err, "no error element"

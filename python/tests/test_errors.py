@@ -23,7 +23,8 @@ def test_a_bad_scene_raises_scene_error_with_the_cli_message(name, tmp_path):
     path.write_text(BAD[name])
     cli = run_cli(path, "-o", tmp_path / "out.png", check=False)
     assert cli.returncode == 2
-    message = cli.stderr.strip().removeprefix("gpurt: ")
+    # The first line; the command line draws the source line and a caret under it.
+    message = cli.stderr.strip().splitlines()[0].removeprefix("gpurt: ")
     assert message.startswith(str(path) + ":")
     for call in [lambda: gpurt.render(path), lambda: gpurt.Scene.open(path), lambda: gpurt.info(path),
                  lambda: gpurt.Renderer(path)]:
