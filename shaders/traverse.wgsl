@@ -196,7 +196,9 @@ fn next_leaf_wide(
         let z1 = (n.hi[2] - o.z) * inv_dir.z;
         let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
         let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
-        let reached = near <= far * SLAB_WIDEN & n.entry != vec4<u32>(WIDE_EMPTY);
+        // WGSL requires the parentheses (Chrome's compiler rejects a relational and a bitwise
+        // operator side by side without them; naga reads them as here).
+        let reached = (near <= far * SLAB_WIDEN) & (n.entry != vec4<u32>(WIDE_EMPTY));
         let t = bitcast<vec4<u32>>(select(vec4<f32>(NO_HIT), near, reached));
         var a = vec2<u32>(t.x, n.entry.x);
         var b = vec2<u32>(t.y, n.entry.y);

@@ -41,15 +41,17 @@ pub fn write_atomic_with(
     let result = (|| {
         let mut w = BufWriter::new(file);
         write(&mut w)?;
-        let file = w
-            .into_inner()
-            .map_err(|e| Error::io(path, e.into_error()))?;
-        if let Some(p) = permissions {
-            file.set_permissions(p).map_err(|e| Error::io(path, e))?;
+        // The file is closed at the end of this block, before the rename.
+        {
+            let file = w
+                .into_inner()
+                .map_err(|e| Error::io(path, e.into_error()))?;
+            if let Some(p) = permissions {
+                file.set_permissions(p).map_err(|e| Error::io(path, e))?;
+            }
+            // Without the sync a crash soon after the rename can leave an empty file behind.
+            file.sync_all().map_err(|e| Error::io(path, e))?;
         }
-        // Without the sync a crash soon after the rename can leave an empty file behind.
-        file.sync_all().map_err(|e| Error::io(path, e))?;
-        drop(file);
         fs::rename(&temp, path).map_err(|e| Error::io(path, e))
     })();
     if result.is_err() {

@@ -5,13 +5,23 @@
 //! compute) or `cpu` (the reference) -> `film` (images) -> `compare` (diffs). `run` strings
 //! these together for the command line; `docs/api.md` shows the library.
 
+//!
+//! Without the default `native` feature (for `wasm32-unknown-unknown`, `web/`) the library
+//! is its core: `scene`, `bvh`, `pack`, `frame`, `film`, `info`, `gpu` and the viewer's
+//! camera; the CPU renderer, the sessions and the commands need threads and are left out.
+
+#[cfg(feature = "native")]
 pub mod agreement;
 pub mod atomic;
+#[cfg(feature = "native")]
 pub mod batch;
+#[cfg(feature = "native")]
 pub mod bench;
 pub mod bvh;
+#[cfg(feature = "native")]
 pub mod compare;
 pub mod console;
+#[cfg(feature = "native")]
 pub mod cpu;
 pub mod error;
 pub mod fault;
@@ -22,9 +32,12 @@ pub mod gpu_types;
 pub mod info;
 pub mod limits;
 pub mod pack;
+#[cfg(feature = "native")]
 pub mod run;
 pub mod scene;
+#[cfg(feature = "native")]
 pub mod session;
+#[cfg(feature = "native")]
 pub mod shard;
 pub mod view;
 

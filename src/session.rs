@@ -203,18 +203,12 @@ impl GpuSession {
     /// Gets the uploaded scene ready for the frame `globals`, uploading it the first time.
     fn set_frame(&mut self, globals: &GpuGlobals) -> Result<()> {
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
-        match &mut self.uploaded {
-            Some((current, _)) if current == globals => {}
-            Some((current, uploaded)) => {
-                self.renderer
-                    .set_frame(device, queue, uploaded, &self.scene, globals)?;
-                *current = *globals;
-            }
-            None => {
-                let uploaded = self.renderer.upload(device, queue, &self.scene, globals)?;
-                self.uploads += 1;
-                self.uploaded = Some((*globals, uploaded));
-            }
+        let slot = &mut self.uploaded;
+        if self
+            .renderer
+            .ready(device, queue, slot, &self.scene, globals)?
+        {
+            self.uploads += 1;
         }
         Ok(())
     }

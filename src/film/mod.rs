@@ -9,11 +9,12 @@ mod encode;
 
 use std::path::Path;
 
+#[cfg(feature = "native")]
 use rayon::prelude::*;
 
 pub use encode::Format;
 
-use image::{ColorType, DynamicImage, RgbImage};
+use image::{ColorType, DynamicImage, ImageFormat, RgbImage};
 
 use crate::gpu_types::{AOV_COST, AOV_DEPTH};
 use crate::{Error, Result};
@@ -195,9 +196,12 @@ impl Accumulator {
     pub fn into_film(self) -> Film {
         let n = self.samples.max(1) as f32;
         let mut film = self.sums;
-        film.pixels
-            .par_chunks_mut(1 << 14)
-            .for_each(|chunk| chunk.iter_mut().for_each(|p| *p = p.map(|c| c / n)));
+        let divide = |chunk: &mut [[f32; 3]]| chunk.iter_mut().for_each(|p| *p = p.map(|c| c / n));
+        // One thread in the browser (no `native`): the same division, in order.
+        #[cfg(feature = "native")]
+        film.pixels.par_chunks_mut(1 << 14).for_each(divide);
+        #[cfg(not(feature = "native"))]
+        film.pixels.chunks_mut(1 << 14).for_each(divide);
         film
     }
 
@@ -231,6 +235,15 @@ impl Accumulator {
 /// saturates and maps NaN to 0), so a stray NaN shows as black rather than aborting a save.
 pub fn quantize(c: f32) -> u8 {
     (c.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// An 8-bit image as the bytes of a PNG file, for callers that show or send it rather
+/// than write it (the Python module's notebook display, the browser page).
+pub fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, ImageFormat::Png)
+        .map_err(|e| Error::Image(format!("PNG encoding: {e}")))?;
+    Ok(out.into_inner())
 }
 
 /// Writes an 8-bit image to `path` atomically, format chosen from the extension as in

@@ -181,20 +181,41 @@ fn best_adapter(
 
 /// Opens a device on `adapter`.
 fn open_adapter(adapter: wgpu::Adapter) -> Result<GpuContext> {
+    pollster::block_on(open_adapter_async(adapter))
+}
+
+/// Opens a device on the adapter the instance offers when asked (the browser's WebGPU
+/// adapter: a page cannot list adapters, only request one), without blocking.
+pub async fn request(instance: &wgpu::Instance) -> Result<GpuContext> {
+    let options = wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        ..Default::default()
+    };
+    let adapter = instance
+        .request_adapter(&options)
+        .await
+        .map_err(|e| Error::NoAdapter(format!(" ({e})")))?;
+    open_adapter_async(adapter).await
+}
+
+/// `open_adapter` as a future, for the browser, which may not block.
+async fn open_adapter_async(adapter: wgpu::Adapter) -> Result<GpuContext> {
     let info = adapter.get_info();
     // Ask for everything the adapter offers: big scenes need its largest buffer limits.
     let mut required_features = wgpu::Features::empty();
     if adapter.features().contains(wgpu::Features::PIPELINE_CACHE) {
         required_features |= wgpu::Features::PIPELINE_CACHE;
     }
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("gpurt"),
-        required_features,
-        required_limits: adapter.limits(),
-        memory_hints: crate::fault::memory_hints(),
-        ..Default::default()
-    }))
-    .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;
+    let (device, queue) = adapter
+        .request_device(&wgpu::DeviceDescriptor {
+            label: Some("gpurt"),
+            required_features,
+            required_limits: adapter.limits(),
+            memory_hints: crate::fault::memory_hints(),
+            ..Default::default()
+        })
+        .await
+        .map_err(|e| Error::Gpu(format!("cannot open a device on {}: {e}", describe(&info))))?;
     Ok(GpuContext {
         device,
         queue,

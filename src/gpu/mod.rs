@@ -18,11 +18,14 @@
 //! - `resume` finishes the pixels whose work did not fit one invocation;
 //! - `trace` is the dispatch loop: band by band, then the readback;
 //! - `renderer` (`GpuRenderer`) uploads scenes, moves them to other frames and compiles
-//!   and warms up the pipelines they need.
+//!   and warms up the pipelines they need;
+//! - `oneshot` renders a frame from buffers to a film in one blocking call (natively).
 
 pub mod context;
 mod cut;
 pub(crate) mod device;
+#[cfg(feature = "native")]
+mod oneshot;
 mod pipeline;
 mod renderer;
 mod resume;
@@ -32,8 +35,12 @@ pub mod specialization;
 mod trace;
 mod upload;
 
-pub use context::{Choice, GpuContext, choose, is_software, open, open_on};
+pub use context::{Choice, GpuContext, choose, is_software, open, open_on, request};
 pub use cut::DISPATCH_BUDGET;
-pub use renderer::{GpuRenderer, render_gpu};
+#[cfg(feature = "native")]
+pub use oneshot::render_gpu;
+pub use renderer::GpuRenderer;
 pub use scene::GpuScene;
-pub use trace::{trace, trace_on_device, trace_rows, trace_samples};
+#[cfg(feature = "native")]
+pub use trace::{trace, trace_rows, trace_samples};
+pub use trace::{trace_on_device, trace_rows_async};

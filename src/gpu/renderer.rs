@@ -5,9 +5,10 @@
 //! walk of the BVH and which cut.
 
 use std::collections::HashMap;
-use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+
+use web_time::Instant;
 
 use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES};
 use super::device::{Device, Gpu};
@@ -17,10 +18,9 @@ use super::pipeline::{
 };
 use super::scene::{GpuScene, bind};
 use super::specialization::Specialization;
-use super::trace::{encode_band, trace};
+use super::trace::encode_band;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use crate::error::{Error, Result};
-use crate::film::Film;
 use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 
@@ -389,36 +389,29 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Renders the image described by `globals` on `device`. Returns the film and the
-    /// number of rays traced.
-    pub fn render(
+    /// Gets `uploaded` ready for the frame `globals` of `scene`: uploads the scene the
+    /// first time (returning true), else moves it to this frame when the frame changed
+    /// (`set_frame`). The one way a session of many frames keeps its scene on the device
+    /// (`session::GpuSession`, the browser page).
+    pub fn ready(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
+        uploaded: &mut Option<(GpuGlobals, GpuScene)>,
         scene: &SceneBuffers,
         globals: &GpuGlobals,
-        progress: &dyn Fn(u64),
-        cancel: &AtomicBool,
-    ) -> Result<(Film, u64)> {
-        let uploaded = self.upload(device, queue, scene, globals)?;
-        trace(device, queue, &uploaded, progress, cancel)
+    ) -> Result<bool> {
+        match uploaded {
+            Some((current, _)) if current == globals => Ok(false),
+            Some((current, up)) => {
+                self.set_frame(device, queue, up, scene, globals)?;
+                *current = *globals;
+                Ok(false)
+            }
+            None => {
+                *uploaded = Some((*globals, self.upload(device, queue, scene, globals)?));
+                Ok(true)
+            }
+        }
     }
-}
-
-/// Convenience for one render: compiles the pipeline (no disk cache) and renders.
-pub fn render_gpu(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    scene: &SceneBuffers,
-    globals: &GpuGlobals,
-) -> Result<(Film, u64)> {
-    let r = GpuRenderer::new(device, None)?;
-    r.render(
-        device,
-        queue,
-        scene,
-        globals,
-        &|_| {},
-        &AtomicBool::new(false),
-    )
 }

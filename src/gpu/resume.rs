@@ -19,8 +19,8 @@ pub(super) const RESUME_CHUNK: usize = 16384;
 /// Traces `samples` of the pixels (x | y << RESUME_Y_SHIFT) whose work did not fit one invocation,
 /// with the `resume` entry point, one dispatch after another until none is left, and adds
 /// them to `sums`. Returns their rays and how many were still cut short.
-pub(super) fn resume(
-    gpu: &Gpu,
+pub(super) async fn resume(
+    gpu: &Gpu<'_>,
     scene: &GpuScene,
     pixels: &[u32],
     samples: &Range<u32>,
@@ -73,7 +73,9 @@ pub(super) fn resume(
                 enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
                 gpu.run(enc);
             })?;
-            let left: u32 = gpu.read(&pending_back, 4, bytemuck::pod_read_unaligned)?;
+            let left: u32 = gpu
+                .read_async(&pending_back, 4, bytemuck::pod_read_unaligned)
+                .await?;
             if left == 0 {
                 break;
             }
@@ -83,7 +85,7 @@ pub(super) fn resume(
             enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
             gpu.run(enc);
         })?;
-        gpu.read(&state_back, state_bytes, |bytes| {
+        gpu.read_async(&state_back, state_bytes, |bytes| {
             let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
             for (&xy, st) in chunk.iter().zip(states) {
                 let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);
@@ -92,7 +94,8 @@ pub(super) fn resume(
                 rays += u64::from(st.rays);
                 cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
             }
-        })?;
+        })
+        .await?;
     }
     Ok((rays, cut_short))
 }

@@ -44,15 +44,16 @@ pub fn source(trace_stack: u32) -> String {
 }
 
 /// The WGSL declaration of a constant shared with Rust, of the same type and value: a `u32`
-/// as a `u32` literal, an `f32` as the shortest decimal that reads back to the same bits,
-/// with the `f` suffix so that it is read as an `f32` directly, not rounded through an
-/// abstract float.
+/// as a `u32` literal, an `f32` with the `f` suffix as the shortest decimal that reads back
+/// to the same value as an f64 (the f32's exact value, widened), so that it lies within
+/// f32's range as written: the shortest f32 decimal of `f32::MAX`, 3.4028235e38, lies above
+/// it, which naga rounds down but Chrome's WGSL compiler (Tint) rejects as out of range.
 fn declaration(name: &str, value: WgslValue) -> String {
     match value {
         WgslValue::U32(v) => format!("const {name}: u32 = {v}u;\n"),
         WgslValue::F32(v) => {
             assert!(v.is_finite(), "WGSL has no literal for {name} = {v}");
-            format!("const {name}: f32 = {v:?}f;\n")
+            format!("const {name}: f32 = {:?}f;\n", f64::from(v))
         }
     }
 }
@@ -74,6 +75,42 @@ pub fn validate() -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
 
 #[cfg(test)]
 mod tests {
+    use super::{WgslValue, declaration};
+
+    /// Each f32 literal reads back to its constant's bits, and its decimal value, read
+    /// exactly (as an f64), is within f32's range: `f32::MAX` written as Rust's shortest
+    /// f32 decimal is not, and fails.
+    #[test]
+    fn f32_literals_are_exact_and_in_range() {
+        let literal = |d: &str| {
+            d.split(" = ")
+                .nth(1)
+                .unwrap()
+                .trim_end_matches("f;\n")
+                .to_string()
+        };
+        for v in [
+            f32::MAX,
+            -f32::MAX,
+            f32::MIN_POSITIVE,
+            1.0 + 1.0 / 65536.0,
+            0.1,
+            1e-30,
+        ] {
+            let text = literal(&declaration("X", WgslValue::F32(v)));
+            let wide: f64 = text.parse().unwrap();
+            assert_eq!(wide, f64::from(v), "{text}");
+            assert!(wide.abs() <= f64::from(f32::MAX), "{text}");
+            assert_eq!(
+                text.parse::<f32>().unwrap().to_bits(),
+                v.to_bits(),
+                "{text}"
+            );
+        }
+        let shortest: f64 = format!("{:?}", f32::MAX).parse().unwrap();
+        assert!(shortest > f64::from(f32::MAX));
+    }
+
     #[test]
     fn joined_shader_parses_and_validates() {
         if let Err(e) = super::validate() {

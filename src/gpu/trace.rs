@@ -8,8 +8,9 @@
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use web_time::Instant;
 
+#[cfg(feature = "native")]
 use rayon::prelude::*;
 
 use super::cut::{Cut, PIXEL_BYTES};
@@ -21,6 +22,7 @@ use crate::film::{Accumulator, Film};
 use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT, RESUME_Y_SHIFT};
 
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
+#[cfg(feature = "native")]
 pub fn trace(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -31,13 +33,15 @@ pub fn trace(
     let mut accum = Accumulator::new(scene.cut.width, scene.cut.height);
     let (rows, samples) = (0..scene.cut.height, 0..scene.cut.spp);
     let gpu = Gpu::new(device, queue);
-    let rays = trace_band_rows(&gpu, scene, rows, samples, &mut accum, progress, cancel)?;
+    let trace = trace_band_rows(&gpu, scene, rows, samples, &mut accum, progress, cancel);
+    let rays = pollster::block_on(trace)?;
     Ok((accum.into_film(), rays))
 }
 
 /// Traces samples `samples` of every pixel of an uploaded scene and adds them to
 /// `accum`, which must hold samples `0..samples.start` of the same frame (progressive
 /// rendering). Returns the rays traced.
+#[cfg(feature = "native")]
 pub fn trace_samples(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -49,12 +53,14 @@ pub fn trace_samples(
 ) -> Result<u64> {
     let rows = 0..scene.cut.height;
     let gpu = Gpu::new(device, queue);
-    trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel)
+    let trace = trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel);
+    pollster::block_on(trace)
 }
 
 /// `trace_samples` for the image rows `rows` only (a shard of the image): the other
 /// rows of `accum` stay as they are.
 #[allow(clippy::too_many_arguments)]
+#[cfg(feature = "native")]
 pub fn trace_rows(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -65,13 +71,31 @@ pub fn trace_rows(
     progress: &dyn Fn(u64),
     cancel: &AtomicBool,
 ) -> Result<u64> {
+    let trace = trace_rows_async(device, queue, scene, rows, samples, accum, progress, cancel);
+    pollster::block_on(trace)
+}
+
+/// `trace_rows` as a future, for the browser (`web/`), which may not block: it awaits
+/// each band's readback, giving way to the page's event loop. Natively every await
+/// returns at once, so `trace_rows` blocks on this.
+#[allow(clippy::too_many_arguments)]
+pub async fn trace_rows_async(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &GpuScene,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
     let gpu = Gpu::new(device, queue);
-    trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel)
+    trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel).await
 }
 
 /// `trace_rows`, band by band.
-fn trace_band_rows(
-    gpu: &Gpu,
+async fn trace_band_rows(
+    gpu: &Gpu<'_>,
     scene: &GpuScene,
     rows: Range<u32>,
     samples: Range<u32>,
@@ -115,7 +139,7 @@ fn trace_band_rows(
             })?;
             if last {
                 let (band_rays, band_cut) =
-                    read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+                    read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums).await?;
                 rays += band_rays;
                 unfinished.extend(band_cut);
             } else {
@@ -137,7 +161,8 @@ fn trace_band_rows(
         }
     }
     if !unfinished.is_empty() {
-        let (more_rays, cut) = resume(gpu, scene, &unfinished, &samples, &mut accum.sums, cancel)?;
+        let resumed = resume(gpu, scene, &unfinished, &samples, &mut accum.sums, cancel);
+        let (more_rays, cut) = resumed.await?;
         rays += more_rays;
         cut_short += cut;
     }
@@ -231,11 +256,14 @@ pub(super) fn encode_band(
     }
 }
 
+/// A band's chunk of sums to add to, and its readback pixels, at its index.
+type Chunk<'a> = (usize, (&'a mut [[f32; 3]], &'a [[u32; 4]]));
+
 /// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;
 /// returns its ray count and the pixels (x | y << RESUME_Y_SHIFT) whose work was cut short, which are
 /// left to `resume` (neither their sums nor their rays are counted).
-fn read_band(
-    gpu: &Gpu,
+async fn read_band(
+    gpu: &Gpu<'_>,
     readback: &wgpu::Buffer,
     bytes: u64,
     y0: u32,
@@ -245,34 +273,40 @@ fn read_band(
     // In parallel: a 4K band is 133 MB, and one core takes longer to add it up than the
     // GPU took to trace it.
     const CHUNK: usize = 1 << 14;
-    gpu.read(readback, bytes, |view| {
-        let px: &[[u32; 4]] = bytemuck::cast_slice(view);
-        let start = y0 as usize * width;
-        sums.pixels[start..start + px.len()]
-            .par_chunks_mut(CHUNK)
-            .zip(px.par_chunks(CHUNK))
-            .enumerate()
-            .map(|(k, (out, px))| {
-                let (mut rays, mut cut) = (0u64, Vec::new());
-                for (i, (out, p)) in out.iter_mut().zip(px).enumerate() {
-                    if p[3] & PIXEL_CUT_SHORT != 0 {
-                        let j = start + k * CHUNK + i;
-                        cut.push((j % width) as u32 | ((j / width) as u32) << RESUME_Y_SHIFT);
-                    } else {
-                        for c in 0..3 {
-                            out[c] += f32::from_bits(p[c]);
-                        }
-                        rays += u64::from(p[3]);
-                    }
+    let start = y0 as usize * width;
+    // The chunk at `k` of the band: its sums added, its rays and its pixels cut short.
+    let add = |(k, (out, px)): Chunk| {
+        let (mut rays, mut cut) = (0u64, Vec::new());
+        for (i, (out, p)) in out.iter_mut().zip(px).enumerate() {
+            if p[3] & PIXEL_CUT_SHORT != 0 {
+                let j = start + k * CHUNK + i;
+                cut.push((j % width) as u32 | ((j / width) as u32) << RESUME_Y_SHIFT);
+            } else {
+                for c in 0..3 {
+                    out[c] += f32::from_bits(p[c]);
                 }
-                (rays, cut)
-            })
-            .reduce(
-                || (0, Vec::new()),
-                |(rays, mut cut), (more, more_cut)| {
-                    cut.extend(more_cut);
-                    (rays + more, cut)
-                },
-            )
+                rays += u64::from(p[3]);
+            }
+        }
+        (rays, cut)
+    };
+    let join = |(rays, mut cut): (u64, Vec<u32>), (more, more_cut): (u64, Vec<u32>)| {
+        cut.extend(more_cut);
+        (rays + more, cut)
+    };
+    gpu.read_async(readback, bytes, |view| {
+        let px: &[[u32; 4]] = bytemuck::cast_slice(view);
+        let out = &mut sums.pixels[start..start + px.len()];
+        #[cfg(feature = "native")]
+        let chunks = out.par_chunks_mut(CHUNK).zip(px.par_chunks(CHUNK));
+        // One thread in the browser: the same chunks, in order.
+        #[cfg(not(feature = "native"))]
+        let chunks = out.chunks_mut(CHUNK).zip(px.chunks(CHUNK));
+        let parts = chunks.enumerate().map(add);
+        #[cfg(feature = "native")]
+        return parts.reduce(|| (0, Vec::new()), join);
+        #[cfg(not(feature = "native"))]
+        return parts.fold((0, Vec::new()), join);
     })
+    .await
 }

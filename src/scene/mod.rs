@@ -87,10 +87,44 @@ pub fn read(path: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scen
     let input = io::open(path)?;
     let name = path.display().to_string();
     let dir = path.parent().unwrap_or(Path::new("."));
-    match FileKind::of(path) {
-        FileKind::Nff => nff::read(lex::Lexer::from_input(input, &name), dir, sink, opts),
+    read_input(input, FileKind::of(path), &name, dir, sink, opts)
+}
+
+/// Reads a scene from bytes in memory (plain or gzip) with the reader for `kind`, as
+/// `load` reads a file with those contents: for callers that hold the bytes (a string in
+/// Python, a dropped file in the browser). `name` names the scene in messages; an NFF
+/// `mesh` include and an OBJ's `.mtl` libraries are looked for under `base`.
+pub fn parse(bytes: &[u8], kind: FileKind, name: &str, base: &Path) -> Result<Scene> {
+    parse_with(bytes, kind, name, base, &ReadOptions::default())
+}
+
+/// `parse` with reading options.
+pub fn parse_with(
+    bytes: &[u8],
+    kind: FileKind,
+    name: &str,
+    base: &Path,
+    opts: &ReadOptions,
+) -> Result<Scene> {
+    let mut prims = Collect::default();
+    let mut scene = read_input(io::Input::bytes(bytes), kind, name, base, &mut prims, opts)?;
+    prims.into_scene(&mut scene);
+    Ok(scene)
+}
+
+/// Reads `input` with the reader for `kind`, its bounded primitives into `sink`.
+fn read_input(
+    input: io::Input,
+    kind: FileKind,
+    name: &str,
+    dir: &Path,
+    sink: &mut dyn Sink,
+    opts: &ReadOptions,
+) -> Result<Scene> {
+    match kind {
+        FileKind::Nff => nff::read(lex::Lexer::from_input(input, name), dir, sink, opts),
         kind => {
-            let mut scene = Scene::new(&name, nff_default_camera());
+            let mut scene = Scene::new(name, nff_default_camera());
             let mut palette = Palette::default();
             let grey = palette.id(&mut scene.materials, Material::NEUTRAL_GREY);
             let mut out = MeshOut {
@@ -102,7 +136,7 @@ pub fn read(path: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> Result<Scen
                 mtl: true,
                 dir: Some(dir),
             };
-            mesh::read(input, kind, &name, &mut out)?;
+            mesh::read(input, kind, name, &mut out)?;
             auto::frame_mesh(&mut scene, sink.bounds())?;
             Ok(scene)
         }

@@ -56,6 +56,23 @@ impl Camera {
     pub fn focal_distance(&self) -> f32 {
         self.focal.unwrap_or_else(|| (self.at - self.from).length())
     }
+
+    /// What makes this view give no image, if anything: the one check of a camera that
+    /// the NFF `v` block and the library's callers (the Python and browser cameras) share.
+    pub fn view_problem(&self) -> Option<&'static str> {
+        if !(self.from.is_finite() && self.at.is_finite() && self.up.is_finite()) {
+            return Some("degenerate view: a coordinate is not finite");
+        }
+        let dir = self.at - self.from;
+        if dir.length_squared() == 0.0 {
+            return Some("degenerate view: 'from' and 'at' are the same point");
+        }
+        let side = dir.normalize().cross(self.up.normalize_or_zero());
+        if side.length() < 1e-6 {
+            return Some("degenerate view: 'up' is zero or parallel to the view direction");
+        }
+        None
+    }
 }
 
 /// NFF `f r g b Kd Ks Shine T ior`.

@@ -6,14 +6,25 @@
 //! events, `input` turns winit's input into `controls::Action`s, and `surface` draws
 //! frames into the window's wgpu surface (`readback` reads one back for a screenshot).
 //! Data flows one way: `window` uses the others, none of them uses `window`.
+//!
+//! The camera and the controls are also the browser page's (`web/`), so they build
+//! without the `native` feature; the rest needs threads or a window.
 
 pub mod camera;
 pub mod controls;
+#[cfg(feature = "native")]
 pub mod input;
+#[cfg(feature = "native")]
 pub mod progressive;
+#[cfg(feature = "native")]
 pub mod readback;
+#[cfg(feature = "native")]
 pub mod script;
+#[cfg(feature = "native")]
 pub mod stats;
+#[cfg(feature = "native")]
 pub mod surface;
+#[cfg(feature = "native")]
 pub mod window;
+#[cfg(feature = "native")]
 pub mod wireframe;

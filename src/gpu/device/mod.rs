@@ -53,6 +53,7 @@ impl<'a> Device<'a> {
     /// An out-of-memory error is the one reported when both come: a resource that could
     /// not be allocated is invalid, and every later use of it is a validation error that
     /// hides the cause.
+    #[cfg(not(target_arch = "wasm32"))]
     pub(crate) fn scoped<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -65,6 +66,15 @@ impl<'a> Device<'a> {
         }
     }
 
+    /// `scoped` in the browser, where a scope's errors arrive only after control has gone
+    /// back to the page's event loop, and no thread may block for them: `f` runs unscoped,
+    /// and the device's uncaptured-error handler (installed by the page, `web/`) reports
+    /// what fails.
+    #[cfg(target_arch = "wasm32")]
+    pub(crate) fn scoped<T>(&self, _what: &str, f: impl FnOnce() -> T) -> Result<T> {
+        Ok(f())
+    }
+
     /// Blocks until the GPU has finished everything submitted.
     pub(crate) fn wait(&self) -> Result<()> {
         self.device
@@ -74,21 +84,24 @@ impl<'a> Device<'a> {
     }
 
     /// Maps the first `bytes` of a readback buffer (`readback`) once the work submitted
-    /// before has run, hands them to `f`, unmaps.
-    pub(crate) fn read<T>(
+    /// before has run, hands them to `f`, unmaps. Natively the mapping is complete once the
+    /// device has been waited for, and the await returns at once; in the browser, where
+    /// waiting on the device does nothing, the await gives way to the page's event loop
+    /// until the browser has mapped the buffer.
+    pub(crate) async fn read_async<T>(
         &self,
         buffer: &wgpu::Buffer,
         bytes: u64,
         f: impl FnOnce(&[u8]) -> T,
     ) -> Result<T> {
         let slice = buffer.slice(..bytes);
-        let (tx, rx) = std::sync::mpsc::channel();
+        let (tx, rx) = futures_channel::oneshot::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
         // A lost device or a hung submission surfaces here as a poll error.
         self.wait()?;
-        rx.recv()
+        rx.await
             .map_err(|_| Error::Gpu("readback was never completed".into()))?
             .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
         let out = {
@@ -99,6 +112,17 @@ impl<'a> Device<'a> {
         };
         buffer.unmap();
         Ok(out)
+    }
+
+    /// `read_async` for a caller that may block (not the browser's).
+    #[cfg(feature = "native")]
+    pub(crate) fn read<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        f: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T> {
+        pollster::block_on(self.read_async(buffer, bytes, f))
     }
 
     // ---- what the device is ----
@@ -158,6 +182,7 @@ impl<'a> Gpu<'a> {
 
 /// An error with its causes, on one line: wgpu's `Display` says "Validation Error" and
 /// then the same causes again, indented over several lines, so only its first line is kept.
+#[cfg(not(target_arch = "wasm32"))]
 fn error_chain(e: &dyn std::error::Error) -> String {
     let shown = e.to_string();
     let mut s = shown.lines().next().unwrap_or_default().to_string();

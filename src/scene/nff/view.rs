@@ -113,18 +113,8 @@ impl Parser<'_> {
             cam.width = w;
             cam.height = h;
         }
-        let dir = cam.at - cam.from;
-        if dir.length_squared() == 0.0 {
-            return Err(self
-                .lx
-                .error_at(vtok, "degenerate view: 'from' and 'at' are the same point"));
-        }
-        let side = dir.normalize().cross(cam.up.normalize_or_zero());
-        if side.length() < 1e-6 {
-            return Err(self.lx.error_at(
-                vtok,
-                "degenerate view: 'up' is zero or parallel to the view direction",
-            ));
+        if let Some(problem) = cam.view_problem() {
+            return Err(self.lx.error_at(vtok, problem));
         }
         if self.have_view {
             self.warn(vtok, "second view replaces the first");

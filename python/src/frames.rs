@@ -1,0 +1,137 @@
+//! A packed scene on the renderer chosen for it, and its frames traced with the GIL
+//! released: the render runs on a thread of its own while the calling thread waits without
+//! the GIL, waking every few milliseconds to let Python's signal handlers run; a
+//! KeyboardInterrupt there cancels the render (the library's `cancel` flag) and is raised
+//! once the render has stopped.
+
+use std::ffi::CString;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use gpurt::film::Film;
+use gpurt::gpu_types::GpuGlobals;
+use gpurt::pack::SceneBuffers;
+use gpurt::run;
+use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
+use pyo3::exceptions::{PyRuntimeError, PyRuntimeWarning};
+use pyo3::prelude::*;
+
+use crate::to_py;
+
+/// How often the waiting thread takes the GIL back to run Python's signal handlers.
+const SIGNAL_POLL: Duration = Duration::from_millis(20);
+
+/// One packed scene on one renderer: the GPU's device keeps the uploaded scene between
+/// frames, so that a sweep of frames pays for one upload.
+pub struct Frames {
+    renderer: Traced,
+    pub buffers: Arc<SceneBuffers>,
+    /// Frames rendered, for the counters Python reads.
+    pub frames: u64,
+    /// Rays the last frame traced, counted as the command line's `--stats` counts them.
+    pub rays: u64,
+}
+
+/// The renderer, kept by kind so that the GPU's upload counter can be read.
+enum Traced {
+    Gpu(Box<GpuSession>),
+    Cpu(CpuRenderer),
+}
+
+impl Frames {
+    /// Chooses the renderer for `backend` as the command line does (`session::choose`; a
+    /// missing GPU falls back to the CPU with a RuntimeWarning, as `--backend gpu` warns).
+    pub fn open(py: Python<'_>, buffers: SceneBuffers, backend: Backend) -> PyResult<Frames> {
+        let buffers = Arc::new(buffers);
+        let found = py
+            .detach(|| session::choose(backend, None, Missing::Cpu))
+            .map_err(to_py)?;
+        if let Some(note) = found.note.filter(|n| n.warning) {
+            let text = CString::new(note.text).unwrap_or_default();
+            PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &text, 2)?;
+        }
+        let renderer = match found.gpu {
+            Some(ctx) => Traced::Gpu(Box::new(
+                GpuSession::new(ctx, buffers.clone()).map_err(to_py)?,
+            )),
+            None => Traced::Cpu(CpuRenderer::new(buffers.clone())),
+        };
+        Ok(Frames {
+            renderer,
+            buffers,
+            frames: 0,
+            rays: 0,
+        })
+    }
+
+    fn renderer(&mut self) -> &mut (dyn Renderer + Send) {
+        match &mut self.renderer {
+            Traced::Gpu(gpu) => gpu.as_mut(),
+            Traced::Cpu(cpu) => cpu,
+        }
+    }
+
+    /// "gpu" or "cpu": where the frames are traced.
+    pub fn backend(&self) -> &'static str {
+        match self.renderer {
+            Traced::Gpu(_) => "gpu",
+            Traced::Cpu(_) => "cpu",
+        }
+    }
+
+    /// One line naming what renders: the adapter, or the CPU and its threads.
+    pub fn describe(&self) -> String {
+        match &self.renderer {
+            Traced::Gpu(gpu) => gpu.describe(),
+            Traced::Cpu(cpu) => cpu.describe(),
+        }
+    }
+
+    /// How many times the scene's arrays went to the GPU: once for any number of frames
+    /// (`None` on the CPU, which traces the packed arrays where they are).
+    pub fn scene_uploads(&self) -> Option<u32> {
+        match &self.renderer {
+            Traced::Gpu(gpu) => Some(gpu.scene_uploads()),
+            Traced::Cpu(_) => None,
+        }
+    }
+
+    /// Renders every sample of `globals` (the renderer's own frame of it, as the command
+    /// line renders), with the GIL released; Ctrl-C raises KeyboardInterrupt.
+    pub fn render(&mut self, py: Python<'_>, globals: &GpuGlobals) -> PyResult<Film> {
+        let renderer = self.renderer();
+        let globals = renderer.frame(globals);
+        let cancel = AtomicBool::new(false);
+        let mut interrupt = None;
+        let result = std::thread::scope(|s| {
+            let waiter = std::thread::current();
+            let (cancel, globals) = (&cancel, &globals);
+            let tracer = s.spawn(move || {
+                let r = run::render_frame(renderer, globals, &|_| {}, cancel);
+                waiter.unpark();
+                r
+            });
+            while !tracer.is_finished() {
+                py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
+                if interrupt.is_none()
+                    && let Err(e) = py.check_signals()
+                {
+                    // Stop the render, and wait for it to stop before raising.
+                    cancel.store(true, Ordering::Relaxed);
+                    interrupt = Some(e);
+                }
+            }
+            tracer.join()
+        });
+        if let Some(e) = interrupt {
+            return Err(e);
+        }
+        let rendered = result
+            .map_err(|_| PyRuntimeError::new_err("gpurt: the render thread panicked"))?
+            .map_err(to_py)?;
+        self.frames += 1;
+        self.rays = rendered.rays;
+        Ok(rendered.film)
+    }
+}

@@ -1,0 +1,89 @@
+"""gpurt.Renderer: a camera sweep renders what the command line renders from the same
+view, and uploads the scene once."""
+
+import time
+
+import numpy as np
+import pytest
+
+import gpurt
+from conftest import SCENES, assert_same, cli_render, shared_scenes
+
+
+def view_block(eye, look_at, up, fov, size):
+    v = lambda p: " ".join(repr(float(c)) for c in p)
+    return f"v\nfrom {v(eye)}\nat {v(look_at)}\nup {v(up)}\nangle {fov!r}\nresolution {size[0]} {size[1]}\n"
+
+
+def turntable(n, radius=6.0, height=2.5):
+    for i in range(n):
+        a = 2 * np.pi * i / n
+        yield dict(eye=(radius * np.cos(a), radius * np.sin(a), height), look_at=(0, 0, 0.5), up=(0, 0, 1), fov=45.0)
+
+
+def test_a_camera_frame_equals_the_cli_render_from_that_view(tmp_path):
+    scene = SCENES / "mirrors.nff"
+    r = gpurt.Renderer(scene, width=37, height=23, spp=2, backend="cpu")
+    for i, cam in enumerate(turntable(3)):
+        view = tmp_path / f"view{i}.nff"
+        view.write_text(view_block(cam["eye"], cam["look_at"], cam["up"], cam["fov"], (37, 23)))
+        want, rays = cli_render(scene, tmp_path, "--view", view, "--spp", 2, "--backend", "cpu")
+        got = r.render(camera=cam)
+        assert_same(got, want)
+        assert r.rays == rays
+    # The comparison sees the camera: another frame of the sweep is another image.
+    with pytest.raises(AssertionError):
+        assert_same(r.render(camera=next(turntable(5))), want)
+
+
+def test_a_partial_camera_keeps_the_scene_s_other_settings(tmp_path):
+    scene = SCENES / "spheres.nff"
+    r = gpurt.Renderer(scene, width=24, height=24, backend="cpu")
+    assert_same(r.render(camera={}), r.render())
+    narrower = r.render(camera=dict(fov=20))
+    with pytest.raises(AssertionError):
+        assert_same(narrower, r.render())
+
+
+def test_frames_equal_one_off_renders_of_the_same_settings():
+    r = gpurt.Renderer(SCENES / "glass.nff", width=30, height=20, backend="cpu", spp=2, depth=7)
+    assert_same(r.render(), gpurt.render(SCENES / "glass.nff", width=30, height=20, backend="cpu", spp=2, depth=7))
+    assert_same(r.render(spp=5, depth=2, ambient=0.4),
+                gpurt.render(SCENES / "glass.nff", width=30, height=20, backend="cpu", spp=5, depth=2, ambient=0.4))
+    assert_same(r.render(aov="depth"),
+                gpurt.render(SCENES / "glass.nff", width=30, height=20, backend="cpu", spp=2, depth=7, aov="depth"))
+    assert r.frames_rendered == 3 and r.size == (30, 20) and r.backend == "cpu"
+
+
+def test_a_gpu_sweep_uploads_the_scene_once(gpu_available):
+    if not gpu_available:
+        pytest.skip("no GPU adapter")
+    scene = gpurt.Scene.open(SCENES / "mirrors.nff")
+    r = gpurt.Renderer(scene, width=32, height=24, backend="gpu")
+    assert r.backend == "gpu" and r.scene_uploads == 0
+    frames = [r.render(camera=c) for c in turntable(12)]
+    assert r.scene_uploads == 1 and r.frames_rendered == 12
+    # Another size, sample count and depth still reuse the upload.
+    r.render(spp=3, depth=2)
+    assert r.scene_uploads == 1
+    # Each frame is the image a fresh renderer gives for its camera.
+    for i in (0, 7):
+        fresh = gpurt.Renderer(scene, width=32, height=24, backend="gpu")
+        assert_same(fresh.render(camera=list(turntable(12))[i]), frames[i])
+    assert not all((frames[0] == f).all() for f in frames[1:])
+
+
+def test_a_sweep_costs_frames_not_loads():
+    """Timing: 20 small frames of a large scene take less than 5 loads of it, where a
+    renderer that read the scene again for each frame would take 20 (the margin is for a
+    machine other work shares: each small frame waits for the CPU's threads)."""
+    scene = shared_scenes() / "spd" / "balls-5.nff.gz"
+    start = time.perf_counter()
+    r = gpurt.Renderer(scene, width=8, height=8, backend="cpu")
+    load = time.perf_counter() - start
+    start = time.perf_counter()
+    for cam in turntable(20, radius=4, height=2):
+        r.render(camera=dict(cam, look_at=(0, 0, 0)))
+    sweep = time.perf_counter() - start
+    assert r.frames_rendered == 20
+    assert sweep < 5 * load, f"20 frames took {sweep:.2f} s, one load {load:.2f} s"

@@ -1,0 +1,203 @@
+// The page: a scene from a file (dropped or opened) or from ?scene=URL, traced
+// progressively on the page's WebGPU device by the library (gpurt_web.wasm), drawn into a
+// 2D canvas from the library's 8-bit image. With ?scene=URL it renders once and puts the
+// result in <img id="gpurt-result"> (or the error in <pre id="gpurt-error">) and the camera
+// as an NFF `v` block in <pre id="gpurt-view">, for tests.
+import init, { Session } from "./gpurt_web.js";
+
+const $ = (id) => document.getElementById(id);
+const status = (text) => { $("status").textContent = text; };
+
+function showError(message) {
+  let pre = $("gpurt-error");
+  if (!pre) {
+    pre = document.createElement("pre");
+    pre.id = "gpurt-error";
+    $("out").appendChild(pre);
+  }
+  pre.textContent = String(message);
+  status("error");
+}
+
+function clearError() {
+  const pre = $("gpurt-error");
+  if (pre) pre.remove();
+}
+
+function base64(bytes) {
+  let s = "";
+  for (let i = 0; i < bytes.length; i += 0x8000) {
+    s += String.fromCharCode.apply(null, bytes.subarray(i, i + 0x8000));
+  }
+  return btoa(s);
+}
+
+let session = null;
+let generation = 0; // bumps whenever the image starts again; a stale loop stops
+let running = false;
+
+function draw() {
+  const [w, h] = session.size();
+  const canvas = $("canvas");
+  if (canvas.width !== w || canvas.height !== h) {
+    canvas.width = w;
+    canvas.height = h;
+  }
+  const rgba = session.rgba();
+  if (rgba.length === w * h * 4) {
+    canvas.getContext("2d").putImageData(new ImageData(new Uint8ClampedArray(rgba), w, h), 0, 0);
+  }
+}
+
+// Traces sample after sample until the image is done or starts again.
+async function run() {
+  if (running) return;
+  running = true;
+  try {
+    for (;;) {
+      const mine = generation;
+      const more = await session.step();
+      draw();
+      const [done, spp] = session.samples();
+      status(`${done} / ${spp} samples, ${session.rays()} rays, on ${session.adapter()}`);
+      if (mine === generation && !more) break;
+      await new Promise((r) => requestAnimationFrame(r));
+    }
+  } catch (e) {
+    showError(e);
+  } finally {
+    running = false;
+  }
+}
+
+function restart() {
+  generation += 1;
+  run();
+}
+
+function applyOptions() {
+  const n = (id) => parseInt($(id).value, 10) || 0;
+  session.set_options(n("width"), n("height"), n("spp"), n("depth"), $("shading").value);
+}
+
+async function loadBytes(name, bytes) {
+  clearError();
+  session.load(name, bytes);
+  applyOptions();
+}
+
+async function interactive() {
+  const open = async (file) => {
+    try {
+      await loadBytes(file.name, new Uint8Array(await file.arrayBuffer()));
+      restart();
+    } catch (e) {
+      showError(e);
+    }
+  };
+  $("file").addEventListener("change", (e) => e.target.files[0] && open(e.target.files[0]));
+  const drop = $("drop");
+  drop.addEventListener("dragover", (e) => { e.preventDefault(); drop.classList.add("over"); });
+  drop.addEventListener("dragleave", () => drop.classList.remove("over"));
+  drop.addEventListener("drop", (e) => {
+    e.preventDefault();
+    drop.classList.remove("over");
+    if (e.dataTransfer.files[0]) open(e.dataTransfer.files[0]);
+  });
+  for (const id of ["width", "height", "spp", "depth", "shading"]) {
+    $(id).addEventListener("change", () => {
+      try { applyOptions(); restart(); } catch (e) { showError(e); }
+    });
+  }
+  const canvas = $("canvas");
+  let last = null;
+  canvas.addEventListener("pointerdown", (e) => { last = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
+  canvas.addEventListener("pointerup", () => { last = null; });
+  canvas.addEventListener("pointermove", (e) => {
+    if (!last) return;
+    session.drag(e.clientX - last[0], e.clientY - last[1], e.shiftKey);
+    last = [e.clientX, e.clientY];
+    restart();
+  });
+  canvas.addEventListener("wheel", (e) => {
+    e.preventDefault();
+    session.dolly(-Math.sign(e.deltaY));
+    restart();
+  }, { passive: false });
+  const showView = () => { $("view").hidden = false; $("view").textContent = session.view_block(); };
+  $("camera").addEventListener("click", showView);
+  document.addEventListener("keydown", (e) => { if (e.key === "c" || e.key === "C") showView(); });
+  $("reset").addEventListener("click", () => { session.reset(); restart(); });
+  $("download").addEventListener("click", () => {
+    try {
+      const a = document.createElement("a");
+      a.href = URL.createObjectURL(new Blob([session.png()], { type: "image/png" }));
+      a.download = "gpurt.png";
+      a.click();
+    } catch (e) {
+      showError(e);
+    }
+  });
+  status(`ready on ${session.adapter()}: open a scene`);
+}
+
+// ?scene=URL&width=W&height=H&spp=N&depth=D&shading=S: one render, its result in the page.
+// orbit=DX,DY, pan=DX,DY and dolly=N move the camera first, as those drags and wheel
+// notches would (in that order).
+async function scripted(params) {
+  const url = params.get("scene");
+  for (const id of ["width", "height", "spp", "depth"]) {
+    if (params.has(id)) $(id).value = params.get(id);
+  }
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  const name = decodeURIComponent(new URL(url, location.href).pathname.split("/").pop());
+  await loadBytes(name, new Uint8Array(await response.arrayBuffer()));
+  // A <select> ignores a value it has no option for: the library checks the name.
+  if (params.has("shading")) {
+    const n = (id) => parseInt($(id).value, 10) || 0;
+    session.set_options(n("width"), n("height"), n("spp"), n("depth"), params.get("shading"));
+  }
+  const pair = (key) => params.get(key).split(",").map(Number);
+  if (params.has("orbit")) session.drag(...pair("orbit"), false);
+  if (params.has("pan")) session.drag(...pair("pan"), true);
+  if (params.has("dolly")) session.dolly(Number(params.get("dolly")));
+  while (await session.step()) { /* every sample */ }
+  // A device error can arrive after the last readback: give it a turn of the event loop.
+  await new Promise((r) => setTimeout(r, 0));
+  session.check();
+  draw();
+  const view = document.createElement("pre");
+  view.id = "gpurt-view";
+  view.textContent = session.view_block();
+  $("out").appendChild(view);
+  const img = document.createElement("img");
+  img.dataset.rays = String(session.rays());
+  img.dataset.adapter = session.adapter();
+  img.src = "data:image/png;base64," + base64(session.png());
+  img.id = "gpurt-result";
+  $("out").appendChild(img);
+  status(`done: ${session.samples()[0]} samples on ${session.adapter()}`);
+}
+
+async function main() {
+  await init();
+  try {
+    session = await Session.start();
+  } catch (e) {
+    showError(`no WebGPU: ${e}`);
+    return;
+  }
+  const params = new URLSearchParams(location.search);
+  if (params.has("scene")) {
+    try {
+      await scripted(params);
+    } catch (e) {
+      showError(e);
+    }
+  } else {
+    await interactive();
+  }
+}
+
+main();

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Builds the browser page into web/dist/ (index.html, app.js, gpurt_web.js, gpurt_web_bg.wasm)
+# from a clean checkout: adds the wasm32-unknown-unknown target and installs
+# wasm-bindgen-cli at the version Cargo.lock pins for wasm-bindgen (into
+# target/wasm-tools/, inside the checkout) when they are missing. Serve the result with
+#     python3 -m http.server -d web/dist
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+if ! rustup target list --installed | grep -qx wasm32-unknown-unknown; then
+    rustup target add wasm32-unknown-unknown
+fi
+
+# The CLI must match the wasm-bindgen crate the glue was built with, to the patch version.
+version=$(awk '$0 == "name = \"wasm-bindgen\"" { getline; gsub(/"/, "", $3); print $3 }' Cargo.lock)
+tools="$PWD/target/wasm-tools"
+if ! "$tools/bin/wasm-bindgen" --version 2>/dev/null | grep -qx "wasm-bindgen $version"; then
+    cargo install --quiet wasm-bindgen-cli --version "=$version" --root "$tools"
+fi
+
+# No debug lines in the page's module: they would triple its size.
+CARGO_PROFILE_RELEASE_DEBUG=false \
+    cargo build --quiet --release -p gpurt-web --target wasm32-unknown-unknown
+rm -rf web/dist
+mkdir -p web/dist
+"$tools/bin/wasm-bindgen" --target web --no-typescript --out-dir web/dist --out-name gpurt_web \
+    target/wasm32-unknown-unknown/release/gpurt_web.wasm
+cp web/index.html web/app.js web/dist/
+ls -l web/dist
