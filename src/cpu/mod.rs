@@ -6,9 +6,12 @@
 //! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
 //! the same tree eight children at a time, which finds the same hits.
 
+mod coherent;
 pub mod intersect;
 pub mod main;
+pub mod packet;
 pub mod shade;
+pub mod tracer;
 pub mod traverse;
 pub mod types;
 pub mod wide;
@@ -67,10 +70,29 @@ pub fn render_samples(
 
 /// `render_samples` for the image rows `rows` only (a shard of the image): the other
 /// rows of `accum` stay as they are. A pixel's value never depends on which others are
-/// traced with it.
+/// traced with it. Coherent rays go in packets with the kernels `GPURT_SIMD` picks
+/// (`packet::Kernels::from_env`: by default the widest this processor runs).
 pub fn render_rows(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RayCounts> {
+    let kernels = packet::Kernels::from_env()?;
+    let k = kernels.as_ref();
+    render_rows_with(buffers, globals, k, rows, samples, accum, progress, cancel)
+}
+
+/// `render_rows` with coherent rays in packets of `kernels`, or every ray alone for
+/// `None`: the same image to the bit, and the same rays counted (but the packets').
+#[allow(clippy::too_many_arguments)]
+pub fn render_rows_with(
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    kernels: Option<&packet::Kernels>,
     rows: Range<u32>,
     samples: Range<u32>,
     accum: &mut Accumulator,
@@ -81,6 +103,8 @@ pub fn render_rows(
     accum.check(w, h, globals.spp, &samples)?;
     let rows = rows.start.min(h)..rows.end.min(h);
     let b = Bindings::new(buffers, globals);
+    // Packets need the eight-wide tree (the `cost` AOV walks the GPU's instead).
+    let kernels = kernels.filter(|_| b.wide.is_some());
     // Tiles of TILE x TILE pixels, clipped to `rows`: (x0, y0, y1).
     let tiles: Vec<(u32, u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
@@ -89,6 +113,7 @@ pub fn render_rows(
             (lo < hi).then_some((x0, lo, hi))
         })
         .collect();
+    let old = &accum.sums;
     let done: Vec<Option<(Vec<[f32; 3]>, RayCounts)>> = tiles
         .par_iter()
         .map(|&(x0, y0, y1)| {
@@ -96,16 +121,24 @@ pub fn render_rows(
                 return None;
             }
             let mut counts = RayCounts::default();
-            let mut px = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..y1 {
-                for x in x0..(x0 + TILE).min(w) {
-                    let sum = Vec3::from(accum.sums.get(x, y));
-                    let sum = main::sample_sum(&b, x, y, samples.clone(), sum, &mut counts);
-                    px.push(sum.to_array());
+            let x1 = (x0 + TILE).min(w);
+            let mut px: Vec<Vec3> = (y0..y1)
+                .flat_map(|y| (x0..x1).map(move |x| Vec3::from(old.get(x, y))))
+                .collect();
+            match kernels {
+                Some(k) => {
+                    let (xs, ys) = ((x0, x1), y0..y1);
+                    coherent::render_tile(&b, k, xs, ys, samples.clone(), &mut px, &mut counts);
+                }
+                None => {
+                    let pixels = (y0..y1).flat_map(|y| (x0..x1).map(move |x| (x, y)));
+                    for ((x, y), sum) in pixels.zip(&mut px) {
+                        *sum = main::sample_sum(&b, x, y, samples.clone(), *sum, &mut counts);
+                    }
                 }
             }
             progress(px.len() as u64);
-            Some((px, counts))
+            Some((px.iter().map(|p| p.to_array()).collect::<Vec<_>>(), counts))
         })
         .collect();
     let mut total = RayCounts::default();

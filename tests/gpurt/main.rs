@@ -12,6 +12,7 @@ mod gallery;
 mod gpu;
 mod hostile;
 mod layout;
+mod packet;
 mod parse;
 mod session;
 mod spd;
