@@ -391,3 +391,118 @@ fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
         "{packed:?}"
     );
 }
+
+/// `gpurt SCENE --stats` on the CPU with `GPURT_SIMD` set to `simd`.
+fn cli(dir: &Path, simd: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(args)
+        .current_dir(dir)
+        .env("GPURT_SIMD", simd)
+        .output()
+        .expect("gpurt runs")
+}
+
+/// The numbers of `--stats`' `rays` line: eye, packed, shadow, packed, reflected, packed,
+/// refracted.
+fn ray_line(stderr: &str) -> Vec<u64> {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("rays "))
+        .unwrap_or_else(|| panic!("no rays line in:\n{stderr}"));
+    line.split(|c: char| !c.is_ascii_digit())
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse().expect("a count"))
+        .collect()
+}
+
+#[test]
+fn stats_count_rays_by_kind_and_those_in_packets() {
+    let dir = crate::common::workdir("packet-stats");
+    let scene = own_scenes().join("mirrors.nff");
+    let scene = scene.to_str().expect("a UTF-8 path");
+    let args = [
+        scene,
+        "-o",
+        "out.png",
+        "--width",
+        "33",
+        "--height",
+        "21",
+        "--spp",
+        "2",
+        "--backend",
+        "cpu",
+        "--stats",
+    ];
+    let with = cli(&dir, "", &args);
+    let text = crate::common::stderr(&with);
+    assert!(with.status.success(), "{text}");
+    let packed = ray_line(&text);
+    assert_eq!(packed.len(), 7, "{text}");
+    assert_eq!(packed[0], 33 * 21 * 2, "{text}");
+    // Camera rays go in packets but in a corner block of one pixel; shadow rays from
+    // their hits and reflections off the flat mirrors too, the rest alone.
+    assert!(
+        packed[1] >= packed[0] - 2 && packed[3] > 0 && packed[5] > 0,
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "packets of {} rays",
+            Kernels::new(Isa::best()).expect("best").lanes()
+        )),
+        "{text}"
+    );
+    let without = cli(&dir, "none", &args);
+    let text = crate::common::stderr(&without);
+    let alone = ray_line(&text);
+    assert!(text.contains("no packets"), "{text}");
+    let kinds = |v: &[u64]| [v[0], v[2], v[4], v[6]];
+    assert_eq!(kinds(&alone), kinds(&packed), "the same rays by kind");
+    assert_eq!([alone[1], alone[3], alone[5]], [0, 0, 0], "{text}");
+}
+
+#[test]
+fn a_bad_or_missing_instruction_set_is_an_error_with_no_image() {
+    let dir = crate::common::workdir("packet-simd");
+    let scene = own_scenes().join("spheres.nff");
+    let scene = scene.to_str().expect("a UTF-8 path");
+    let args = [
+        scene,
+        "-o",
+        "out.png",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--backend",
+        "cpu",
+    ];
+    let mut cases = vec![(
+        "bogus",
+        "expected none or one of avx512, avx2, sse, portable",
+    )];
+    if !Isa::Avx512.available() {
+        cases.push(("avx512", "this processor lacks avx512"));
+    }
+    for (simd, message) in cases {
+        let out = cli(&dir, simd, &args);
+        let text = crate::common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{simd}: {text}");
+        assert!(
+            text.contains(&format!("GPURT_SIMD={simd}: {message}")),
+            "{simd}: {text}"
+        );
+        assert!(
+            !dir.join("out.png").exists(),
+            "{simd}: an image was written"
+        );
+    }
+    for simd in Isa::ALL
+        .into_iter()
+        .filter(|i| i.available())
+        .map(Isa::name)
+    {
+        assert!(cli(&dir, simd, &args).status.success(), "{simd}");
+    }
+}
