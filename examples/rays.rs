@@ -17,7 +17,9 @@
 //! and by `Kernels::transmissions` (the renderer's: it goes on through surfaces that
 //! transmit light, where an occlusion test stops), mirror rays by `closest_hit`. The packet
 //! answers must be the single-ray ones to the bit: the program fails otherwise.
-//! `GPURT_SIMD` picks the packet kernels (`cpu::packet::Kernels::from_env`).
+//! `GPURT_SIMD` picks the packet kernels (`cpu::packet::Kernels::from_env`); `CLOCK=cpu`
+//! times processor time instead of wall-clock; `PACKETS_ONLY=1` times the packets alone
+//! (the others print 0).
 //!
 //! The file (little-endian): "GPRTRAYS", then counted arrays, each a u32 count and its
 //! f32 records: triangles (v0, v1, v2: 9 floats), spheres (centre, radius: 4), cones
@@ -179,7 +181,16 @@ fn main() -> anyhow::Result<()> {
         differ == 0,
         "{differ} primary rays: packets and single rays differ"
     );
-    let primary_single = best_of_five(|| single(&mut packed));
+    // PACKETS_ONLY=1 times the packets alone (benches/packets.sh: sizes up to 4K).
+    let only_packets = std::env::var("PACKETS_ONLY").is_ok_and(|v| v == "1");
+    let timed = |f: &mut dyn FnMut()| {
+        if only_packets {
+            Duration::MAX
+        } else {
+            best_of_five(f)
+        }
+    };
+    let primary_single = timed(&mut || single(&mut packed));
     let primary_packets = best_of_five(|| packets(&mut packed));
 
     // Shadow rays from every hit to every point light on its side (directional and area
@@ -256,7 +267,7 @@ fn main() -> anyhow::Result<()> {
         blocked == packed,
         "shadow rays: packets and single rays differ"
     );
-    let shadow_single = best_of_five(|| single(&mut packed));
+    let shadow_single = timed(&mut || single(&mut packed));
     let shadow_packets = best_of_five(|| packets(&mut packed));
     let shadow_rays = shadow.iter().flatten().count();
 
@@ -272,12 +283,12 @@ fn main() -> anyhow::Result<()> {
             });
     };
     trace_mirror(&mut mirror_hits);
-    let mirror_time = best_of_five(|| trace_mirror(&mut vec![0.0; mirror.len()]));
+    let mirror_time = timed(&mut || trace_mirror(&mut vec![0.0; mirror.len()]));
 
     let rate = |n: usize, t: Duration| n as f64 / t.as_secs_f64() / 1e6;
-    // Name, rays, Mrays/s, as benches/embree/rays.c prints them.
+    // Name, rays, Mrays/s, as benches/embree/rays.c prints them (P: packets).
     println!(
-        "gpurt primary1 {n} {:.2} primary{lanes} {n} {:.2} shadow1 {s} {:.2} shadow{lanes} {s} {:.2} mirror1 {m} {:.2}   ({} threads, {} kernels of {lanes} lanes)",
+        "gpurt primary1 {n} {:.2} primaryP {n} {:.2} shadow1 {s} {:.2} shadowP {s} {:.2} mirror1 {m} {:.2}   threads {} lanes {lanes} isa {}",
         rate(primary.len(), primary_single),
         rate(primary.len(), primary_packets),
         rate(shadow_rays, shadow_single),
