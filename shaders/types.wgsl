@@ -91,7 +91,8 @@ struct Globals {
     n_lights: u32,
     aov: u32,
     traversal: u32,
-    _pad: array<u32, 3>,
+    shading: u32,
+    _pad: array<u32, 2>,
 }
 
 struct Tile {
@@ -177,6 +178,8 @@ override LENS: bool = true;
 override MULTISAMPLE: bool = true;
 // globals.aov, as a constant.
 override AOV: u32 = AOV_COLOR;
+// globals.shading, as a constant: a Phong pipeline holds no Blinn-Phong code.
+override SHADING: u32 = SHADING_PHONG;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
 // globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.

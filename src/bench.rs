@@ -21,7 +21,7 @@ use std::time::{Duration, Instant};
 
 use crate::bvh;
 use crate::error::Result;
-use crate::frame::{self, Overrides, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
@@ -36,6 +36,8 @@ pub struct BenchConfig {
     pub sizes: Vec<(u32, u32)>,
     pub spps: Vec<u32>,
     pub depth: u32,
+    /// The highlight's model of every frame.
+    pub shading: Shading,
     /// Timed GPU frames per pass (after one warm-up frame).
     pub frames: u32,
     /// Which backends to time: `Gpu` needs an adapter, `Both` times both, `Auto` the one
@@ -134,10 +136,10 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
-    outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
-    );
-    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    eprintln!("shading     {}", config.shading.name());
+    // The table's header waits for its first row, so that a scene that cannot be read
+    // is an error alone, not a header and then an error.
+    let mut header = true;
     for path in &config.scenes {
         // Each row traces the tree a render of its size and samples would get: one build
         // per BVH quality the rows need.
@@ -154,6 +156,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     height: Some(height),
                     spp: Some(spp),
                     max_depth: Some(config.depth),
+                    shading: Some(config.shading),
                     ..Overrides::default()
                 };
                 let with_camera =
@@ -190,6 +193,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                         "gpurt: warning: {name} {width}x{height} {spp} spp: the GPU traced {} rays, the CPU {}",
                         g.full.rays, c.rays
                     );
+                }
+                if std::mem::take(&mut header) {
+                    print_header();
                 }
                 print_row(&Row {
                     scene: name.clone(),
@@ -282,6 +288,13 @@ fn cpu_row(buffers: &pack::SceneBuffers, globals: &GpuGlobals) -> Result<CpuRow>
         shadow: counts.shadow,
         secondary: counts.reflected + counts.refracted,
     })
+}
+
+fn print_header() {
+    outln!(
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
+    );
+    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
 }
 
 fn print_row(r: &Row) {

@@ -137,15 +137,31 @@ pub fn light_ray(
     Some((shadow_ray, dist))
 }
 
-/// Sample `k` of `light` at surface `s` (material `m`, mirror direction `r`): Lambert and
-/// the Phong highlight scaled by the shadow ray's transmission, or `None` when the light
-/// is below the surface (no shadow ray is traced).
+/// The specular highlight of material `m` towards a light in direction `l`, for a ray
+/// that came along `dir` and mirrors to `r` about the shading normal `n`: Phong,
+/// `Ks (R.L)^Shine`, or under `SHADING_BLINN_PHONG` Blinn-Phong, `Ks (N.H)^Shine` with H
+/// halfway between L and the way back to the viewer.
+pub fn highlight(shading: u32, m: &GpuMaterial, n: Vec3, dir: Vec3, r: Vec3, l: Vec3) -> f32 {
+    let c = if shading == SHADING_BLINN_PHONG {
+        // N.L > 0 and N.dir <= 0 here, so L - dir is never zero.
+        n.dot((l - dir).normalize())
+    } else {
+        r.dot(l)
+    };
+    if c > 0.0 { m.ks * c.powf(m.shine) } else { 0.0 }
+}
+
+/// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
+/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission (as
+/// `tracer` answers it), or `None` when the light is below the surface (no shadow ray is
+/// traced).
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample(
     b: &Bindings,
     tracer: &mut impl Tracer,
     s: &Surface,
     m: &GpuMaterial,
+    dir: Vec3,
     r: Vec3,
     light: &GpuLight,
     k: u32,
@@ -156,16 +172,11 @@ pub fn light_sample(
     let l = shadow_ray.dir;
     let ndotl = s.ns.dot(l);
     let shadow = tracer.transmission(b, &shadow_ray, dist);
-    let rl = r.dot(l);
-    let highlight = if rl > 0.0 {
-        m.ks * rl.powf(m.shine)
-    } else {
-        0.0
-    };
-    Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(highlight)))
+    let spec = highlight(b.globals.shading, m, s.ns, dir, r, l);
+    Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(spec)))
 }
 
-/// Direct light at a surface point: ambient plus, per light sample, Lambert and the Phong
+/// Direct light at a surface point: ambient plus, per light sample, Lambert and the
 /// highlight, each scaled by the shadow ray's transmission.
 fn direct(
     b: &Bindings,
@@ -181,7 +192,7 @@ fn direct(
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, tracer, s, m, r, light, k, rng) {
+            if let Some(c) = light_sample(b, tracer, s, m, dir, r, light, k, rng) {
                 counts.shadow += 1;
                 colour += c;
             }

@@ -3,8 +3,11 @@
 //!
 //! Each module imports only modules listed before it here, so the arrows run one way:
 //! - `context` finds an adapter and opens a device;
-//! - `device` is the one place that calls wgpu's device and queue helpers (error scopes,
-//!   waiting, mapped readback, buffers made from bytes), for the viewer too;
+//! - `device` is the one door to wgpu's device and queue: `Device` (what is made on the
+//!   device, error scopes, waits, readbacks; the viewer uses it too) and `Gpu` (with the
+//!   queue: writes and submissions). No other module calls a method of either
+//!   (`tests/gpurt/architecture/door.rs`); the public entry points take wgpu's device and
+//!   queue and hand them to the door;
 //! - `shaders` assembles and validates the WGSL; `specialization` picks the pipeline a
 //!   scene needs;
 //! - `cut` cuts a frame into bounded dispatches, bands and submissions;

@@ -8,10 +8,9 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use super::device::scoped;
+use super::device::{Device, Slot};
 use super::shaders;
 use super::specialization::Specialization;
-use super::upload::TEXEL_FORMAT;
 use crate::error::Result;
 use crate::gpu_types::GpuTile;
 
@@ -37,27 +36,18 @@ pub(super) struct DiskCache {
 impl DiskCache {
     /// The cache's file for the adapter `adapter_info`, when the device has
     /// `PIPELINE_CACHE` and there is a cache directory (`cache_dir`).
-    pub(super) fn file(
-        device: &wgpu::Device,
-        adapter_info: Option<&wgpu::AdapterInfo>,
-    ) -> Option<PathBuf> {
+    pub(super) fn file(gpu: &Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Option<PathBuf> {
         adapter_info
-            .filter(|_| device.features().contains(wgpu::Features::PIPELINE_CACHE))
+            .filter(|_| gpu.has_pipeline_cache())
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)))
     }
 
     /// The cache, holding what `file` holds if it can be read.
-    pub(super) fn open(device: &wgpu::Device, file: PathBuf) -> DiskCache {
+    pub(super) fn open(gpu: &Device, file: PathBuf) -> DiskCache {
         let data = std::fs::read(&file).ok();
-        // SAFETY: the data was written by `PipelineCache::get_data` for an adapter
-        // with the same cache key; `fallback` makes wgpu ignore data it rejects.
-        let cache = unsafe {
-            device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
-                label: Some("gpurt"),
-                data: data.as_deref(),
-                fallback: true,
-            })
-        };
+        // SAFETY: the file is named by the adapter's cache key (`file`), and only `save`
+        // writes it, with what `PipelineCache::get_data` gave.
+        let cache = unsafe { gpu.pipeline_cache("gpurt", data.as_deref()) };
         DiskCache { cache, file }
     }
 
@@ -82,16 +72,12 @@ impl DiskCache {
 pub(super) struct Modules(Mutex<HashMap<u32, wgpu::ShaderModule>>);
 
 impl Modules {
-    fn get(&self, device: &wgpu::Device, trace_stack: u32) -> Result<wgpu::ShaderModule> {
+    fn get(&self, gpu: &Device, trace_stack: u32) -> Result<wgpu::ShaderModule> {
         let mut modules = self.0.lock().expect("not poisoned");
         if let Some(m) = modules.get(&trace_stack) {
             return Ok(m.clone());
         }
-        let module = scoped(device, "compiling the shader", || {
-            let desc = wgpu::ShaderModuleDescriptor {
-                label: Some("gpurt"),
-                source: wgpu::ShaderSource::Wgsl(shaders::source(trace_stack).into()),
-            };
+        let module = gpu.scoped("compiling the shader", || {
             // SAFETY: without runtime checks an out-of-bounds index or an endless loop is
             // undefined behaviour. The renderer calls `SceneBuffers::check` first, which proves
             // every index the shader follows (children, leaf ranges, materials, normal
@@ -99,9 +85,7 @@ impl Modules {
             // within the stack and the ray depth within the ray stack (whose length,
             // `SceneBuffers::trace_stack`, bounds the rays a trace holds). The checks cost
             // lavapipe about a quarter of its tracing time.
-            unsafe {
-                device.create_shader_module_trusted(desc, wgpu::ShaderRuntimeChecks::unchecked())
-            }
+            unsafe { gpu.unchecked_shader("gpurt", shaders::source(trace_stack)) }
         })?;
         modules.insert(trace_stack, module.clone());
         Ok(module)
@@ -110,7 +94,7 @@ impl Modules {
 
 /// Compiles the shader's entry point `entry` for a specialisation.
 pub(super) fn compile(
-    device: &wgpu::Device,
+    gpu: &Device,
     layout: &wgpu::PipelineLayout,
     modules: &Modules,
     entry: &str,
@@ -118,22 +102,9 @@ pub(super) fn compile(
     cache: Option<&wgpu::PipelineCache>,
 ) -> Result<wgpu::ComputePipeline> {
     let constants = spec.constants();
-    let module = &modules.get(device, spec.trace_stack)?;
-    scoped(device, "compiling the shader", || {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(layout),
-            module,
-            entry_point: Some(entry),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &constants,
-                // Every traversal-stack entry is written before it is read, so the
-                // workgroup memory needs no zeroing (wgpu would otherwise add stores
-                // and a barrier to the start of every workgroup).
-                zero_initialize_workgroup_memory: false,
-            },
-            cache,
-        })
+    let module = &modules.get(gpu, spec.trace_stack)?;
+    gpu.scoped("compiling the shader", || {
+        gpu.compute_pipeline(entry, layout, module, &constants, cache)
     })
 }
 
@@ -148,17 +119,13 @@ pub(super) struct ResumePipelines {
 }
 
 impl ResumePipelines {
-    pub(super) fn get(
-        &self,
-        device: &wgpu::Device,
-        spec: Specialization,
-    ) -> Result<wgpu::ComputePipeline> {
+    pub(super) fn get(&self, gpu: &Device, spec: Specialization) -> Result<wgpu::ComputePipeline> {
         let mut compiled = self.compiled.lock().expect("not poisoned");
         if let Some(p) = compiled.get(&spec) {
             return Ok(p.clone());
         }
         let p = compile(
-            device,
+            gpu,
             &self.pipeline_layout,
             &self.modules,
             "resume",
@@ -170,92 +137,39 @@ impl ResumePipelines {
     }
 }
 
-/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform), nodes,
-/// primitives and triangle normals (rgba32uint texture arrays, split into layers as large
-/// as the device allows), the other scene arrays (read-only storage), the tile's output
-/// (read-write storage). Explicit, so that a binding the shader happens not to use is
-/// still accepted.
-pub(super) fn bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
+/// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform, one
+/// record per dispatch), nodes, primitives and triangle normals (texture arrays, split
+/// into layers as large as the device allows), the other scene arrays (read-only
+/// storage), the tile's output (read-write storage).
+pub(super) fn bind_group_layout(gpu: &Device) -> wgpu::BindGroupLayout {
+    use Slot::*;
+    let tile = UniformRecord {
+        size: size_of::<GpuTile>() as u64,
     };
-    let texels = |binding: u32| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::ReadOnly,
-            format: TEXEL_FORMAT,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-        count: None,
-    };
-    let mut entries = vec![
-        entry(0, wgpu::BufferBindingType::Storage { read_only: true }),
-        wgpu::BindGroupLayoutEntry {
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: true,
-                min_binding_size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
-            },
-            ..entry(1, wgpu::BufferBindingType::Uniform)
-        },
-        texels(2),
-        texels(3),
-        texels(4),
-    ];
-    entries.extend((5..8).map(|b| entry(b, wgpu::BufferBindingType::Storage { read_only: true })));
-    entries.push(entry(
-        8,
-        wgpu::BufferBindingType::Storage { read_only: false },
-    ));
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpurt"),
-        entries: &entries,
-    })
+    gpu.bind_group_layout(
+        "gpurt",
+        &[
+            ReadOnly, tile, Texels, Texels, Texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
+        ],
+    )
 }
 
 /// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of
 /// unfinished ones (read-write storage).
-pub(super) fn resume_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, read_only: bool| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("gpurt resume"),
-        entries: &[entry(0, true), entry(1, false), entry(2, false)],
-    })
+pub(super) fn resume_group_layout(gpu: &Device) -> wgpu::BindGroupLayout {
+    use Slot::*;
+    gpu.bind_group_layout("gpurt resume", &[ReadOnly, ReadWrite, ReadWrite])
 }
 
 /// The pipeline layouts of the `main` entry point (group 0, `layout`) and of `resume`
 /// (groups 0 and 1).
 pub(super) fn pipeline_layouts(
-    device: &wgpu::Device,
+    gpu: &Device,
     layout: &wgpu::BindGroupLayout,
     resume_layout: &wgpu::BindGroupLayout,
 ) -> (wgpu::PipelineLayout, wgpu::PipelineLayout) {
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("gpurt"),
-        bind_group_layouts: &[Some(layout)],
-        immediate_size: 0,
-    });
-    let resume_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("gpurt resume"),
-        bind_group_layouts: &[Some(layout), Some(resume_layout)],
-        immediate_size: 0,
-    });
-    (pipeline_layout, resume_pipeline_layout)
+    (
+        gpu.pipeline_layout("gpurt", &[layout]),
+        gpu.pipeline_layout("gpurt resume", &[layout, resume_layout]),
+    )
 }

@@ -10,7 +10,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES};
-use super::device::{scoped, wait};
+use super::device::{Device, Gpu};
 use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
@@ -75,17 +75,18 @@ impl GpuRenderer {
     /// `PIPELINE_CACHE` (pass `None` to skip the cache).
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
         let start = Instant::now();
-        let software = device.adapter_info().device_type == wgpu::DeviceType::Cpu;
-        let cache_file = DiskCache::file(device, adapter_info);
-        let layout = bind_group_layout(device);
-        let resume_layout = resume_group_layout(device);
+        let gpu = &Device::new(device);
+        let software = gpu.runs_on_cpu();
+        let cache_file = DiskCache::file(gpu, adapter_info);
+        let layout = bind_group_layout(gpu);
+        let resume_layout = resume_group_layout(gpu);
         let (pipeline_layout, resume_pipeline_layout, cache) =
-            scoped(device, "compiling the shader", || {
-                let (main, resume) = pipeline_layouts(device, &layout, &resume_layout);
+            gpu.scoped("compiling the shader", || {
+                let (main, resume) = pipeline_layouts(gpu, &layout, &resume_layout);
                 (
                     main,
                     resume,
-                    cache_file.map(|file| DiskCache::open(device, file)),
+                    cache_file.map(|file| DiskCache::open(gpu, file)),
                 )
             })?;
         let modules = Arc::new(Modules::default());
@@ -104,7 +105,7 @@ impl GpuRenderer {
             compile_time: Mutex::new(start.elapsed()),
             software,
             traversal: traversal_for()?,
-            layer_rows: upload::layer_rows(device),
+            layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
             texture_margin: None,
         })
@@ -179,21 +180,8 @@ impl GpuRenderer {
 
     /// The scene's arrays on the device, laid out for the walk `traversal` as this
     /// renderer's textures are (`layer_rows`, `texture_margin`).
-    fn upload_scene(
-        &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        scene: &SceneBuffers,
-        traversal: u32,
-    ) -> Result<SceneData> {
-        upload_scene(
-            device,
-            queue,
-            scene,
-            traversal,
-            self.layer_rows,
-            self.texture_margin,
-        )
+    fn upload_scene(&self, gpu: &Gpu, scene: &SceneBuffers, traversal: u32) -> Result<SceneData> {
+        upload_scene(gpu, scene, traversal, self.layer_rows, self.texture_margin)
     }
 
     /// Compiles (once) the pipeline for a scene and render settings. The first time, the
@@ -206,21 +194,21 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<wgpu::ComputePipeline> {
+        let gpu = &Gpu::new(device, queue);
         let globals = &self.frame(scene, globals);
         let spec = self.spec(scene, globals);
         if let Some(p) = self.pipelines.lock().expect("not poisoned").get(&spec) {
             return Ok(p.clone());
         }
-        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
-        self.pipeline(device, queue, scene, &data, globals)
+        let data = self.upload_scene(gpu, scene, globals.traversal)?;
+        self.pipeline(gpu, scene, &data, globals)
     }
 
     /// The pipeline for a scene and render settings, compiled the first time and warmed
     /// up on `data`, the scene's arrays on the device.
     fn pipeline(
         &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: &Gpu,
         scene: &SceneBuffers,
         data: &SceneData,
         globals: &GpuGlobals,
@@ -232,14 +220,14 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         let pipeline = compile(
-            device,
+            gpu,
             &self.pipeline_layout,
             &self.modules,
             "main",
             spec,
             self.cache.as_ref().map(DiskCache::cache),
         )?;
-        self.warm_up(device, queue, data, globals, &pipeline)?;
+        self.warm_up(gpu, data, globals, &pipeline)?;
         if let Some(cache) = &self.cache {
             cache.save();
         }
@@ -255,13 +243,12 @@ impl GpuRenderer {
     /// dispatches will run, whatever the driver specialises on.
     fn warm_up(
         &self,
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
+        gpu: &Gpu,
         data: &SceneData,
         globals: &GpuGlobals,
         pipeline: &wgpu::ComputePipeline,
     ) -> Result<()> {
-        let bound = bind(device, &self.layout, data, globals, PIXEL_BYTES, 1)?;
+        let bound = bind(gpu, &self.layout, data, globals, PIXEL_BYTES, 1)?;
         let tile = GpuTile {
             x: globals.width / 2,
             y: globals.height / 2,
@@ -271,14 +258,13 @@ impl GpuRenderer {
             sample_count: 1,
             ..Default::default()
         };
-        queue.write_buffer(&bound.tile_buf, 0, bytemuck::bytes_of(&tile));
-        scoped(device, "compiling the shader", || {
-            let mut enc = device.create_command_encoder(&Default::default());
+        gpu.write(&bound.tile_buf, 0, bytemuck::bytes_of(&tile));
+        gpu.scoped("compiling the shader", || {
+            let mut enc = gpu.encoder();
             encode_band(&mut enc, pipeline, &bound, &[tile]);
-            queue.submit([enc.finish()]);
+            gpu.run(enc);
         })?;
-        wait(device)?;
-        Ok(())
+        gpu.wait()
     }
 
     /// How a frame of `globals`' size and samples is cut on this device. Software
@@ -287,8 +273,7 @@ impl GpuRenderer {
     /// 65535 loop iterations in all, and one sample of an ordinary scene needs far fewer.
     /// GPUs take up to 16 samples per pass, and a band is the most one submission should
     /// hold.
-    fn cut(&self, device: &wgpu::Device, globals: &GpuGlobals) -> Cut {
-        let limits = device.limits();
+    fn cut(&self, limits: &wgpu::Limits, globals: &GpuGlobals) -> Cut {
         let (pass_samples, band_samples) = if self.software {
             (1, 1 << 18)
         } else {
@@ -319,10 +304,12 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<GpuScene> {
+        let gpu = &Gpu::new(device, queue);
+        let limits = gpu.limits();
         let globals = &self.frame(scene, globals);
-        let cut = self.cut(device, globals);
+        let cut = self.cut(&limits, globals);
         check_sizes(
-            device,
+            &limits,
             scene,
             globals.traversal,
             cut.band_bytes(),
@@ -330,10 +317,10 @@ impl GpuRenderer {
         )?;
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        let data = self.upload_scene(device, queue, scene, globals.traversal)?;
-        let pipeline = self.pipeline(device, queue, scene, &data, globals)?;
+        let data = self.upload_scene(gpu, scene, globals.traversal)?;
+        let pipeline = self.pipeline(gpu, scene, &data, globals)?;
         let bound = bind(
-            device,
+            gpu,
             &self.layout,
             &data,
             globals,
@@ -341,8 +328,7 @@ impl GpuRenderer {
             cut.dispatches_per_submission(),
         )?;
         // The texture uploads are queued: finish them, so a failure surfaces here.
-        queue.submit([]);
-        wait(device)?;
+        gpu.finish()?;
         Ok(GpuScene {
             data,
             bound,
@@ -369,26 +355,28 @@ impl GpuRenderer {
         scene: &SceneBuffers,
         globals: &GpuGlobals,
     ) -> Result<()> {
+        let gpu = &Gpu::new(device, queue);
+        let limits = gpu.limits();
         let globals = &self.frame(scene, globals);
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
         if spec != uploaded.spec {
-            uploaded.pipeline = self.pipeline(device, queue, scene, &uploaded.data, globals)?;
+            uploaded.pipeline = self.pipeline(gpu, scene, &uploaded.data, globals)?;
             uploaded.spec = spec;
         }
-        let cut = self.cut(device, globals);
+        let cut = self.cut(&limits, globals);
         if cut == uploaded.cut {
-            queue.write_buffer(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
+            gpu.write(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
         } else {
             check_sizes(
-                device,
+                &limits,
                 scene,
                 globals.traversal,
                 cut.band_bytes(),
                 self.layer_rows,
             )?;
             uploaded.bound = bind(
-                device,
+                gpu,
                 &self.layout,
                 &uploaded.data,
                 globals,

@@ -5,7 +5,7 @@
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use super::device::{buffer_init, read_mapped, scoped};
+use super::device::Gpu;
 use super::scene::GpuScene;
 use crate::error::{Error, Result};
 use crate::film::Film;
@@ -20,56 +20,32 @@ pub(super) const RESUME_CHUNK: usize = 16384;
 /// with the `resume` entry point, one dispatch after another until none is left, and adds
 /// them to `sums`. Returns their rays and how many were still cut short.
 pub(super) fn resume(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
+    gpu: &Gpu,
     scene: &GpuScene,
     pixels: &[u32],
     samples: &Range<u32>,
     sums: &mut Film,
     cancel: &AtomicBool,
 ) -> Result<(u64, u64)> {
-    let pipeline = &scene.resume.get(device, scene.spec)?;
+    let pipeline = &scene.resume.get(gpu, scene.spec)?;
     let (mut rays, mut cut_short) = (0u64, 0u64);
     for chunk in pixels.chunks(RESUME_CHUNK) {
         let n = chunk.len() as u32;
         let state_bytes = u64::from(n) * size_of::<GpuPixelState>() as u64;
-        let buffer = |label: &str, size: u64, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        use wgpu::BufferUsages as U;
         let (state, pending, pending_back, state_back, group) =
-            scoped(device, "resuming pixels", || {
-                let list = buffer_init(
-                    device,
-                    "resume pixels",
-                    bytemuck::cast_slice(chunk),
-                    U::STORAGE,
+            gpu.scoped("resuming pixels", || {
+                let list = gpu.read_only_storage("resume pixels", bytemuck::cast_slice(chunk));
+                let state = gpu.output("resume state", state_bytes);
+                let pending = gpu.output("resume pending", 4);
+                let pending_back = gpu.readback("resume pending readback", 4);
+                let state_back = gpu.readback("resume state readback", state_bytes);
+                let group = gpu.bind_group(
+                    "gpurt resume",
+                    &scene.resume.layout,
+                    [&list, &state, &pending]
+                        .map(|b| b.as_entire_binding())
+                        .into(),
                 );
-                let state = buffer("resume state", state_bytes, U::STORAGE | U::COPY_SRC);
-                let pending = buffer("resume pending", 4, U::STORAGE | U::COPY_DST | U::COPY_SRC);
-                let pending_back = buffer("resume pending readback", 4, U::MAP_READ | U::COPY_DST);
-                let state_back = buffer(
-                    "resume state readback",
-                    state_bytes,
-                    U::MAP_READ | U::COPY_DST,
-                );
-                let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("gpurt resume"),
-                    layout: &scene.resume.layout,
-                    entries: &[&list, &state, &pending]
-                        .iter()
-                        .enumerate()
-                        .map(|(i, b)| wgpu::BindGroupEntry {
-                            binding: i as u32,
-                            resource: b.as_entire_binding(),
-                        })
-                        .collect::<Vec<_>>(),
-                });
                 (state, pending, pending_back, state_back, group)
             })?;
         for round in 0u32.. {
@@ -83,10 +59,10 @@ pub(super) fn resume(
                 sample_start: round,
                 ..Default::default()
             };
-            scoped(device, "resuming pixels", || {
-                queue.write_buffer(&scene.bound.tile_buf, 0, bytemuck::bytes_of(&tile));
-                queue.write_buffer(&pending, 0, &[0; 4]);
-                let mut enc = device.create_command_encoder(&Default::default());
+            gpu.scoped("resuming pixels", || {
+                gpu.write(&scene.bound.tile_buf, 0, bytemuck::bytes_of(&tile));
+                gpu.write(&pending, 0, &[0; 4]);
+                let mut enc = gpu.encoder();
                 {
                     let mut pass = enc.begin_compute_pass(&Default::default());
                     pass.set_pipeline(pipeline);
@@ -95,21 +71,19 @@ pub(super) fn resume(
                     pass.dispatch_workgroups(n.div_ceil(WORKGROUP_INVOCATIONS), 1, 1);
                 }
                 enc.copy_buffer_to_buffer(&pending, 0, &pending_back, 0, 4);
-                queue.submit([enc.finish()]);
+                gpu.run(enc);
             })?;
-            let left: u32 = read_mapped(device, &pending_back, 4, |b| {
-                bytemuck::pod_read_unaligned(b)
-            })?;
+            let left: u32 = gpu.read(&pending_back, 4, bytemuck::pod_read_unaligned)?;
             if left == 0 {
                 break;
             }
         }
-        scoped(device, "resuming pixels", || {
-            let mut enc = device.create_command_encoder(&Default::default());
+        gpu.scoped("resuming pixels", || {
+            let mut enc = gpu.encoder();
             enc.copy_buffer_to_buffer(&state, 0, &state_back, 0, state_bytes);
-            queue.submit([enc.finish()]);
+            gpu.run(enc);
         })?;
-        read_mapped(device, &state_back, state_bytes, |bytes| {
+        gpu.read(&state_back, state_bytes, |bytes| {
             let states: &[GpuPixelState] = bytemuck::cast_slice(bytes);
             for (&xy, st) in chunk.iter().zip(states) {
                 let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);

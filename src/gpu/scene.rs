@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::cut::Cut;
-use super::device::{buffer_init, scoped};
+use super::device::Device;
 use super::pipeline::ResumePipelines;
 use super::specialization::Specialization;
 use super::upload::SceneData;
@@ -65,48 +65,25 @@ pub(super) struct Bound {
 /// Creates a frame's constants and tile slots, its band output and readback buffers, and the bind
 /// group that joins them to the scene's arrays.
 pub(super) fn bind(
-    device: &wgpu::Device,
+    gpu: &Device,
     layout: &wgpu::BindGroupLayout,
     data: &SceneData,
     globals: &GpuGlobals,
     out_bytes: u64,
     tile_slots: u32,
 ) -> Result<Bound> {
-    scoped(device, "binding the frame", || {
-        let globals_buf = buffer_init(
-            device,
-            "globals",
-            bytemuck::bytes_of(globals),
-            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        );
-        let tile_stride = (size_of::<GpuTile>() as u32)
-            .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment);
-        let tile_buf = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("tiles"),
-            size: u64::from(tile_stride) * u64::from(tile_slots.max(1)),
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let output = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("output"),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: out_bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let resources = [
+    gpu.scoped("binding the frame", || {
+        let globals_buf = gpu.constants("globals", bytemuck::bytes_of(globals));
+        let tile_size = size_of::<GpuTile>() as u64;
+        let (tile_buf, tile_stride) = gpu.uniform_records("tiles", tile_size, tile_slots);
+        let output = gpu.output("output", out_bytes);
+        let readback = gpu.readback("readback", out_bytes);
+        let resources = vec![
             globals_buf.as_entire_binding(),
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                 buffer: &tile_buf,
                 offset: 0,
-                size: wgpu::BufferSize::new(size_of::<GpuTile>() as u64),
+                size: wgpu::BufferSize::new(tile_size),
             }),
             wgpu::BindingResource::TextureView(&data.nodes),
             wgpu::BindingResource::TextureView(&data.prims),
@@ -116,19 +93,7 @@ pub(super) fn bind(
             data.lights.as_entire_binding(),
             output.as_entire_binding(),
         ];
-        let entries: Vec<wgpu::BindGroupEntry> = resources
-            .into_iter()
-            .enumerate()
-            .map(|(i, resource)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource,
-            })
-            .collect();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("gpurt"),
-            layout,
-            entries: &entries,
-        });
+        let bind_group = gpu.bind_group("gpurt", layout, resources);
         Bound {
             bind_group,
             globals: globals_buf,

@@ -13,7 +13,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::cut::{Cut, PIXEL_BYTES};
-use super::device::{read_mapped, scoped, wait};
+use super::device::Gpu;
 use super::resume::resume;
 use super::scene::{Bound, GpuScene};
 use crate::error::{Error, Result};
@@ -29,15 +29,9 @@ pub fn trace(
     cancel: &AtomicBool,
 ) -> Result<(Film, u64)> {
     let mut accum = Accumulator::new(scene.cut.width, scene.cut.height);
-    let rays = trace_samples(
-        device,
-        queue,
-        scene,
-        0..scene.cut.spp,
-        &mut accum,
-        progress,
-        cancel,
-    )?;
+    let (rows, samples) = (0..scene.cut.height, 0..scene.cut.spp);
+    let gpu = Gpu::new(device, queue);
+    let rays = trace_band_rows(&gpu, scene, rows, samples, &mut accum, progress, cancel)?;
     Ok((accum.into_film(), rays))
 }
 
@@ -54,7 +48,8 @@ pub fn trace_samples(
     cancel: &AtomicBool,
 ) -> Result<u64> {
     let rows = 0..scene.cut.height;
-    trace_rows(device, queue, scene, rows, samples, accum, progress, cancel)
+    let gpu = Gpu::new(device, queue);
+    trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel)
 }
 
 /// `trace_samples` for the image rows `rows` only (a shard of the image): the other
@@ -63,6 +58,20 @@ pub fn trace_samples(
 pub fn trace_rows(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
+    scene: &GpuScene,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &dyn Fn(u64),
+    cancel: &AtomicBool,
+) -> Result<u64> {
+    let gpu = Gpu::new(device, queue);
+    trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel)
+}
+
+/// `trace_rows`, band by band.
+fn trace_band_rows(
+    gpu: &Gpu,
     scene: &GpuScene,
     rows: Range<u32>,
     samples: Range<u32>,
@@ -93,25 +102,25 @@ pub fn trace_rows(
             }
             let last = run.end == samples.end;
             let start = Instant::now();
-            let dispatches = scoped(device, "tracing a band", || {
+            let dispatches = gpu.scoped("tracing a band", || {
                 let first = run.start == samples.start;
                 let (mut enc, dispatches) =
-                    submit_band(device, queue, scene, &tracing, y0, rows, &run, first);
+                    submit_band(gpu, scene, &tracing, y0, rows, &run, first);
                 if last {
                     let (output, readback) = (&scene.bound.output, &scene.bound.readback);
                     enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
                 }
-                queue.submit([enc.finish()]);
+                gpu.run(enc);
                 dispatches
             })?;
             if last {
                 let (band_rays, band_cut) =
-                    read_band(device, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+                    read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
                 rays += band_rays;
                 unfinished.extend(band_cut);
             } else {
                 // One submission at a time, so that Ctrl-C is seen within one.
-                wait(device)?;
+                gpu.wait()?;
             }
             if let Some(budget) = scene.dispatch_budget {
                 // The time includes the band's readback after its last submission: the
@@ -128,15 +137,7 @@ pub fn trace_rows(
         }
     }
     if !unfinished.is_empty() {
-        let (more_rays, cut) = resume(
-            device,
-            queue,
-            scene,
-            &unfinished,
-            &samples,
-            &mut accum.sums,
-            cancel,
-        )?;
+        let (more_rays, cut) = resume(gpu, scene, &unfinished, &samples, &mut accum.sums, cancel)?;
         rays += more_rays;
         cut_short += cut;
     }
@@ -147,7 +148,7 @@ pub fn trace_rows(
              loop iterations, and a single ray of these pixels needs more, crossing too \
              many surfaces); render with --backend cpu",
             u64::from(cut.width) * u64::from(cut.height),
-            device.adapter_info().name
+            gpu.adapter_name()
         )));
     }
     accum.samples = samples.end;
@@ -157,17 +158,18 @@ pub fn trace_rows(
 /// Traces an uploaded scene's image and waits for the GPU, reading nothing back: the
 /// GPU's own time for a frame, as a viewer that displays on the device would see it.
 pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuScene) -> Result<()> {
+    let gpu = Gpu::new(device, queue);
     let cut = scene.tracing_cut();
     for (y0, rows) in cut.bands() {
         for run in cut.submissions(&(0..cut.spp)) {
-            scoped(device, "tracing a band", || {
+            gpu.scoped("tracing a band", || {
                 let first = run.start == 0;
-                let (enc, _) = submit_band(device, queue, scene, &cut, y0, rows, &run, first);
-                queue.submit([enc.finish()]);
+                let (enc, _) = submit_band(&gpu, scene, &cut, y0, rows, &run, first);
+                gpu.run(enc);
             })?;
         }
     }
-    wait(device)
+    gpu.wait()
 }
 
 /// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
@@ -175,10 +177,8 @@ pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuSc
 /// samples of the band: each pass adds to what the passes before left). A finer cut than
 /// the one the tile buffer was made for has more tiles than slots: all but the last
 /// buffer-full are submitted here. Returns the encoder of the last, and the dispatches.
-#[allow(clippy::too_many_arguments)]
 fn submit_band(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
+    gpu: &Gpu,
     scene: &GpuScene,
     cut: &Cut,
     y0: u32,
@@ -189,7 +189,7 @@ fn submit_band(
     let tiles = cut.tiles(y0, rows, samples);
     let stride = scene.bound.tile_stride as usize;
     let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
-    let mut enc = device.create_command_encoder(&Default::default());
+    let mut enc = gpu.encoder();
     if clear {
         enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
     }
@@ -202,11 +202,11 @@ fn submit_band(
             chunk[..size_of::<GpuTile>()].copy_from_slice(bytemuck::bytes_of(tile));
         }
         // Queue order: this write lands after the submissions before it have run.
-        queue.write_buffer(&scene.bound.tile_buf, 0, &bytes);
+        gpu.write(&scene.bound.tile_buf, 0, &bytes);
         encode_band(&mut enc, &scene.pipeline, &scene.bound, group);
         if groups.peek().is_some() {
-            queue.submit([enc.finish()]);
-            enc = device.create_command_encoder(&Default::default());
+            gpu.run(enc);
+            enc = gpu.encoder();
         }
     }
     (enc, tiles.len() as u32)
@@ -235,7 +235,7 @@ pub(super) fn encode_band(
 /// returns its ray count and the pixels (x | y << RESUME_Y_SHIFT) whose work was cut short, which are
 /// left to `resume` (neither their sums nor their rays are counted).
 fn read_band(
-    device: &wgpu::Device,
+    gpu: &Gpu,
     readback: &wgpu::Buffer,
     bytes: u64,
     y0: u32,
@@ -245,7 +245,7 @@ fn read_band(
     // In parallel: a 4K band is 133 MB, and one core takes longer to add it up than the
     // GPU took to trace it.
     const CHUNK: usize = 1 << 14;
-    read_mapped(device, readback, bytes, |view| {
+    gpu.read(readback, bytes, |view| {
         let px: &[[u32; 4]] = bytemuck::cast_slice(view);
         let start = y0 as usize * width;
         sums.pixels[start..start + px.len()]

@@ -2,7 +2,7 @@
 //! as texture arrays, which grow by layers past one texture's size; the small rest as
 //! storage buffers), checked first against the device's limits.
 
-use super::device::{buffer_init, scoped};
+use super::device::Gpu;
 use crate::error::{Error, Result};
 use crate::fault::AddressSpaceCap;
 use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_WIDE};
@@ -52,17 +52,15 @@ pub(super) fn scene_bytes(scene: &SceneBuffers, traversal: u32, layer_rows: u32)
 /// `texture_margin`, each texture is allocated with the address space capped that far
 /// above the process's size (`GpuRenderer::with_texture_margin`).
 pub(super) fn upload_scene(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
+    gpu: &Gpu,
     scene: &SceneBuffers,
     traversal: u32,
     layer_rows: u32,
     texture_margin: Option<u64>,
 ) -> Result<SceneData> {
-    let storage =
-        |label: &str, bytes: &[u8]| buffer_init(device, label, bytes, wgpu::BufferUsages::STORAGE);
-    scoped(device, "uploading the scene", || {
-        let texels = |label, bytes| texels(device, queue, label, bytes, layer_rows, texture_margin);
+    let storage = |label: &str, bytes: &[u8]| gpu.read_only_storage(label, bytes);
+    gpu.scoped("uploading the scene", || {
+        let texels = |label, bytes| texels(gpu, label, bytes, layer_rows, texture_margin);
         let nodes = texels("nodes", node_bytes(scene, traversal))?;
         let prims = texels("prims", bytemuck::cast_slice(&scene.prims))?;
         let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?;
@@ -98,30 +96,26 @@ pub(super) fn texture_extent(bytes: usize, layer_rows: u32) -> (u32, u32) {
     }
 }
 
-/// Rows of a texture layer on `device`: the highest power of two it allows, so that a
-/// layer holds a power of two of texels and the shader splits an index with shifts.
-pub(super) fn layer_rows(device: &wgpu::Device) -> u32 {
+/// Rows of a texture layer on a device of `limits`: the highest power of two it allows,
+/// so that a layer holds a power of two of texels and the shader splits an index with
+/// shifts.
+pub(super) fn layer_rows(limits: &wgpu::Limits) -> u32 {
     // At most 2^16 rows: a layer's texel count, 2^12 times that, stays a u32 shift.
-    let max = device.limits().max_texture_dimension_2d.clamp(1, 1 << 16);
+    let max = limits.max_texture_dimension_2d.clamp(1, 1 << 16);
     1 << max.ilog2()
 }
-
-/// The format of the node, primitive and normal textures: 16 bytes a texel, bound as
-/// read-only storage textures (`Texels` in `shaders/types.wgsl`, which says why).
-pub(super) const TEXEL_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Uint;
 
 /// Texture rows written per upload step: 4 MB (see `texels`).
 const UPLOAD_ROWS: u32 = 64;
 
-/// An rgba32uint texture array holding `bytes` row by row, layer after layer of
+/// A texture array of 16-byte texels (`TEXEL_FORMAT`) holding `bytes` row by row, layer after layer of
 /// `layer_rows` rows (see `texture_extent`), zero-padded to whole rows. Written from
 /// `bytes` in place, all but the last row in bands of `UPLOAD_ROWS`: a copy padded to
 /// whole rows would double the host memory of the largest scenes (400 MB of primitives
 /// for mount-11). With `margin`, the texture is allocated with the address space capped
 /// that far above the process's size (the out-of-memory fault).
 pub(super) fn texels(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
+    gpu: &Gpu,
     label: &str,
     bytes: &[u8],
     layer_rows: u32,
@@ -129,47 +123,12 @@ pub(super) fn texels(
 ) -> Result<wgpu::Texture> {
     let (height, layers) = texture_extent(bytes.len(), layer_rows);
     let cap = margin.map(AddressSpaceCap::new).transpose()?;
-    let texture = device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: TEXTURE_WIDTH,
-            height,
-            depth_or_array_layers: layers,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: TEXEL_FORMAT,
-        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-        view_formats: &[],
-    });
+    let texture = gpu.texel_array(label, TEXTURE_WIDTH, height, layers);
     drop(cap);
     let row_bytes = TEXTURE_WIDTH as usize * 16;
     // Writes `rows` rows from image row `first` on (rows never cross a layer).
     let write = |first: u32, rows: u32, data: &[u8]| {
-        queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &texture,
-                mip_level: 0,
-                origin: wgpu::Origin3d {
-                    x: 0,
-                    y: first % height,
-                    z: first / height,
-                },
-                aspect: wgpu::TextureAspect::All,
-            },
-            data,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(row_bytes as u32),
-                rows_per_image: Some(rows),
-            },
-            wgpu::Extent3d {
-                width: TEXTURE_WIDTH,
-                height: rows,
-                depth_or_array_layers: 1,
-            },
-        );
+        gpu.write_texel_rows(&texture, first / height, first % height, rows, data);
     };
     // wgpu stages each write in a buffer of its size, freed once the GPU has copied it:
     // bands of rows, each waited for, bound that second copy (lavapipe's staging memory
@@ -184,9 +143,8 @@ pub(super) fn texels(
         write(first, n, &bytes[band]);
         first += n;
         if first < whole {
-            queue.submit([]);
             // A lost device surfaces at the upload's final wait.
-            let _ = device.poll(wgpu::PollType::wait_indefinitely());
+            let _ = gpu.finish();
         }
     }
     if bytes.len() > whole as usize * row_bytes {
@@ -211,13 +169,12 @@ pub(super) fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
 /// Refuses scenes that need a larger texture, storage binding or buffer than the device
 /// allows, naming the limit and the size needed.
 pub(super) fn check_sizes(
-    device: &wgpu::Device,
+    limits: &wgpu::Limits,
     scene: &SceneBuffers,
     traversal: u32,
     out_bytes: u64,
     layer_rows: u32,
 ) -> Result<()> {
-    let limits = device.limits();
     let max_side = limits.max_texture_dimension_2d;
     if max_side < TEXTURE_WIDTH {
         return Err(Error::Gpu(format!(

@@ -4,7 +4,7 @@
 use image::RgbImage;
 
 use crate::error::Result;
-use crate::gpu::device::read_mapped;
+use crate::gpu::device::Device;
 
 /// A copy of an 8-bit RGBA or BGRA texture on its way to the host.
 pub struct TextureReadback {
@@ -53,7 +53,7 @@ impl TextureReadback {
     pub fn read(&self, device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<RgbImage> {
         let bgra = format == wgpu::TextureFormat::Bgra8Unorm;
         let bytes = u64::from(self.row) * u64::from(self.height);
-        read_mapped(device, &self.buffer, bytes, |view| {
+        Device::new(device).read(&self.buffer, bytes, |view| {
             let mut img = RgbImage::new(self.width, self.height);
             for (y, line) in view.chunks(self.row as usize).enumerate() {
                 for x in 0..self.width as usize {

@@ -14,7 +14,7 @@ use super::readback::TextureReadback;
 use super::wireframe::Wireframe;
 use crate::error::{Error, Result};
 use crate::film;
-use crate::gpu::device::scoped;
+use crate::gpu::device::Device;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
@@ -174,7 +174,7 @@ impl Surface {
             format: Some(self.view_format),
             ..Default::default()
         });
-        let shot = scoped(device, "drawing the window", || {
+        let shot = Device::new(device).scoped("drawing the window", || {
             let mut enc = device.create_command_encoder(&Default::default());
             if let Some(image) = image {
                 queue.write_texture(

@@ -16,7 +16,7 @@ use image::RgbImage;
 
 use super::readback::TextureReadback;
 use crate::error::{Error, Result};
-use crate::gpu::device::{buffer_init, scoped};
+use crate::gpu::device::Device;
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
@@ -221,7 +221,7 @@ impl Wireframe {
     ) -> Result<Self> {
         let points = segments(scene);
         // Pipeline or buffer errors become `Error::Gpu`, not wgpu's panicking handler.
-        scoped(device, "building the wireframe", || {
+        Device::new(device).scoped("building the wireframe", || {
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("wireframe"),
                 source: wgpu::ShaderSource::Wgsl(
@@ -294,8 +294,7 @@ impl Wireframe {
             } else {
                 points.iter().map(|p| p.to_array()).collect()
             };
-            let vertices = buffer_init(
-                device,
+            let vertices = Device::new(device).buffer_from(
                 "wireframe vertices",
                 bytemuck::cast_slice(&flat),
                 wgpu::BufferUsages::VERTEX,

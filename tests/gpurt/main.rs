@@ -15,6 +15,7 @@ mod layout;
 mod packet;
 mod parse;
 mod session;
+mod shading;
 mod spd;
 /// The SPD generator example, for `spd`'s tests (its `main` goes unused here).
 #[path = "../../examples/spd.rs"]

@@ -4,7 +4,7 @@
 
 /// A source file's text with comments and string and character literals blanked out
 /// (a literal becomes `""` or a space), line breaks kept so that line numbers stay true.
-fn strip(src: &str) -> String {
+pub(super) fn strip(src: &str) -> String {
     let c: Vec<char> = src.chars().collect();
     let mut out = String::with_capacity(src.len());
     // Skips `c[from..to]`, keeping its line breaks.
@@ -80,12 +80,12 @@ fn strip(src: &str) -> String {
 /// A token of stripped source: a word (identifier or keyword), `::`, or one other
 /// character; with its line.
 #[derive(Clone, Debug, PartialEq)]
-struct Token {
-    text: String,
-    line: usize,
+pub(super) struct Token {
+    pub(super) text: String,
+    pub(super) line: usize,
 }
 
-fn tokens(stripped: &str) -> Vec<Token> {
+pub(super) fn tokens(stripped: &str) -> Vec<Token> {
     let mut out = Vec::new();
     for (n, line) in stripped.lines().enumerate() {
         let c: Vec<char> = line.chars().collect();

@@ -1,0 +1,170 @@
+//! The one door to wgpu's device and queue: every other module of the renderer asks these
+//! two types for what it needs, in the renderer's own terms (a scene's arrays, a frame's
+//! constants and outputs, readbacks, the shader's layouts and pipelines, submissions), and
+//! never calls a method of `wgpu::Device` or `wgpu::Queue` itself
+//! (`tests/gpurt/architecture.rs` checks it). So what a failure of the device looks like
+//! (error scopes, waits, mappings) and how each kind of resource is made is decided once,
+//! and the other modules read as the renderer's logic. The viewer uses `Device` too.
+//!
+//! `Device` borrows the device: what is made on it, error scopes, waits and readbacks.
+//! `Gpu` adds the queue: writes and submissions. Both are made where a public entry point
+//! receives wgpu's device and queue, and handed down. What is made is apart:
+//! `resources` (buffers and textures of each kind the renderer uses) and `pipelines`
+//! (bind group layouts, shader modules, pipelines and their cache).
+
+mod pipelines;
+mod resources;
+
+use std::ops::Deref;
+
+use crate::error::{Error, Result};
+
+pub(crate) use pipelines::Slot;
+pub(crate) use resources::TEXEL_FORMAT;
+
+/// The device, borrowed: what the renderer makes on it, error scopes, waits and readbacks.
+#[derive(Clone, Copy)]
+pub(crate) struct Device<'a> {
+    device: &'a wgpu::Device,
+}
+
+/// The device and its queue: a `Device` that also writes to buffers and textures and
+/// submits work.
+#[derive(Clone, Copy)]
+pub(crate) struct Gpu<'a> {
+    device: Device<'a>,
+    queue: &'a wgpu::Queue,
+}
+
+impl<'a> Deref for Gpu<'a> {
+    type Target = Device<'a>;
+    fn deref(&self) -> &Device<'a> {
+        &self.device
+    }
+}
+
+impl<'a> Device<'a> {
+    pub(crate) fn new(device: &'a wgpu::Device) -> Self {
+        Device { device }
+    }
+
+    /// Runs `f` inside validation and out-of-memory error scopes, turning any captured
+    /// error into `Error::Gpu` naming `what` was being done (never a silent black image).
+    /// An out-of-memory error is the one reported when both come: a resource that could
+    /// not be allocated is invalid, and every later use of it is a validation error that
+    /// hides the cause.
+    pub(crate) fn scoped<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
+        let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let out = f();
+        let v = pollster::block_on(validation.pop());
+        let o = pollster::block_on(oom.pop());
+        match o.or(v) {
+            Some(e) => Err(Error::Gpu(format!("{what}: {}", error_chain(&e)))),
+            None => Ok(out),
+        }
+    }
+
+    /// Blocks until the GPU has finished everything submitted.
+    pub(crate) fn wait(&self) -> Result<()> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
+    }
+
+    /// Maps the first `bytes` of a readback buffer (`readback`) once the work submitted
+    /// before has run, hands them to `f`, unmaps.
+    pub(crate) fn read<T>(
+        &self,
+        buffer: &wgpu::Buffer,
+        bytes: u64,
+        f: impl FnOnce(&[u8]) -> T,
+    ) -> Result<T> {
+        let slice = buffer.slice(..bytes);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        // A lost device or a hung submission surfaces here as a poll error.
+        self.wait()?;
+        rx.recv()
+            .map_err(|_| Error::Gpu("readback was never completed".into()))?
+            .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
+        let out = {
+            let view = slice
+                .get_mapped_range()
+                .map_err(|e| Error::Gpu(format!("reading back: {e}")))?;
+            f(&view)
+        };
+        buffer.unmap();
+        Ok(out)
+    }
+
+    // ---- what the device is ----
+
+    /// Whether the device is a CPU (lavapipe and the like): the renderer cuts its work
+    /// smaller there, and sets no dispatch budget.
+    pub(crate) fn runs_on_cpu(&self) -> bool {
+        self.device.adapter_info().device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// The adapter's name, for messages.
+    pub(crate) fn adapter_name(&self) -> String {
+        self.device.adapter_info().name
+    }
+
+    /// The device's limits (the sizes of textures, bindings and buffers it allows).
+    pub(crate) fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+
+    /// An encoder for a submission (`Gpu::run`).
+    pub(crate) fn encoder(&self) -> wgpu::CommandEncoder {
+        self.device.create_command_encoder(&Default::default())
+    }
+}
+
+impl<'a> Gpu<'a> {
+    pub(crate) fn new(device: &'a wgpu::Device, queue: &'a wgpu::Queue) -> Self {
+        Gpu {
+            device: Device::new(device),
+            queue,
+        }
+    }
+
+    /// Writes `bytes` into `buffer` at `offset`, in queue order: after the submissions
+    /// before, before those after.
+    pub(crate) fn write(&self, buffer: &wgpu::Buffer, offset: u64, bytes: &[u8]) {
+        self.queue.write_buffer(buffer, offset, bytes);
+    }
+
+    /// Submits what `enc` encoded, after the writes queued before.
+    pub(crate) fn run(&self, enc: wgpu::CommandEncoder) {
+        self.queue.submit([enc.finish()]);
+    }
+
+    /// Submits the writes queued so far, with no other work.
+    pub(crate) fn flush(&self) {
+        self.queue.submit([]);
+    }
+
+    /// Submits the writes queued so far and waits for everything submitted.
+    pub(crate) fn finish(&self) -> Result<()> {
+        self.flush();
+        self.wait()
+    }
+}
+
+/// An error with its causes, on one line: wgpu's `Display` says "Validation Error" and
+/// then the same causes again, indented over several lines, so only its first line is kept.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let shown = e.to_string();
+    let mut s = shown.lines().next().unwrap_or_default().to_string();
+    let mut source = e.source();
+    while let Some(cause) = source {
+        s.push_str(&format!(": {cause}"));
+        source = cause.source();
+    }
+    s
+}
