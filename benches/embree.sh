@@ -1,48 +1,89 @@
 #!/usr/bin/env bash
-# gpurt's CPU traversal against Embree 3 on the same rays: primary rays of a 512x512
-# render and the shadow rays from their hits to each point light, on the same threads.
-# `examples/rays.rs` traces them with our `closest_hit` and `transmission` and writes them
-# out; `benches/embree/rays.c` traces the same file with Embree and says how often the
-# answers match. Prints a markdown table.
+# gpurt's CPU traversal against Embree 3 on the same rays, in one run: the primary rays of
+# a SIZE x SIZE render (one a pixel, centres, in 4x4 blocks), the shadow rays from their
+# hits to each point light, and mirror rays off every hit (the incoherent rays that keep
+# the single-ray walk). `examples/rays.rs` traces them with our `closest_hit` and
+# `transmission` one at a time and in packets (`cpu::packet`, the kernels GPURT_SIMD or
+# the processor picks), checks that both give the same answers, and writes the rays out;
+# `benches/embree/rays.c` traces the same file with Embree's rtcIntersect1/8/16 and
+# rtcOccluded1/8/16 and says how often its answers match ours. Prints markdown tables.
 #
-#   benches/embree.sh [SCENE...]      (default: the five SPD scenes of benches/peers.sh)
-#   THREADS=4 SIZE=1024 benches/embree.sh
-#   GPURT_CPU_WALK=binary benches/embree.sh   (our side walks the binary tree, as the GPU)
-#   SPP=16 benches/embree.sh   (our side traces the tree gpurt builds for a 16-sample render;
-#                               the rays are the same)
+#   benches/embree.sh [SCENE...]      (default: the six SPD scenes below, 1024x1024, 2 threads)
+#   THREADS=1 SIZE=512 benches/embree.sh
+#   CLOCK=cpu benches/embree.sh       (processor time instead of wall-clock, both sides: on a
+#                                      machine shared with other work)
+#   GPURT_SIMD=sse benches/embree.sh  (our packets in SSE's four lanes)
+#   SPP=16 benches/embree.sh          (our side traces the tree gpurt builds for a 16-sample
+#                                      render; the rays are the same)
 #
 # Needs Debian's libembree-dev (skipped with a message when it is missing) and ../shared.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 THREADS=${THREADS:-2}
-SIZE=${SIZE:-512}
+SIZE=${SIZE:-1024}
 if [[ ! -f /usr/include/embree3/rtcore.h ]]; then
     echo "skipped: Embree 3 is not installed (apt-get install -y libembree-dev)" >&2
     exit 0
 fi
 if [ $# -eq 0 ]; then
-    set -- "$ROOT"/../shared/scenes/spd/{balls-4,gears-4,mount-7,teapot-6,tree-11}.nff
+    set -- "$ROOT"/../shared/scenes/spd/{balls-4,gears-4,mount-7,teapot-6,tree-11,rings-7}.nff
 fi
 WORK=$(mktemp -d)
 trap 'rm -rf "$WORK"' EXIT
 cc -O3 -march=native -o "$WORK/rays" "$ROOT/benches/embree/rays.c" -lembree3 -lpthread -lm
 (cd "$ROOT" && cargo build --release --quiet --example rays)
 
-echo "| scene | primary rays | gpurt Mrays/s | Embree Mrays/s | gpurt / Embree | shadow rays | gpurt Mrays/s | Embree Mrays/s | gpurt / Embree | answers that agree (primary, shadow) |"
-echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"
+# `name count rate` triples: the count and the rate after `name`.
+count() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 1); exit}}' <<<"$1"; }
+rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 2); exit}}' <<<"$1"; }
+ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
+best() { awk 'BEGIN{m = 0} {for (i = 1; i <= NF; i++) if ($i > m) m = $i} END{print m}' <<<"$*"; }
+
+primary=() shadow=() mirror=() agree=()
+lanes="" isa=""
 for scene in "$@"; do
     name=$(basename "$scene" .nff)
+    echo "== $name" >&2
     ours=$(RAYON_NUM_THREADS=$THREADS "$ROOT/target/release/examples/rays" "$scene" "$SIZE" "$WORK/$name.rays")
     theirs=$("$WORK/rays" "$WORK/$name.rays" "$THREADS")
-    field() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 1); exit}}' <<<"$1"; }
-    rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 3); exit}}' <<<"$1"; }
-    gp=$(rate "$ours" primary) gs=$(rate "$ours" shadow)
-    ep=$(rate "$theirs" primary) es=$(rate "$theirs" shadow)
-    agree=$(grep '^agree' <<<"$theirs" | awk '{print $3 ", " $11}')
-    ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
-    echo "| $name | $(field "$ours" primary) | $gp | $ep | $(ratio "$gp" "$ep") | $(field "$ours" shadow) | $gs | $es | $(ratio "$gs" "$es") | $agree |"
+    lanes=$(awk '{for (i = 1; i < NF; i++) if ($i == "lanes") print $(i + 1)}' <<<"$ours")
+    isa=$(awk '{for (i = 1; i < NF; i++) if ($i == "isa") print $(i + 1)}' <<<"$ours")
+    g1=$(rate "$ours" primary1) gp=$(rate "$ours" primaryP)
+    e1=$(rate "$theirs" primary1) e8=$(rate "$theirs" primary8) e16=$(rate "$theirs" primary16)
+    primary+=("| $name | $(count "$ours" primary1) | $g1 | $gp | $e1 | $e8 | $e16 | $(ratio "$g1" "$e1") | $(ratio "$gp" "$(best "$e1 $e8 $e16")") |")
+    s1=$(rate "$ours" shadow1) sp=$(rate "$ours" shadowP)
+    o1=$(rate "$theirs" shadow1) o8=$(rate "$theirs" shadow8) o16=$(rate "$theirs" shadow16)
+    shadow+=("| $name | $(count "$ours" shadow1) | $s1 | $sp | $o1 | $o8 | $o16 | $(ratio "$s1" "$o1") | $(ratio "$sp" "$o16") |")
+    m1=$(rate "$ours" mirror1) em=$(rate "$theirs" mirror1)
+    mirror+=("| $name | $(count "$ours" mirror1) | $m1 | $em | $(ratio "$m1" "$em") |")
+    agree+=("| $name | $(awk '/^agree/ {print $3 ", " $5 ", " $7 " | " $9 ", " $11 ", " $13 " | " $15}' <<<"$theirs") |")
 done
+
+echo "Primary rays, Mrays/s (one a pixel; Embree's packets: 8 = half a 4x4 block, 16 = the block):"
 echo
-echo "${SIZE}x${SIZE}, one primary ray per pixel, $THREADS threads on both sides, chunks of 64 rays;"
-echo "best of five runs. Embree: rtcIntersect1 / rtcOccluded1, spheres as SPHERE_POINT,"
-echo "cones as user geometry (our intersection in C). gpurt: closest_hit / transmission."
+echo "| scene | rays | gpurt one at a time | gpurt packets of $lanes ($isa) | Embree rtcIntersect1 | rtcIntersect8 | rtcIntersect16 | gpurt 1 / Embree 1 | packets / Embree's best |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+printf '%s\n' "${primary[@]}"
+echo
+echo "Shadow rays to point lights, Mrays/s (a packet: one block's rays to one light):"
+echo
+echo "| scene | rays | gpurt one at a time | gpurt packets of $lanes | Embree rtcOccluded1 | rtcOccluded8 | rtcOccluded16 | gpurt 1 / Embree 1 | packets / rtcOccluded16 |"
+echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|"
+printf '%s\n' "${shadow[@]}"
+echo
+echo "Mirror rays off every hit (incoherent: one at a time on both sides), Mrays/s:"
+echo
+echo "| scene | rays | gpurt | Embree rtcIntersect1 | gpurt / Embree |"
+echo "|---|---:|---:|---:|---:|"
+printf '%s\n' "${mirror[@]}"
+echo
+echo "Embree's answers that agree with ours, % of rays (hit distance within 1e-4; shadow: blocked or not):"
+echo
+echo "| scene | primary 1, 8, 16 | shadow 1, 8, 16 | mirror |"
+echo "|---|---|---|---|"
+printf '%s\n' "${agree[@]}"
+echo
+echo "${SIZE}x${SIZE}, $THREADS threads on both sides, chunks of 64 rays, best of five runs"
+echo "(${CLOCK:-wall}-clock time). Embree 3: spheres as SPHERE_POINT, cones as user geometry (our"
+echo "intersection in C, lane by lane). gpurt: closest_hit / transmission and cpu::packet; our"
+echo "shadow rays go on through surfaces that transmit light, Embree's occlusion test stops."

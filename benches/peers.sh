@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # gpurt against POV-Ray and Tachyon on five SPD scenes at 512x512, one sample per pixel,
-# both cores.
+# both cores (WIDTH, HEIGHT and SPP change that).
 #
 # Times each whole process (start-up, parsing, BVH, render, PNG writing) with
 # /usr/bin/time, keeps the fastest of REPEAT runs (default 3; the machine may be shared),
@@ -12,16 +12,32 @@
 # Tachyon reads the NFF files themselves (-numthreads 2, -raydepth 5 as gpurt's default
 # depth); it does no refraction, and draws gears-4 all white.
 #
+# With SPP=n (a square: 4, 9, 16) gpurt traces n jittered samples a pixel and POV-Ray
+# supersamples every pixel n times (+A0.0 +AM1 +R<sqrt n>: its threshold 0 makes it
+# supersample all pixels, adding its corner samples); Tachyon stays at one.
+#
 # Usage: benches/peers.sh            (from anywhere; needs povray, tachyon and ../shared)
 #        REPEAT=5 benches/peers.sh
+#        WIDTH=1920 HEIGHT=1080 SPP=4 NO_GPU=1 benches/peers.sh balls-4 gears-4 teapot-6
+#        (NO_GPU=1 leaves out the two --backend gpu columns; scenes: a subset of the five)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SCENES_DIR="$ROOT/../shared/scenes/spd"
 POV_DIR="$ROOT/../shared/peers/povray"
 SCENES=(balls-4 gears-4 mount-7 teapot-6 tree-11)
-SIZE=512
+if [[ $# -gt 0 ]]; then SCENES=("$@"); fi
+WIDTH=${WIDTH:-512}
+HEIGHT=${HEIGHT:-512}
+SPP=${SPP:-1}
 REPEAT=${REPEAT:-3}
+POV_AA=(-A)
+if [[ $SPP -gt 1 ]]; then
+    n=$(awk -v s="$SPP" 'BEGIN{n = int(sqrt(s) + 0.5); print (n * n == s) ? n : 0}')
+    [[ $n -gt 0 ]] || { echo "SPP must be a square (4, 9, 16, ...)" >&2; exit 2; }
+    POV_AA=(+A0.0 +AM1 "+R$n")
+fi
+SIZE_ARGS=(--width "$WIDTH" --height "$HEIGHT" --spp "$SPP")
 TIME=/usr/bin/time
 
 if [[ ! -x $TIME ]]; then
@@ -63,23 +79,23 @@ adapter=""
 for s in "${SCENES[@]}"; do
     echo "== $s" >&2
     out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-cpu.png" \
-        --width $SIZE --height $SIZE --backend cpu --stats) || { echo "gpurt failed on $s" >&2; exit 1; }
+        "${SIZE_ARGS[@]}" --backend cpu --stats) || { echo "gpurt failed on $s" >&2; exit 1; }
     read -r g_wall g_kb g_log <<<"$out"
     g_mrays=$(grep -o '[0-9.]* Mrays/s' "$g_log" | awk '{print $1}')
 
     out=$(timed "$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" \
-        --width $SIZE --height $SIZE) || { echo "gpurt failed on $s" >&2; exit 1; }
+        "${SIZE_ARGS[@]}") || { echo "gpurt failed on $s" >&2; exit 1; }
     read -r a_wall a_kb _ <<<"$out"
-    default_backend=$("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" --width $SIZE \
-        --height $SIZE -v 2>&1 | awk '$1 == "backend" {print $2}' | tr -d ':,')
+    default_backend=$("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-auto.png" "${SIZE_ARGS[@]}" \
+        -v 2>&1 | awk '$1 == "backend" {print $2}' | tr -d ':,')
 
     # The GPU backend twice: with Mesa's shader cache cold (a new, empty cache directory
     # for every run, and gpurt's own pipeline cache off), and warm (a cache directory
     # that one untimed run has filled).
     gpu_cell="-" cold_cell="-" u_wall="" c_wall=""
-    gpu=("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" --width $SIZE --height $SIZE
+    gpu=("$GPURT" "$SCENES_DIR/$s.nff" -o "$WORK/$s-gpu.png" "${SIZE_ARGS[@]}"
         --backend gpu --stats -v)
-    if out=$(timed sh -c 'MESA_SHADER_CACHE_DIR=$(mktemp -d -p "$0") GPURT_CACHE_DIR= exec "$@"' \
+    if [[ -z ${NO_GPU:-} ]] && out=$(timed sh -c 'MESA_SHADER_CACHE_DIR=$(mktemp -d -p "$0") GPURT_CACHE_DIR= exec "$@"' \
         "$WORK" "${gpu[@]}"); then
         read -r c_wall _ c_log <<<"$out"
         c_shader=$(awk '$1 == "shader" {print $2}' "$c_log")
@@ -93,14 +109,14 @@ for s in "${SCENES[@]}"; do
         gpu_cell="$u_wall ($u_mrays Mrays/s)"
     fi
 
-    out=$(timed tachyon "$SCENES_DIR/$s.nff" -res $SIZE $SIZE -numthreads 2 -raydepth 5 \
+    out=$(timed tachyon "$SCENES_DIR/$s.nff" -res "$WIDTH" "$HEIGHT" -numthreads 2 -raydepth 5 \
         -format PNG -o "$WORK/$s-tachyon.png") || { echo "tachyon failed on $s" >&2; exit 1; }
     read -r t_wall t_kb _ <<<"$out"
 
     gunzip -c "$POV_DIR/$s.pov.gz" >"$WORK/$s.pov"
     # POV-Ray resolves relative names against the current directory.
     out=$(cd "$WORK" && timed povray "+I$s.pov" "+O$s-pov.png" \
-        +W$SIZE +H$SIZE -A +WT2 -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
+        "+W$WIDTH" "+H$HEIGHT" "${POV_AA[@]}" +WT2 -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
     read -r p_wall p_kb p_log <<<"$out"
 
     ratio() { [[ -n $1 ]] && awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}' || echo -; }
@@ -112,6 +128,6 @@ echo "| scene | gpurt (default) wall s | peak MB | --backend cpu wall s | Mrays/
 echo "|---|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"
 echo
-echo "${SIZE}x${SIZE}, 1 spp, $(nproc) threads; best of $REPEAT runs. Wall time and peak memory are"
+echo "${WIDTH}x${HEIGHT}, $SPP spp (POV-Ray: ${POV_AA[*]}), $(nproc) threads; best of $REPEAT runs. Wall time and peak memory are"
 echo "of the whole process; the ratios are of wall times (below 1: gpurt is faster)."
 if [[ -n $adapter ]]; then echo "--backend gpu runs on: $adapter."; fi

@@ -1,21 +1,32 @@
-//! The CPU renderer's traversal timed on plain rays, and those rays written out for
-//! `benches/embree/rays.c`, so that Embree traces exactly the same ones:
+//! The CPU renderer's traversal timed on plain rays, alone and in packets, and those rays
+//! written out for `benches/embree/rays.c`, so that Embree traces exactly the same ones:
 //!
 //!     cargo run --release --example rays -- SCENE [SIZE] [OUT.rays]
 //!
-//! The rays are those of a SIZE x SIZE render (default 512) at one sample per pixel: the
-//! primary rays through the pixel centres, and one shadow ray from each primary hit to
-//! each point light above the surface, from the same offset origin and to the same
-//! distance as the renderer's (`cpu::shade::light_sample`). Both kinds are traced on all
-//! rayon threads in chunks of 64 rays, best of five runs: primary rays by `closest_hit`,
-//! shadow rays by `transmission`, which the renderer uses (it goes on through surfaces
-//! that transmit light, where an occlusion test would stop).
+//! The rays are those of a SIZE x SIZE render (default 512, a multiple of 4) at one sample
+//! per pixel, taken in blocks of 4x4 pixels (the order of the file too): the primary rays
+//! through the pixel centres; one shadow ray from each primary hit to each point light
+//! above the surface, from the same offset origin and to the same distance as the
+//! renderer's (`cpu::shade::light_ray`); and one mirror ray from each hit, off its shading
+//! normal (`reflect_dir`), as the renderer reflects them, curved surfaces and all: the
+//! incoherent rays that keep the single-ray walk.
+//!
+//! Each kind is traced on all rayon threads in chunks of 64 rays, best of five runs:
+//! primary rays by `closest_hit` one at a time and by `Kernels::closest_hits` in packets
+//! (16 lanes: a 4x4 block, 8: half of one, 4: a row of one), shadow rays by `transmission`
+//! and by `Kernels::transmissions` (the renderer's: it goes on through surfaces that
+//! transmit light, where an occlusion test stops), mirror rays by `closest_hit`. The packet
+//! answers must be the single-ray ones to the bit: the program fails otherwise.
+//! `GPURT_SIMD` picks the packet kernels (`cpu::packet::Kernels::from_env`); `CLOCK=cpu`
+//! times processor time instead of wall-clock; `PACKETS_ONLY=1` times the packets alone
+//! (the others print 0).
 //!
 //! The file (little-endian): "GPRTRAYS", then counted arrays, each a u32 count and its
 //! f32 records: triangles (v0, v1, v2: 9 floats), spheres (centre, radius: 4), cones
 //! (p0, r0, p1, r1: 8), primary rays (origin, direction, tnear, and our hit distance,
-//! infinity for a miss: 8), shadow rays (origin, direction, tfar, and whether ours found
-//! the light blocked, 0 or 1: 8).
+//! infinity for a miss: 8), shadow rays in groups of 16 slots, a group per block and
+//! light (origin, direction, tfar, and whether ours found the light blocked, 0 or 1: 8; an
+//! empty slot has tfar -1), mirror rays (as primary rays, tnear 0).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -23,33 +34,71 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use gpurt::cpu::main::camera_ray;
-use gpurt::cpu::shade::offset_origin;
+use gpurt::cpu::packet::{Kernels, MAX_LANES, Packet};
+use gpurt::cpu::shade::{light_ray, offset_origin, surface};
 use gpurt::cpu::traverse::{closest_hit, transmission};
-use gpurt::cpu::types::{Bindings, Ray};
+use gpurt::cpu::types::{Bindings, Hit, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
 use rayon::prelude::*;
 
 /// Rays per task: rayon's unit of work, and Embree's in the C harness.
 const CHUNK: usize = 64;
+/// Pixels of a block, a 4x4 square: a packet of 16 rays, two of 8, four of 4.
+const BLOCK: usize = 16;
 
-/// Best time of five runs of `f`.
+/// Best time of five runs of `f`: wall-clock time, or with `CLOCK=cpu` the processor time
+/// of the whole process, which other programs sharing the machine inflate far less.
 fn best_of_five(mut f: impl FnMut()) -> Duration {
+    let cpu = std::env::var("CLOCK").is_ok_and(|c| c == "cpu");
+    let now = || {
+        if cpu {
+            process_time()
+        } else {
+            Instant::now().duration_since(*START.get_or_init(Instant::now))
+        }
+    };
     (0..5)
         .map(|_| {
-            let start = Instant::now();
+            let start = now();
             f();
-            start.elapsed()
+            now() - start
         })
         .min()
         .expect("five runs")
 }
+
+static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+
+/// Processor time this process has used, all threads (Linux; wall-clock elsewhere).
+#[cfg(target_os = "linux")]
+fn process_time() -> Duration {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid timespec to write to.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    Duration::new(ts.tv_sec as u64, ts.tv_nsec as u32)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn process_time() -> Duration {
+    START.get_or_init(Instant::now).elapsed()
+}
+
+/// A shadow ray and its interval's end; `None` for an empty slot of a group.
+type Shadow = Option<(Ray, f32)>;
 
 fn main() -> anyhow::Result<()> {
     let mut args = std::env::args().skip(1);
     let scene = PathBuf::from(args.next().unwrap_or("scenes/spheres.nff".into()));
     let size: u32 = args.next().map_or(Ok(512), |s| s.parse())?;
     let out = args.next().map(PathBuf::from);
+    anyhow::ensure!(
+        size > 0 && size.is_multiple_of(4),
+        "SIZE must be a multiple of 4"
+    );
 
     // The tree a render of these rays would get: one sample per pixel, or SPP (the rays
     // are those of the first sample either way; a longer render gets a better tree,
@@ -72,71 +121,186 @@ fn main() -> anyhow::Result<()> {
         ..RenderOptions::for_camera(&buffers.camera)
     };
     let g = frame::globals(&buffers, &opts);
-    // GPURT_CPU_WALK=binary times the GPU's walk of the binary tree instead.
-    let b = match std::env::var("GPURT_CPU_WALK").as_deref() {
-        Ok("binary") => Bindings::gpu_walk(&buffers, &g),
-        _ => Bindings::new(&buffers, &g),
-    };
+    let b = Bindings::new(&buffers, &g);
+    let kernels = Kernels::from_env()?.ok_or_else(|| anyhow::anyhow!("GPURT_SIMD=none"))?;
+    let lanes = kernels.lanes();
 
-    // Primary rays, scanline order, as a renderer without tiles would shoot them.
+    // Primary rays, block by block, row by row within a block.
+    let blocks = size / 4;
     let primary: Vec<Ray> = (0..size * size)
         .map(|i| {
-            let (x, y) = ((i % size) as f32 + 0.5, (i / size) as f32 + 0.5);
-            camera_ray(&g, x, y, &mut 0)
+            let (block, k) = (i / 16, i % 16);
+            let x = (block % blocks) * 4 + k % 4;
+            let y = (block / blocks) * 4 + k / 4;
+            camera_ray(&g, x as f32 + 0.5, y as f32 + 0.5, &mut 0)
         })
         .collect();
-    let trace_primary = || -> Vec<f32> {
+    let mut hits = vec![0.0f32; primary.len()];
+    let single = |out: &mut [f32]| {
         primary
-            .par_iter()
-            .with_min_len(CHUNK)
-            .map(|r| closest_hit(&b, r, g.hither, NO_HIT).t)
-            .collect()
+            .par_chunks(CHUNK)
+            .zip(out.par_chunks_mut(CHUNK))
+            .for_each(|(rays, out)| {
+                for (r, t) in rays.iter().zip(out) {
+                    *t = closest_hit(&b, r, g.hither, NO_HIT).t;
+                }
+            });
     };
-    let hits = trace_primary();
-    let primary_time = best_of_five(|| {
-        std::hint::black_box(trace_primary());
-    });
+    let packets = |out: &mut [f32]| {
+        primary
+            .par_chunks(CHUNK)
+            .zip(out.par_chunks_mut(CHUNK))
+            .for_each(|(rays, out)| {
+                let mut p = Packet::default();
+                let mut h = [Hit {
+                    t: 0.0,
+                    prim: 0,
+                    u: 0.0,
+                    v: 0.0,
+                    cost: 0,
+                }; MAX_LANES];
+                for (rays, out) in rays.chunks(lanes).zip(out.chunks_mut(lanes)) {
+                    p.clear();
+                    for (k, r) in rays.iter().enumerate() {
+                        p.set(k, r, g.hither, NO_HIT);
+                    }
+                    kernels.closest_hits(&b, &p, &mut h);
+                    for (k, t) in out.iter_mut().enumerate() {
+                        *t = h[k].t;
+                    }
+                }
+            });
+    };
+    single(&mut hits);
+    let mut packed = vec![0.0f32; primary.len()];
+    packets(&mut packed);
+    let differ = hits
+        .iter()
+        .zip(&packed)
+        .filter(|(a, b)| a.to_bits() != b.to_bits())
+        .count();
+    anyhow::ensure!(
+        differ == 0,
+        "{differ} primary rays: packets and single rays differ"
+    );
+    // PACKETS_ONLY=1 times the packets alone (benches/packets.sh: sizes up to 4K).
+    let only_packets = std::env::var("PACKETS_ONLY").is_ok_and(|v| v == "1");
+    let timed = |f: &mut dyn FnMut()| {
+        if only_packets {
+            Duration::MAX
+        } else {
+            best_of_five(f)
+        }
+    };
+    let primary_single = timed(&mut || single(&mut packed));
+    let primary_packets = best_of_five(|| packets(&mut packed));
 
     // Shadow rays from every hit to every point light on its side (directional and area
-    // lights are not in the SPD scenes).
-    let mut shadow: Vec<(Ray, f32)> = Vec::new();
-    for (ray, &t) in primary.iter().zip(&hits) {
-        if t == NO_HIT {
-            continue;
-        }
-        let hit = closest_hit(&b, ray, g.hither, NO_HIT);
-        debug_assert_ne!(hit.prim, NO_PRIM);
-        let s = gpurt::cpu::shade::surface(&b, ray, &hit);
+    // lights are not in the SPD scenes), in groups of a block's, and mirror rays.
+    let surfaces: Vec<_> = primary
+        .iter()
+        .zip(&hits)
+        .map(|(ray, &t)| {
+            (t != NO_HIT).then(|| surface(&b, ray, &closest_hit(&b, ray, g.hither, NO_HIT)))
+        })
+        .collect();
+    let mut shadow: Vec<Shadow> = Vec::new();
+    for block in surfaces.chunks(BLOCK) {
         for light in b.lights.iter().filter(|l| l.kind == LIGHT_POINT) {
-            let to = light.pos - s.point;
-            let l = to.normalize();
-            if s.ns.dot(l) <= 0.0 {
-                continue;
+            let group = block
+                .iter()
+                .map(|s| s.as_ref().and_then(|s| light_ray(&b, s, light, 0, &mut 0)));
+            if group.clone().any(|r| r.is_some()) {
+                shadow.extend(group);
             }
-            let origin = offset_origin(&s, l, g.epsilon);
-            shadow.push((Ray { origin, dir: l }, to.length()));
         }
     }
-    let trace_shadow = || -> Vec<bool> {
+    let mirror: Vec<Ray> = primary
+        .iter()
+        .zip(&surfaces)
+        .filter_map(|(ray, s)| {
+            let s = s.as_ref()?;
+            let dir = ray.dir - 2.0 * s.ns.dot(ray.dir) * s.ns;
+            Some(Ray {
+                origin: offset_origin(s, dir, g.epsilon),
+                dir,
+            })
+        })
+        .collect();
+
+    let mut blocked = vec![false; shadow.len()];
+    let single = |out: &mut [bool]| {
         shadow
-            .par_iter()
-            .with_min_len(CHUNK)
-            .map(|(r, tmax)| transmission(&b, r, *tmax) == Vec3::ZERO)
-            .collect()
+            .par_chunks(CHUNK)
+            .zip(out.par_chunks_mut(CHUNK))
+            .for_each(|(rays, out)| {
+                for (r, o) in rays.iter().zip(out) {
+                    if let Some((r, tmax)) = r {
+                        *o = transmission(&b, r, *tmax) == Vec3::ZERO;
+                    }
+                }
+            });
     };
-    let blocked = trace_shadow();
-    let shadow_time = best_of_five(|| {
-        std::hint::black_box(trace_shadow());
-    });
+    let packets = |out: &mut [bool]| {
+        shadow
+            .par_chunks(CHUNK)
+            .zip(out.par_chunks_mut(CHUNK))
+            .for_each(|(rays, out)| {
+                let mut p = Packet::default();
+                let mut light = [Vec3::ZERO; MAX_LANES];
+                for (rays, out) in rays.chunks(lanes).zip(out.chunks_mut(lanes)) {
+                    p.clear();
+                    for (k, r) in rays.iter().enumerate() {
+                        if let Some((r, tmax)) = r {
+                            p.set(k, r, 0.0, *tmax);
+                        }
+                    }
+                    kernels.transmissions(&b, &p, &mut light);
+                    for (k, o) in out.iter_mut().enumerate() {
+                        *o = p.lanes() & 1 << k != 0 && light[k] == Vec3::ZERO;
+                    }
+                }
+            });
+    };
+    single(&mut blocked);
+    let mut packed = vec![false; shadow.len()];
+    packets(&mut packed);
+    anyhow::ensure!(
+        blocked == packed,
+        "shadow rays: packets and single rays differ"
+    );
+    let shadow_single = timed(&mut || single(&mut packed));
+    let shadow_packets = best_of_five(|| packets(&mut packed));
+    let shadow_rays = shadow.iter().flatten().count();
+
+    let mut mirror_hits = vec![0.0f32; mirror.len()];
+    let trace_mirror = |out: &mut [f32]| {
+        mirror
+            .par_chunks(CHUNK)
+            .zip(out.par_chunks_mut(CHUNK))
+            .for_each(|(rays, out)| {
+                for (r, t) in rays.iter().zip(out) {
+                    *t = closest_hit(&b, r, 0.0, NO_HIT).t;
+                }
+            });
+    };
+    trace_mirror(&mut mirror_hits);
+    let mirror_time = timed(&mut || trace_mirror(&mut vec![0.0; mirror.len()]));
 
     let rate = |n: usize, t: Duration| n as f64 / t.as_secs_f64() / 1e6;
+    // Name, rays, Mrays/s, as benches/embree/rays.c prints them (P: packets).
     println!(
-        "gpurt   primary {:>9} rays {:8.2} Mrays/s   shadow {:>9} rays {:8.2} Mrays/s   ({} threads)",
-        primary.len(),
-        rate(primary.len(), primary_time),
-        shadow.len(),
-        rate(shadow.len(), shadow_time),
-        rayon::current_num_threads()
+        "gpurt primary1 {n} {:.2} primaryP {n} {:.2} shadow1 {s} {:.2} shadowP {s} {:.2} mirror1 {m} {:.2}   threads {} lanes {lanes} isa {}",
+        rate(primary.len(), primary_single),
+        rate(primary.len(), primary_packets),
+        rate(shadow_rays, shadow_single),
+        rate(shadow_rays, shadow_packets),
+        rate(mirror.len(), mirror_time),
+        rayon::current_num_threads(),
+        kernels.isa().name(),
+        n = primary.len(),
+        s = shadow_rays,
+        m = mirror.len(),
     );
 
     if let Some(out) = out {
@@ -167,26 +331,35 @@ fn main() -> anyhow::Result<()> {
                 &[p.p0.x, p.p0.y, p.p0.z, p.f0, p.p1.x, p.p1.y, p.p1.z, p.f1],
             )?;
         }
-        count(&mut w, primary.len())?;
-        for (r, &t) in primary.iter().zip(&hits) {
-            let t = if t == NO_HIT { f32::INFINITY } else { t };
-            floats(
-                &mut w,
-                &[&r.origin.to_array()[..], &r.dir.to_array(), &[g.hither, t]].concat(),
-            )?;
-        }
+        let closest = |w: &mut dyn Write, rays: &[Ray], hits: &[f32], tnear: f32| {
+            count(w, rays.len())?;
+            for (r, &t) in rays.iter().zip(hits) {
+                let t = if t == NO_HIT { f32::INFINITY } else { t };
+                floats(
+                    w,
+                    &[&r.origin.to_array()[..], &r.dir.to_array(), &[tnear, t]].concat(),
+                )?;
+            }
+            std::io::Result::Ok(())
+        };
+        closest(&mut w, &primary, &hits, g.hither)?;
         count(&mut w, shadow.len())?;
-        for ((r, tmax), &blocked) in shadow.iter().zip(&blocked) {
-            floats(
-                &mut w,
-                &[
-                    &r.origin.to_array()[..],
-                    &r.dir.to_array(),
-                    &[*tmax, f32::from(u8::from(blocked))],
-                ]
-                .concat(),
-            )?;
+        for (r, &blocked) in shadow.iter().zip(&blocked) {
+            let (r, tmax) = r.unwrap_or((
+                Ray {
+                    origin: Vec3::ZERO,
+                    dir: Vec3::X,
+                },
+                -1.0,
+            ));
+            let record = [
+                &r.origin.to_array()[..],
+                &r.dir.to_array(),
+                &[tmax, f32::from(u8::from(blocked))],
+            ];
+            floats(&mut w, &record.concat())?;
         }
+        closest(&mut w, &mirror, &mirror_hits, 0.0)?;
         w.flush()?;
     }
     Ok(())

@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+use crate::cpu::RayCounts;
 use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
@@ -54,6 +55,9 @@ pub fn prepare(
 pub struct Rendered {
     pub film: Film,
     pub rays: u64,
+    /// The rays by kind, and how many went in packets, where the renderer counts them
+    /// so (the CPU's; `Renderer::ray_kinds`).
+    pub kinds: Option<RayCounts>,
     /// Time spent compiling shaders to get ready (zero on the CPU, or when compiled before).
     pub compile: Duration,
     /// Time tracing the frame (on the GPU with the scene's upload and the readback).
@@ -78,11 +82,13 @@ pub fn render_frame(
     let start = Instant::now();
     let mut accum = Accumulator::new(globals.width, globals.height);
     let rays = renderer.render(globals, 0..globals.spp, &mut accum, progress, cancel)?;
+    let trace = start.elapsed();
     Ok(Rendered {
         film: accum.into_film(),
         rays,
+        kinds: renderer.ray_kinds(),
         compile,
-        trace: start.elapsed(),
+        trace,
     })
 }
 

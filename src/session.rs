@@ -13,6 +13,7 @@ use std::sync::atomic::AtomicBool;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use crate::cpu::RayCounts;
 use crate::error::{Error, Result};
 use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
@@ -65,22 +66,38 @@ pub trait Renderer {
         progress: &(dyn Fn(u64) + Sync),
         cancel: &AtomicBool,
     ) -> Result<u64>;
+
+    /// The rays of the last `render` or `render_rows` by kind, and how many of each went in
+    /// packets, where this renderer counts them so (the CPU; the GPU counts one total).
+    fn ray_kinds(&self) -> Option<RayCounts> {
+        None
+    }
 }
 
 /// The CPU reference renderer, on all cores (rayon).
 pub struct CpuRenderer {
     scene: Arc<SceneBuffers>,
+    /// The last frame's rays (`ray_kinds`).
+    counts: Option<RayCounts>,
 }
 
 impl CpuRenderer {
     pub fn new(scene: Arc<SceneBuffers>) -> Self {
-        CpuRenderer { scene }
+        CpuRenderer {
+            scene,
+            counts: None,
+        }
     }
 }
 
 impl Renderer for CpuRenderer {
     fn describe(&self) -> String {
-        format!("CPU, {} threads", rayon::current_num_threads())
+        let packets = match crate::cpu::packet::Kernels::from_env() {
+            Ok(Some(k)) => format!("packets of {} rays ({})", k.lanes(), k.isa().name()),
+            Ok(None) => "no packets".to_string(),
+            Err(e) => e.to_string(),
+        };
+        format!("CPU, {} threads, {packets}", rayon::current_num_threads())
     }
 
     fn prepare(&mut self, _: &GpuGlobals) -> Result<Duration> {
@@ -99,8 +116,14 @@ impl Renderer for CpuRenderer {
         // The same guard as the GPU's: a frame the fixed-size stacks cannot trace is an
         // error, not a panic.
         self.scene.check(globals)?;
-        crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)
-            .map(|c| c.total())
+        let counts =
+            crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)?;
+        self.counts = Some(counts);
+        Ok(counts.total())
+    }
+
+    fn ray_kinds(&self) -> Option<RayCounts> {
+        self.counts
     }
 }
 

@@ -1,15 +1,19 @@
 /* Embree 3 on the rays `cargo run --release --example rays -- SCENE SIZE FILE` wrote:
- * the same triangles, spheres and cones, the same primary and shadow rays, on THREADS
- * threads taking chunks of 64 rays from a shared counter, as rayon does on our side.
- * Prints Mrays/s (best of five runs) and how often Embree's answers match ours.
+ * the same triangles, spheres and cones, the same primary, shadow and mirror rays, on
+ * THREADS threads taking chunks of 64 rays from a shared counter, as rayon does on our
+ * side. Each kind of ray through each of Embree's kernels: primary rays one at a time
+ * (rtcIntersect1) and in packets of 8 (rtcIntersect8, half a 4x4 block of pixels) and 16
+ * (rtcIntersect16, the block); shadow rays by rtcOccluded1, 8 and 16 (a group of 16 is a
+ * block's rays to one light; empty slots are masked off); mirror rays, which are
+ * incoherent, by rtcIntersect1. Prints Mrays/s (best of five runs) and how often Embree's
+ * answers match ours.
  *
  *   cc -O3 -march=native -o rays rays.c -lembree3 -lpthread -lm
  *   ./rays FILE [THREADS]
  *
  * Triangles and spheres are Embree's own primitives (RTC_GEOMETRY_TYPE_TRIANGLE and
  * SPHERE_POINT); cones, which Embree lacks, are user geometry intersected by a C port of
- * our `intersect_cone` (open sides, no caps). Primary rays use rtcIntersect1, shadow rays
- * rtcOccluded1 (an any-hit test: it stops at the first surface). */
+ * our `intersect_cone` (open sides, no caps), lane by lane for packets. */
 #include <embree3/rtcore.h>
 #include <math.h>
 #include <pthread.h>
@@ -84,90 +88,154 @@ static void cone_hits(const Cone *c, const float *o, const float *d, float t[2])
     }
 }
 
+/* A packet of N rays is N-strided structure of arrays (rtcore_ray.h's RTCRayN_* helpers,
+ * which are C++ only): ray fields origin x, y, z, tnear, direction x, y, z, time, tfar at
+ * float k * N + i; the hit follows the ray's 12 * N words: Ng x, y, z, u, v, primID,
+ * geomID, instID. */
 static void cone_intersect(const struct RTCIntersectFunctionNArguments *args) {
-    if (!args->valid[0]) return;
     const Cone *c = (const Cone *)args->geometryUserPtr + args->primID;
-    struct RTCRayHit *rh = (struct RTCRayHit *)args->rayhit;
-    float o[3] = {rh->ray.org_x, rh->ray.org_y, rh->ray.org_z};
-    float d[3] = {rh->ray.dir_x, rh->ray.dir_y, rh->ray.dir_z};
-    float t[2];
-    cone_hits(c, o, d, t);
-    for (int i = 0; i < 2; i++) {
-        if (t[i] > rh->ray.tnear && t[i] < rh->ray.tfar) {
-            rh->ray.tfar = t[i];
-            rh->hit.geomID = args->geomID;
-            rh->hit.primID = args->primID;
-            rh->hit.instID[0] = args->context->instID[0];
-            rh->hit.Ng_x = rh->hit.Ng_y = 0.0f; rh->hit.Ng_z = 1.0f;
-            rh->hit.u = rh->hit.v = 0.0f;
-            break;
-        }
-    }
-}
-
-static void cone_occluded(const struct RTCOccludedFunctionNArguments *args) {
-    if (!args->valid[0]) return;
-    const Cone *c = (const Cone *)args->geometryUserPtr + args->primID;
-    struct RTCRay *r = (struct RTCRay *)args->ray;
-    float o[3] = {r->org_x, r->org_y, r->org_z}, d[3] = {r->dir_x, r->dir_y, r->dir_z};
-    float t[2];
-    cone_hits(c, o, d, t);
-    for (int i = 0; i < 2; i++)
-        if (t[i] > r->tnear && t[i] < r->tfar) { r->tfar = -INFINITY; return; }
-}
-
-/* ---- tracing ---- */
-
-typedef struct {
-    RTCScene scene;
-    const float *rays; /* 8 floats a ray: origin, direction, tnear or tfar, our answer */
-    unsigned n;
-    int shadow;
-    float *answer; /* per ray: hit distance (INFINITY: miss), or 1 blocked / 0 not */
-    atomic_uint next;
-} Job;
-
-static void *work(void *arg) {
-    Job *job = arg;
-    struct RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    for (;;) {
-        unsigned start = atomic_fetch_add(&job->next, CHUNK);
-        if (start >= job->n) return NULL;
-        unsigned end = start + CHUNK < job->n ? start + CHUNK : job->n;
-        for (unsigned i = start; i < end; i++) {
-            const float *r = job->rays + 8 * (size_t)i;
-            if (job->shadow) {
-                struct RTCRay ray = {.org_x = r[0], .org_y = r[1], .org_z = r[2], .tnear = 0.0f,
-                                     .dir_x = r[3], .dir_y = r[4], .dir_z = r[5], .time = 0.0f,
-                                     .tfar = r[6], .mask = 0xffffffffu, .id = 0, .flags = 0};
-                rtcOccluded1(job->scene, &ctx, &ray);
-                job->answer[i] = ray.tfar == -INFINITY ? 1.0f : 0.0f;
-            } else {
-                struct RTCRayHit rh;
-                memset(&rh, 0, sizeof rh);
-                rh.ray.org_x = r[0]; rh.ray.org_y = r[1]; rh.ray.org_z = r[2];
-                rh.ray.dir_x = r[3]; rh.ray.dir_y = r[4]; rh.ray.dir_z = r[5];
-                rh.ray.tnear = r[6]; rh.ray.tfar = INFINITY; rh.ray.mask = 0xffffffffu;
-                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rtcIntersect1(job->scene, &ctx, &rh);
-                job->answer[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? INFINITY : rh.ray.tfar;
+    unsigned N = args->N;
+    float *ray = (float *)args->rayhit;
+    float *hit = ray + 12 * N;
+    for (unsigned i = 0; i < N; i++) {
+        if (!args->valid[i]) continue;
+        float o[3] = {ray[0 * N + i], ray[1 * N + i], ray[2 * N + i]};
+        float d[3] = {ray[4 * N + i], ray[5 * N + i], ray[6 * N + i]};
+        float t[2];
+        cone_hits(c, o, d, t);
+        for (int j = 0; j < 2; j++) {
+            if (t[j] > ray[3 * N + i] && t[j] < ray[8 * N + i]) {
+                ray[8 * N + i] = t[j];
+                hit[0 * N + i] = hit[1 * N + i] = 0.0f;
+                hit[2 * N + i] = 1.0f;
+                hit[3 * N + i] = hit[4 * N + i] = 0.0f;
+                ((unsigned *)hit)[5 * N + i] = args->primID;
+                ((unsigned *)hit)[6 * N + i] = args->geomID;
+                ((unsigned *)hit)[7 * N + i] = args->context->instID[0];
+                break;
             }
         }
     }
 }
 
+static void cone_occluded(const struct RTCOccludedFunctionNArguments *args) {
+    const Cone *c = (const Cone *)args->geometryUserPtr + args->primID;
+    unsigned N = args->N;
+    float *ray = (float *)args->ray;
+    for (unsigned i = 0; i < N; i++) {
+        if (!args->valid[i]) continue;
+        float o[3] = {ray[0 * N + i], ray[1 * N + i], ray[2 * N + i]};
+        float d[3] = {ray[4 * N + i], ray[5 * N + i], ray[6 * N + i]};
+        float t[2];
+        cone_hits(c, o, d, t);
+        for (int j = 0; j < 2; j++)
+            if (t[j] > ray[3 * N + i] && t[j] < ray[8 * N + i]) { ray[8 * N + i] = -INFINITY; break; }
+    }
+}
+
+/* ---- tracing ---- */
+
+enum Kind { PRIMARY, SHADOW, MIRROR };
+
+typedef struct {
+    RTCScene scene;
+    const float *rays; /* 8 floats a ray: origin, direction, tnear or tfar, our answer */
+    unsigned n;
+    enum Kind kind;
+    int width; /* rays a call: 1, 8 or 16 */
+    float *answer; /* per ray: hit distance (INFINITY: miss), or 1 blocked / 0 not */
+    atomic_uint next;
+} Job;
+
+/* An empty slot of a shadow group: tfar below zero. */
+static int present(const float *r, enum Kind kind) { return kind != SHADOW || r[6] >= 0.0f; }
+
+static void trace_one(Job *job, struct RTCIntersectContext *ctx, unsigned i) {
+    const float *r = job->rays + 8 * (size_t)i;
+    if (!present(r, job->kind)) return;
+    if (job->kind == SHADOW) {
+        struct RTCRay ray = {.org_x = r[0], .org_y = r[1], .org_z = r[2], .tnear = 0.0f,
+                             .dir_x = r[3], .dir_y = r[4], .dir_z = r[5], .time = 0.0f,
+                             .tfar = r[6], .mask = 0xffffffffu, .id = 0, .flags = 0};
+        rtcOccluded1(job->scene, ctx, &ray);
+        job->answer[i] = ray.tfar == -INFINITY ? 1.0f : 0.0f;
+    } else {
+        struct RTCRayHit rh;
+        memset(&rh, 0, sizeof rh);
+        rh.ray.org_x = r[0]; rh.ray.org_y = r[1]; rh.ray.org_z = r[2];
+        rh.ray.dir_x = r[3]; rh.ray.dir_y = r[4]; rh.ray.dir_z = r[5];
+        rh.ray.tnear = r[6]; rh.ray.tfar = INFINITY; rh.ray.mask = 0xffffffffu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(job->scene, ctx, &rh);
+        job->answer[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? INFINITY : rh.ray.tfar;
+    }
+}
+
+/* Rays first..first + W - 1 as one packet of W (8 or 16) through rtcIntersectW or
+ * rtcOccludedW: the packet's layout is RTCRayHitN's with N = W. */
+static void trace_packet(Job *job, struct RTCIntersectContext *ctx, unsigned first) {
+    const unsigned W = (unsigned)job->width;
+    _Alignas(64) float buf[24 * 16];
+    _Alignas(64) int valid[16] = {0};
+    memset(buf, 0, sizeof buf);
+    unsigned *words = (unsigned *)buf;
+    for (unsigned i = 0; i < W; i++) {
+        const float *r = job->rays + 8 * (size_t)(first + i);
+        valid[i] = first + i < job->n && present(r, job->kind) ? -1 : 0;
+        if (!valid[i]) continue;
+        buf[0 * W + i] = r[0]; buf[1 * W + i] = r[1]; buf[2 * W + i] = r[2];
+        buf[3 * W + i] = job->kind == SHADOW ? 0.0f : r[6];
+        buf[4 * W + i] = r[3]; buf[5 * W + i] = r[4]; buf[6 * W + i] = r[5];
+        buf[8 * W + i] = job->kind == SHADOW ? r[6] : INFINITY;
+        words[9 * W + i] = 0xffffffffu;
+        words[(12 + 6) * W + i] = RTC_INVALID_GEOMETRY_ID;
+    }
+    if (job->kind == SHADOW) {
+        if (W == 8) rtcOccluded8(valid, job->scene, ctx, (struct RTCRay8 *)buf);
+        else rtcOccluded16(valid, job->scene, ctx, (struct RTCRay16 *)buf);
+    } else {
+        if (W == 8) rtcIntersect8(valid, job->scene, ctx, (struct RTCRayHit8 *)buf);
+        else rtcIntersect16(valid, job->scene, ctx, (struct RTCRayHit16 *)buf);
+    }
+    for (unsigned i = 0; i < W; i++) {
+        if (!valid[i]) continue;
+        float *a = &job->answer[first + i];
+        if (job->kind == SHADOW) *a = buf[8 * W + i] == -INFINITY ? 1.0f : 0.0f;
+        else *a = words[(12 + 6) * W + i] == RTC_INVALID_GEOMETRY_ID ? INFINITY : buf[8 * W + i];
+    }
+}
+
+static void *work(void *arg) {
+    Job *job = arg;
+    struct RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    /* Packets hold neighbouring rays: tell Embree so (mirror rays go one at a time). */
+    if (job->width > 1) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (;;) {
+        unsigned start = atomic_fetch_add(&job->next, CHUNK);
+        if (start >= job->n) return NULL;
+        unsigned end = start + CHUNK < job->n ? start + CHUNK : job->n;
+        if (job->width == 1)
+            for (unsigned i = start; i < end; i++) trace_one(job, &ctx, i);
+        else
+            for (unsigned i = start; i < end; i += (unsigned)job->width) trace_packet(job, &ctx, i);
+    }
+}
+
+/* Wall-clock time, or with CLOCK=cpu the processor time of the whole process (as
+ * examples/rays.rs), which other programs sharing the machine inflate far less. */
+static int cpu_clock;
 static double now(void) {
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(cpu_clock ? CLOCK_PROCESS_CPUTIME_ID : CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
 
 /* Traces all rays on `threads` threads, five times; returns the best time. */
-static double trace(RTCScene scene, Array rays, int shadow, float *answer, int threads) {
+static double trace(RTCScene scene, Array rays, enum Kind kind, int width, float *answer, int threads) {
     double best = INFINITY;
     for (int run = 0; run < 5; run++) {
-        Job job = {scene, rays.data, rays.n, shadow, answer, 0};
+        Job job = {scene, rays.data, rays.n, kind, width, answer, 0};
         pthread_t tid[64];
         double t0 = now();
         for (int i = 0; i < threads; i++) pthread_create(&tid[i], NULL, work, &job);
@@ -178,9 +246,29 @@ static double trace(RTCScene scene, Array rays, int shadow, float *answer, int t
     return best;
 }
 
+/* How many of `rays`' answers `answer` matches: both miss, or both hit within a relative
+ * 1e-4 of each other (hits), or the same verdict (shadows); and how many rays there are. */
+static unsigned agree(Array rays, enum Kind kind, const float *answer, unsigned *count) {
+    unsigned same = 0;
+    *count = 0;
+    for (unsigned i = 0; i < rays.n; i++) {
+        const float *r = rays.data + 8 * (size_t)i;
+        if (!present(r, kind)) continue;
+        float ours = r[7], theirs = answer[i];
+        ++*count;
+        if (kind == SHADOW)
+            same += ours == theirs;
+        else
+            same += (isinf(ours) && isinf(theirs)) ||
+                    (!isinf(ours) && !isinf(theirs) && fabsf(ours - theirs) <= 1e-4f * fabsf(ours));
+    }
+    return same;
+}
+
 int main(int argc, char **argv) {
     if (argc < 2) { fprintf(stderr, "usage: %s FILE [THREADS]\n", argv[0]); return 2; }
     int threads = argc > 2 ? atoi(argv[2]) : 2;
+    cpu_clock = getenv("CLOCK") && strcmp(getenv("CLOCK"), "cpu") == 0;
     if (threads < 1 || threads > 64) { fprintf(stderr, "1 to 64 threads\n"); return 2; }
     FILE *f = fopen(argv[1], "rb");
     char magic[8];
@@ -191,10 +279,12 @@ int main(int argc, char **argv) {
     Array tris = read_array(f, 9, "triangles");
     Array spheres = read_array(f, 4, "spheres");
     Array cones = read_array(f, 8, "cones");
-    /* 8 floats a ray: origin, direction, tnear (primary) or tfar (shadow), our answer. */
+    /* 8 floats a ray: origin, direction, tnear (primary, mirror) or tfar (shadow), our answer. */
     Array primary = read_array(f, 8, "primary rays");
     Array shadow = read_array(f, 8, "shadow rays");
+    Array mirror = read_array(f, 8, "mirror rays");
     fclose(f);
+    if (primary.n % 16 || shadow.n % 16) { fprintf(stderr, "rays not in blocks of 16\n"); return 2; }
 
     char config[32];
     snprintf(config, sizeof config, "threads=%d", threads);
@@ -236,26 +326,26 @@ int main(int argc, char **argv) {
     rtcCommitScene(scene);
     double build = now() - t0;
 
-    float *answer = malloc(((size_t)primary.n + shadow.n + 1) * sizeof(float));
-    double tp = trace(scene, primary, 0, answer, threads);
-    /* Agreement: both miss, or both hit within a relative 1e-4 of each other. */
-    unsigned same_p = 0;
-    for (unsigned i = 0; i < primary.n; i++) {
-        float ours = primary.data[8 * (size_t)i + 7], theirs = answer[i];
-        if ((isinf(ours) && isinf(theirs)) ||
-            (!isinf(ours) && !isinf(theirs) && fabsf(ours - theirs) <= 1e-4f * fabsf(ours)))
-            same_p++;
+    size_t most = primary.n > shadow.n ? primary.n : shadow.n;
+    float *answer = malloc((most > mirror.n ? most : mirror.n) * sizeof(float) + 16);
+    struct { const char *name; Array rays; enum Kind kind; int width; } runs[] = {
+        {"primary1", primary, PRIMARY, 1}, {"primary8", primary, PRIMARY, 8},
+        {"primary16", primary, PRIMARY, 16}, {"shadow1", shadow, SHADOW, 1},
+        {"shadow8", shadow, SHADOW, 8}, {"shadow16", shadow, SHADOW, 16},
+        {"mirror1", mirror, MIRROR, 1},
+    };
+    printf("embree");
+    char agreement[512] = "agree";
+    for (size_t k = 0; k < sizeof runs / sizeof runs[0]; k++) {
+        double t = trace(scene, runs[k].rays, runs[k].kind, runs[k].width, answer, threads);
+        unsigned count, same = agree(runs[k].rays, runs[k].kind, answer, &count);
+        printf(" %s %u %.2f", runs[k].name, count, count / t / 1e6);
+        size_t used = strlen(agreement);
+        snprintf(agreement + used, sizeof agreement - used, " %s %.4f", runs[k].name,
+                 count ? 100.0 * same / count : 100.0);
     }
-    double ts = trace(scene, shadow, 1, answer + primary.n, threads);
-    unsigned same_s = 0;
-    for (unsigned i = 0; i < shadow.n; i++)
-        same_s += shadow.data[8 * (size_t)i + 7] == answer[primary.n + i];
-
-    printf("embree  primary %9u rays %8.2f Mrays/s   shadow %9u rays %8.2f Mrays/s   (%d threads, "
-           "build %.3f s)\n",
-           primary.n, primary.n / tp / 1e6, shadow.n, shadow.n / ts / 1e6, threads, build);
-    printf("agree   primary %.4f%% of rays (hit distance within 1e-4), shadow %.4f%% (blocked or not)\n",
-           primary.n ? 100.0 * same_p / primary.n : 100.0, shadow.n ? 100.0 * same_s / shadow.n : 100.0);
+    printf("   (name, rays, Mrays/s; %d threads, build %.3f s)\n", threads, build);
+    printf("%s   (name, %% of rays: hit distance within 1e-4, or the same shadow verdict)\n", agreement);
     rtcReleaseScene(scene);
     rtcReleaseDevice(device);
     return 0;

@@ -128,6 +128,18 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             r.rays,
             r.mrays_per_s()
         ));
+        if let Some(k) = r.kinds {
+            report.push(format!(
+                "rays        eye {} ({} in packets), shadow {} ({}), reflected {} ({}), refracted {}",
+                k.eye,
+                k.eye_packed,
+                k.shadow,
+                k.shadow_packed,
+                k.reflected,
+                k.reflected_packed,
+                k.refracted
+            ));
+        }
         films.push(r.film);
     }
     if let [cpu, gpu] = &films[..] {

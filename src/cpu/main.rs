@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3};
 
 use super::shade::{surface, trace};
-use super::traverse::closest_hit;
+use super::tracer::{Alone, Tracer};
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 
@@ -70,18 +70,18 @@ pub fn sample_sum(
         let ray = camera_ray(g, px as f32 + off.x, py as f32 + off.y, &mut rng);
         counts.eye += 1;
         sum += if g.aov == AOV_COLOR {
-            trace(b, ray, &mut rng, counts)
+            trace(b, &mut Alone, ray, &mut rng, counts)
         } else {
-            aov(b, &ray)
+            aov(b, &mut Alone, &ray)
         };
     }
     sum
 }
 
 /// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
-fn aov(b: &Bindings, ray: &Ray) -> Vec3 {
+pub fn aov(b: &Bindings, tracer: &mut impl Tracer, ray: &Ray) -> Vec3 {
     let g = b.globals;
-    let hit = closest_hit(b, ray, g.hither, NO_HIT);
+    let hit = tracer.closest_hit(b, ray, g.hither, NO_HIT);
     match g.aov {
         AOV_COST => Vec3::splat(hit.cost as f32),
         _ if hit.prim == NO_PRIM => Vec3::ZERO,

@@ -6,9 +6,12 @@
 //! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
 //! the same tree eight children at a time, which finds the same hits.
 
+mod coherent;
 pub mod intersect;
 pub mod main;
+pub mod packet;
 pub mod shade;
+pub mod tracer;
 pub mod traverse;
 pub mod types;
 pub mod wide;
@@ -70,7 +73,8 @@ pub fn render_samples(
 
 /// `render_samples` for the image rows `rows` only (a shard of the image): the other
 /// rows of `accum` stay as they are. A pixel's value never depends on which others are
-/// traced with it.
+/// traced with it. Coherent rays go in packets with the kernels `GPURT_SIMD` picks
+/// (`packet::Kernels::from_env`: by default the widest this processor runs).
 ///
 /// Each pixel's sum is traced in place in `accum`, in tiles of TILE x TILE pixels, so a
 /// frame costs no memory beyond its accumulator (at 16384 x 16384, 3 GiB; a second
@@ -88,10 +92,30 @@ pub fn render_rows(
     progress: &(dyn Fn(u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<RayCounts> {
+    let kernels = packet::Kernels::from_env()?;
+    let k = kernels.as_ref();
+    render_rows_with(buffers, globals, k, rows, samples, accum, progress, cancel)
+}
+
+/// `render_rows` with coherent rays in packets of `kernels`, or every ray alone for
+/// `None`: the same image to the bit, and the same rays counted (but the packets').
+#[allow(clippy::too_many_arguments)]
+pub fn render_rows_with(
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    kernels: Option<&packet::Kernels>,
+    rows: Range<u32>,
+    samples: Range<u32>,
+    accum: &mut Accumulator,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RayCounts> {
     let (w, h) = (globals.width, globals.height);
     accum.check(w, h, globals.spp, &samples)?;
     let rows = rows.start.min(h)..rows.end.min(h);
     let b = Bindings::new(buffers, globals);
+    // Packets need the eight-wide tree (the `cost` AOV walks the GPU's instead).
+    let kernels = kernels.filter(|_| b.wide.is_some());
     let span = rows.start as usize * w as usize..rows.end as usize * w as usize;
     let held = &accum.sums.pixels[span.clone()];
     let before = held.iter().any(|p| *p != [0.0; 3]).then(|| held.to_vec());
@@ -130,16 +154,54 @@ pub fn render_rows(
                 return None;
             }
             let mut counts = RayCounts::default();
-            let mut n = 0;
-            for (y, piece) in tile {
-                for (dx, px) in piece.iter_mut().enumerate() {
-                    let x = tx as u32 * TILE + dx as u32;
-                    let sum =
-                        main::sample_sum(&b, x, y, samples.clone(), Vec3::from(*px), &mut counts);
-                    *px = sum.to_array();
-                    n += 1;
+            let n = match kernels {
+                Some(k) => {
+                    // The tile's rows are consecutive (`rows` is a range): trace them
+                    // as one block, then write the sums back into the accumulator.
+                    let x0 = tx as u32 * TILE;
+                    let x1 = x0 + tile[0].1.len() as u32;
+                    let ys = tile[0].0..tile[0].0 + tile.len() as u32;
+                    let mut px: Vec<Vec3> = tile
+                        .iter()
+                        .flat_map(|(_, p)| p.iter().map(|&s| Vec3::from(s)))
+                        .collect();
+                    coherent::render_tile(
+                        &b,
+                        k,
+                        (x0, x1),
+                        ys,
+                        samples.clone(),
+                        &mut px,
+                        &mut counts,
+                    );
+                    let sums = px.chunks(tile[0].1.len());
+                    for ((_, piece), row) in tile.into_iter().zip(sums) {
+                        for (out, sum) in piece.iter_mut().zip(row) {
+                            *out = sum.to_array();
+                        }
+                    }
+                    px.len() as u64
                 }
-            }
+                None => {
+                    let mut n = 0;
+                    for (y, piece) in tile {
+                        for (dx, px) in piece.iter_mut().enumerate() {
+                            let x = tx as u32 * TILE + dx as u32;
+                            let sum = main::sample_sum(
+                                &b,
+                                x,
+                                y,
+                                samples.clone(),
+                                Vec3::from(*px),
+                                &mut counts,
+                            );
+                            *px = sum.to_array();
+                            n += 1;
+                        }
+                    }
+                    n
+                }
+            };
             finished[band_index * columns + tx].store(true, Ordering::Relaxed);
             progress(n);
             Some(counts)

@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use super::intersect;
-use super::traverse::{closest_hit, transmission};
+use super::tracer::Tracer;
 use super::types::{Bindings, Hit, Ray, RayCounts, rand};
 use crate::gpu_types::*;
 
@@ -91,7 +91,7 @@ fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) ->
     }
 }
 
-fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
+pub fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
 
@@ -102,6 +102,39 @@ pub fn light_samples(light: &GpuLight) -> u32 {
     } else {
         1
     }
+}
+
+/// The shadow ray of sample `k` of `light` at surface `s` and the distance to the light
+/// along it, or `None` when the light is below the surface (no shadow ray is traced).
+/// Only an area light draws from `rng`. (`light_sample`'s first half, which the renderer's
+/// occlusion packets also take their rays from: coherent.rs.)
+pub fn light_ray(
+    b: &Bindings,
+    s: &Surface,
+    light: &GpuLight,
+    k: u32,
+    rng: &mut u32,
+) -> Option<(Ray, f32)> {
+    let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
+        (light.pos, NO_HIT)
+    } else {
+        let mut lp = light.pos;
+        if light.kind == LIGHT_AREA {
+            let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
+            let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
+            lp += su * light.u + sv * light.v;
+        }
+        let to = lp - s.point;
+        (to.normalize(), to.length())
+    };
+    if s.ns.dot(l) <= 0.0 {
+        return None;
+    }
+    let shadow_ray = Ray {
+        origin: offset_origin(s, l, b.globals.epsilon),
+        dir: l,
+    };
+    Some((shadow_ray, dist))
 }
 
 /// The specular highlight of material `m` towards a light in direction `l`, for a ray
@@ -119,11 +152,13 @@ pub fn highlight(shading: u32, m: &GpuMaterial, n: Vec3, dir: Vec3, r: Vec3, l: 
 }
 
 /// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
-/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission, or
-/// `None` when the light is below the surface (no shadow ray is traced).
+/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission (as
+/// `tracer` answers it), or `None` when the light is below the surface (no shadow ray is
+/// traced).
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample(
     b: &Bindings,
+    tracer: &mut impl Tracer,
     s: &Surface,
     m: &GpuMaterial,
     dir: Vec3,
@@ -133,41 +168,31 @@ pub fn light_sample(
     rng: &mut u32,
 ) -> Option<Vec3> {
     let intensity = light.color / light_samples(light) as f32;
-    let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
-        (light.pos, NO_HIT)
-    } else {
-        let mut lp = light.pos;
-        if light.kind == LIGHT_AREA {
-            let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
-            let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
-            lp += su * light.u + sv * light.v;
-        }
-        let to = lp - s.point;
-        (to.normalize(), to.length())
-    };
+    let (shadow_ray, dist) = light_ray(b, s, light, k, rng)?;
+    let l = shadow_ray.dir;
     let ndotl = s.ns.dot(l);
-    if ndotl <= 0.0 {
-        return None;
-    }
-    let shadow_ray = Ray {
-        origin: offset_origin(s, l, b.globals.epsilon),
-        dir: l,
-    };
-    let shadow = transmission(b, &shadow_ray, dist);
+    let shadow = tracer.transmission(b, &shadow_ray, dist);
     let spec = highlight(b.globals.shading, m, s.ns, dir, r, l);
     Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(spec)))
 }
 
 /// Direct light at a surface point: ambient plus, per light sample, Lambert and the
 /// highlight, each scaled by the shadow ray's transmission.
-fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
+fn direct(
+    b: &Bindings,
+    tracer: &mut impl Tracer,
+    s: &Surface,
+    dir: Vec3,
+    rng: &mut u32,
+    counts: &mut RayCounts,
+) -> Vec3 {
     let g = b.globals;
     let m = &b.materials[s.material as usize];
     let mut colour = g.ambient * m.kd * m.color;
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, s, m, dir, r, light, k, rng) {
+            if let Some(c) = light_sample(b, tracer, s, m, dir, r, light, k, rng) {
                 counts.shadow += 1;
                 colour += c;
             }
@@ -189,8 +214,15 @@ pub fn refracted_dir(s: &Surface, m: &GpuMaterial, dir: Vec3) -> Vec3 {
     }
 }
 
-/// Colour seen along an eye ray: Whitted shading with reflection and refraction.
-pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
+/// Colour seen along an eye ray: Whitted shading with reflection and refraction, the
+/// rays' answers from `tracer`.
+pub fn trace(
+    b: &Bindings,
+    tracer: &mut impl Tracer,
+    eye: Ray,
+    rng: &mut u32,
+    counts: &mut RayCounts,
+) -> Vec3 {
     let g = b.globals;
     let mut stack = [Pending::default(); RAY_STACK];
     stack[0] = Pending {
@@ -211,13 +243,13 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
             origin: ray_in.origin,
             dir: ray_in.dir,
         };
-        let hit = closest_hit(b, &ray, ray_in.tmin, NO_HIT);
+        let hit = tracer.closest_hit(b, &ray, ray_in.tmin, NO_HIT);
         if hit.prim == NO_PRIM {
             colour += ray_in.weight * g.background;
             continue;
         }
         let s = surface(b, &ray, &hit);
-        colour += ray_in.weight * direct(b, &s, ray.dir, rng, counts);
+        colour += ray_in.weight * direct(b, tracer, &s, ray.dir, rng, counts);
         if ray_in.depth >= g.max_depth {
             continue;
         }

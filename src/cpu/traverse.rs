@@ -356,20 +356,29 @@ fn transmit_leaf(
     true
 }
 
-/// Light reaching the end of the segment `origin + t*dir, t in (0, tmax)`: an opaque
-/// occluder blocks it, each crossing of a transmitting surface multiplies it by `T * C`.
-pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
+/// The planes' share of `transmission`, which tests them first: the product of their
+/// crossings' factors, `None` when an opaque one blocks the segment.
+pub fn transmit_planes(b: &Bindings, ray: &Ray, tmax: f32) -> Option<Vec3> {
     let mut light = Vec3::ONE;
     for pl in b.planes {
         let t = intersect::intersect_plane(pl, ray);
         if t > 0.0 && t < tmax {
             let m = &b.materials[pl.material as usize];
             if m.t <= 0.0 {
-                return Vec3::ZERO;
+                return None;
             }
             light *= m.t * m.color;
         }
     }
+    Some(light)
+}
+
+/// Light reaching the end of the segment `origin + t*dir, t in (0, tmax)`: an opaque
+/// occluder blocks it, each crossing of a transmitting surface multiplies it by `T * C`.
+pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
+    let Some(mut light) = transmit_planes(b, ray, tmax) else {
+        return Vec3::ZERO;
+    };
     if b.globals.n_nodes == 0 {
         return light;
     }

@@ -89,13 +89,17 @@ pub fn rand(state: &mut u32) -> f32 {
     (*state >> 8) as f32 * (1.0 / 16777216.0)
 }
 
-/// Per-pixel count of the rays traced, by kind (the shader sums them into one).
+/// Per-pixel count of the rays traced, by kind (the shader sums them into one), and of
+/// those the CPU traced in packets (`cpu::packet`), which are counted in their kind too.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounts {
     pub eye: u64,
     pub shadow: u64,
     pub reflected: u64,
     pub refracted: u64,
+    pub eye_packed: u64,
+    pub shadow_packed: u64,
+    pub reflected_packed: u64,
 }
 
 impl RayCounts {
@@ -107,5 +111,8 @@ impl RayCounts {
         self.shadow += o.shadow;
         self.reflected += o.reflected;
         self.refracted += o.refracted;
+        self.eye_packed += o.eye_packed;
+        self.shadow_packed += o.shadow_packed;
+        self.reflected_packed += o.reflected_packed;
     }
 }

@@ -51,7 +51,7 @@ impl Slabs {
     /// Choosing the near face by the sign of the inverse direction gives the same value
     /// as the scalar `min(t0, t1)`, since that sign orders `t0` and `t1`.
     #[inline]
-    fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
+    pub(crate) fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
         let mut near = [Vec4::ZERO; WIDTH / 4];
         let mut mask = 0;
         for (half, near) in near.iter_mut().enumerate() {
@@ -85,6 +85,20 @@ pub fn walk<const NEAREST_FIRST: bool>(
     wide: &[WideNode],
     slabs: &Slabs,
     tmin: f32,
+    tmax: f32,
+    leaf: impl FnMut(u32, u32) -> Option<f32>,
+) {
+    walk_from::<NEAREST_FIRST>(wide, slabs, 0, tmin, tmax, leaf);
+}
+
+/// `walk` of the subtree under the wide node `node` (its children, not its own box): where
+/// a packet's walk hands a lane over to a walk of its own (`packet::walk`).
+#[inline]
+pub fn walk_from<const NEAREST_FIRST: bool>(
+    wide: &[WideNode],
+    slabs: &Slabs,
+    node: u32,
+    tmin: f32,
     mut tmax: f32,
     mut leaf: impl FnMut(u32, u32) -> Option<f32>,
 ) {
@@ -94,7 +108,7 @@ pub fn walk<const NEAREST_FIRST: bool>(
     let mut stack = [const { MaybeUninit::<Entry>::uninit() }; STACK];
     let mut sp = 0;
     let mut next = Entry {
-        child: 0,
+        child: node,
         count: 0,
         near: tmin,
     };

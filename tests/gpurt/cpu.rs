@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{DVec3, Vec3};
 use gpurt::cpu::shade::trace;
+use gpurt::cpu::tracer::Alone;
 use gpurt::cpu::types::{Bindings, Ray, RayCounts};
 use gpurt::film::Film;
 use gpurt::frame::{self, RenderOptions};
@@ -292,7 +293,7 @@ fn glass_slab_displaces_rays_as_snell_says() {
             origin: Vec3::new(x0 as f32, 0.3, 5.0),
             dir,
         };
-        trace(&b, ray, &mut 0, &mut RayCounts::default())
+        trace(&b, &mut Alone, ray, &mut 0, &mut RayCounts::default())
     };
     let t2 = 0.9f32 * 0.9;
     let red = Vec3::new(t2, 0.0, 0.0);

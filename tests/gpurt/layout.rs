@@ -384,6 +384,14 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "intersect_triangles4",
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
+    (
+        "transmit_planes",
+        "transmission's planes, which the CPU's occlusion packets test lane by lane first",
+    ),
+    (
+        "light_ray",
+        "light_sample's shadow ray, which the CPU also traces ahead in occlusion packets",
+    ),
 ];
 
 /// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.

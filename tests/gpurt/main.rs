@@ -13,6 +13,7 @@ mod gallery;
 mod gpu;
 mod hostile;
 mod layout;
+mod packet;
 mod parse;
 mod session;
 mod shading;

@@ -1,0 +1,243 @@
+//! The CPU renderer's tiles traced with packets where rays are coherent: for each sample,
+//! the camera rays of a block of pixels (4x4, 4x2 or 2x2, as many as the kernels' lanes)
+//! go as one packet, then their shadow rays to each point or directional light as an
+//! occlusion packet, then their reflections off flat mirrors (planes and triangles
+//! without vertex normals) as another; every other ray (refraction, curved mirrors, area
+//! light samples, deeper bounces) is walked alone when the shading asks for it.
+//!
+//! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
+//! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
+//! the single-ray walk's to the bit (`packet`), and walks the others alone: the image is the
+//! per-pixel renderer's to the bit, and so are the rays counted. A ray is answered from a
+//! packet only when it is that very ray (origin, direction and interval, bit for bit).
+
+use std::ops::Range;
+
+use glam::Vec3;
+
+use super::main::{aov, camera_ray, sample_offset};
+use super::packet::{Kernels, MAX_LANES, Packet};
+use super::shade::{Surface, light_ray, offset_origin, reflect_dir, surface, trace};
+use super::tracer::{Alone, Tracer};
+use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
+use crate::gpu_types::*;
+
+/// A ray traced in a packet, and its answer.
+#[derive(Clone, Copy)]
+struct Answer<T> {
+    ray: Ray,
+    tmin: f32,
+    tmax: f32,
+    value: T,
+    /// Whether the packet answered it (rather than a walk of its own).
+    packed: bool,
+}
+
+impl<T: Copy> Answer<T> {
+    fn of(&self, ray: &Ray, tmin: f32, tmax: f32) -> Option<(T, bool)> {
+        let same =
+            |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
+        (same(self.ray.origin, ray.origin)
+            && same(self.ray.dir, ray.dir)
+            && self.tmin.to_bits() == tmin.to_bits()
+            && self.tmax.to_bits() == tmax.to_bits())
+        .then_some((self.value, self.packed))
+    }
+}
+
+/// One pixel's rays traced beforehand: its camera ray, its shadow rays from the camera
+/// ray's hit, one a light (in the lights' order; `None` where none was traced), and its
+/// mirror ray. Any other ray is walked alone.
+struct Known<'a> {
+    eye: Option<Answer<Hit>>,
+    shadows: &'a [Option<Answer<Vec3>>],
+    mirror: Option<Answer<Hit>>,
+    /// Rays answered from packets, by kind.
+    counts: RayCounts,
+}
+
+impl Tracer for Known<'_> {
+    fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
+        if let Some((hit, packed)) = self.eye.and_then(|a| a.of(ray, tmin, tmax)) {
+            self.eye = None;
+            self.counts.eye_packed += u64::from(packed);
+            return hit;
+        }
+        if let Some((hit, packed)) = self.mirror.and_then(|a| a.of(ray, tmin, tmax)) {
+            self.mirror = None;
+            self.counts.reflected_packed += u64::from(packed);
+            return hit;
+        }
+        Alone.closest_hit(b, ray, tmin, tmax)
+    }
+
+    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
+        // Asked in the lights' order: the next shadow ray known, if any, is this one.
+        if let Some(i) = self.shadows.iter().position(Option::is_some) {
+            let a = self.shadows[i].expect("found");
+            if let Some((light, packed)) = a.of(ray, 0.0, tmax) {
+                self.shadows = &self.shadows[i + 1..];
+                self.counts.shadow_packed += u64::from(packed);
+                return light;
+            }
+        }
+        Alone.transmission(b, ray, tmax)
+    }
+}
+
+/// Pixels of a packet, `(columns, rows)`, for `lanes` lanes.
+fn block(lanes: usize) -> (u32, u32) {
+    match lanes {
+        16 => (4, 4),
+        8 => (4, 2),
+        _ => (2, 2),
+    }
+}
+
+/// Whether reflections off the surface `hit` stay as coherent as the rays that met it:
+/// a plane, or a triangle whose shading normal is its face's.
+fn flat(b: &Bindings, hit: &Hit) -> bool {
+    hit.prim & PLANE_FLAG != 0 || {
+        let p = &b.prims[hit.prim as usize];
+        p.kind() == PRIM_TRIANGLE && p.f1 < 0.0
+    }
+}
+
+/// Samples `samples` of the pixels `x0..x1` by `rows` added to `sums` (row by row, `x1 -
+/// x0` a row), as `main::sample_sum` adds them one pixel at a time, and the rays counted.
+pub fn render_tile(
+    b: &Bindings,
+    kernels: &Kernels,
+    (x0, x1): (u32, u32),
+    rows: Range<u32>,
+    samples: Range<u32>,
+    sums: &mut [Vec3],
+    counts: &mut RayCounts,
+) {
+    let g = b.globals;
+    let (bw, bh) = block(kernels.lanes());
+    let shadowed: Vec<usize> = (0..b.lights.len())
+        .filter(|&i| b.lights[i].kind != LIGHT_AREA)
+        .collect();
+    let mut known_shadows = vec![None; MAX_LANES * b.lights.len()];
+    let mut packet = Packet::default();
+    let mut hits = [Hit {
+        t: 0.0,
+        prim: NO_PRIM,
+        u: 0.0,
+        v: 0.0,
+        cost: 0,
+    }; MAX_LANES];
+    let mut light = [Vec3::ZERO; MAX_LANES];
+    for s in samples {
+        for by in rows.clone().step_by(bh as usize) {
+            for bx in (x0..x1).step_by(bw as usize) {
+                // The block's pixels: (sums index, camera ray, random stream), lane by lane.
+                let mut lanes = [(
+                    0usize,
+                    Ray {
+                        origin: Vec3::ZERO,
+                        dir: Vec3::X,
+                    },
+                    0u32,
+                ); MAX_LANES];
+                let mut n = 0;
+                packet.clear();
+                for y in by..(by + bh).min(rows.end) {
+                    for x in bx..(bx + bw).min(x1) {
+                        let mut rng = rng_seed(y * g.width + x, s, g.seed);
+                        let off = sample_offset(s, g.spp, &mut rng);
+                        let ray = camera_ray(g, x as f32 + off.x, y as f32 + off.y, &mut rng);
+                        let i = ((y - rows.start) * (x1 - x0) + x - x0) as usize;
+                        lanes[n] = (i, ray, rng);
+                        packet.set(n, &ray, g.hither, NO_HIT);
+                        n += 1;
+                    }
+                }
+                counts.eye += n as u64;
+                let eye_packed = kernels.closest_hits(b, &packet, &mut hits);
+                let answer = |k: usize, ray: Ray, tmin: f32, value: Hit, packed: u32| Answer {
+                    ray,
+                    tmin,
+                    tmax: NO_HIT,
+                    value,
+                    packed: packed & 1 << k != 0,
+                };
+                if g.aov != AOV_COLOR {
+                    for (k, &(i, ray, _)) in lanes[..n].iter().enumerate() {
+                        let mut known = Known {
+                            eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
+                            shadows: &[],
+                            mirror: None,
+                            counts: RayCounts::default(),
+                        };
+                        sums[i] += aov(b, &mut known, &ray);
+                        counts.add(&known.counts);
+                    }
+                    continue;
+                }
+                let surfaces: [Option<Surface>; MAX_LANES] = std::array::from_fn(|k| {
+                    (k < n && hits[k].prim != NO_PRIM).then(|| surface(b, &lanes[k].1, &hits[k]))
+                });
+                // Shadow rays to each point and directional light, one packet a light.
+                known_shadows.fill(None);
+                for &li in &shadowed {
+                    packet.clear();
+                    for (k, s) in surfaces.iter().enumerate() {
+                        if let Some((ray, tmax)) = s
+                            .as_ref()
+                            .and_then(|s| light_ray(b, s, &b.lights[li], 0, &mut 0))
+                        {
+                            packet.set(k, &ray, 0.0, tmax);
+                        }
+                    }
+                    if packet.lanes() == 0 {
+                        continue;
+                    }
+                    let packed = kernels.transmissions(b, &packet, &mut light);
+                    for k in (0..n).filter(|k| packet.lanes() & 1 << k != 0) {
+                        known_shadows[k * b.lights.len() + li] = Some(Answer {
+                            ray: packet.ray(k),
+                            tmin: 0.0,
+                            tmax: packet.tmax(k),
+                            value: light[k],
+                            packed: packed & 1 << k != 0,
+                        });
+                    }
+                }
+                // Reflections off flat mirrors, where the depth lets the shading trace them.
+                packet.clear();
+                if g.max_depth > 1 {
+                    for (k, s) in surfaces.iter().enumerate() {
+                        let Some(s) = s else { continue };
+                        if b.materials[s.material as usize].ks > 0.0 && flat(b, &hits[k]) {
+                            let dir = reflect_dir(lanes[k].1.dir, s.ns);
+                            let ray = Ray {
+                                origin: offset_origin(s, dir, g.epsilon),
+                                dir,
+                            };
+                            packet.set(k, &ray, 0.0, NO_HIT);
+                        }
+                    }
+                }
+                let mut mirror_hits = hits;
+                let mirror_packed = if packet.lanes() != 0 {
+                    kernels.closest_hits(b, &packet, &mut mirror_hits)
+                } else {
+                    0
+                };
+                for (k, &(i, ray, mut rng)) in lanes[..n].iter().enumerate() {
+                    let mut known = Known {
+                        eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
+                        shadows: &known_shadows[k * b.lights.len()..(k + 1) * b.lights.len()],
+                        mirror: (packet.lanes() & 1 << k != 0)
+                            .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
+                        counts: RayCounts::default(),
+                    };
+                    sums[i] += trace(b, &mut known, ray, &mut rng, counts);
+                    counts.add(&known.counts);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,167 @@
+//! The interval test that culls a wide node's children for a whole packet at once: the
+//! packet's origins and inverse directions as intervals, per axis, and from them a lower
+//! bound on where any of its rays enters each child box and an upper bound on where it
+//! leaves (interval arithmetic, Benthin's thesis ch. 4; Reshetov et al.'s "multi-level
+//! ray tracing"). Eight children in two `Vec4`s, one test for all of them.
+//!
+//! The bounds are safe in floating point without any margin: every step (a subtraction, a
+//! product, a minimum) is monotonic in its operands, even rounded, so the bound computed
+//! from an interval's end is never on the wrong side of what a lane computes for its own
+//! ray with the same operations (`Slabs::test`). A child culled here is one that every lane's
+//! own test would miss; the lanes' own tests still decide what each lane enters.
+
+use glam::Vec4;
+
+use super::lanes::Lanes;
+use super::rays::Rays;
+use crate::bvh::wide::{WIDTH, WideNode};
+use crate::gpu_types::SLAB_WIDEN;
+
+/// One axis of the packet, where all its directions have one sign on it.
+#[derive(Clone, Copy, Debug)]
+struct Axis {
+    /// The directions are negative: the boxes' `hi` faces are the near ones.
+    neg: bool,
+    /// The origin coordinate that makes `face - origin` smallest for the near face and
+    /// largest for the far face (`max` then `min` of the lanes' for a positive direction).
+    o_near: f32,
+    o_far: f32,
+    /// The lanes' inverse directions on this axis, least and greatest.
+    i_lo: f32,
+    i_hi: f32,
+}
+
+/// A packet's rays as intervals, per axis; an axis on which the directions differ in sign
+/// bounds nothing (its interval of inverses spans both infinities' neighbourhoods).
+#[derive(Clone, Copy, Debug)]
+pub struct Frustum {
+    axes: [Option<Axis>; 3],
+}
+
+impl Frustum {
+    /// The intervals of the lanes `lanes` of the rays `r`.
+    #[inline(always)]
+    pub fn new<L: Lanes>(l: L, r: &Rays<L>, lanes: u32) -> Self {
+        let mut axes = [None; 3];
+        for (a, axis) in axes.iter_mut().enumerate() {
+            let (i_lo, i_hi) = (l.min_of(r.inv[a], lanes), l.max_of(r.inv[a], lanes));
+            let (o_lo, o_hi) = (l.min_of(r.o[a], lanes), l.max_of(r.o[a], lanes));
+            let neg = i_hi < 0.0;
+            *axis = (neg || i_lo > 0.0).then_some(Axis {
+                neg,
+                o_near: if neg { o_lo } else { o_hi },
+                o_far: if neg { o_hi } else { o_lo },
+                i_lo,
+                i_hi,
+            });
+        }
+        Frustum { axes }
+    }
+
+    /// The children of `n` that a ray of the packet may reach within `[tmin, tmax]` (the
+    /// least `tmin` and greatest `tmax` of its lanes), as a bit mask, and for each child a
+    /// lower bound of where the packet's rays enter it: the order to visit them in.
+    #[inline(always)]
+    pub fn cull(&self, n: &WideNode, tmin: f32, tmax: f32) -> (u32, [Vec4; WIDTH / 4]) {
+        let mut near = [Vec4::splat(tmin); WIDTH / 4];
+        let mut mask = 0;
+        for (half, near) in near.iter_mut().enumerate() {
+            let mut far = Vec4::splat(tmax);
+            for (a, axis) in self.axes.iter().enumerate() {
+                let Some(x) = axis else { continue };
+                let (near_face, far_face) = if x.neg {
+                    (n.hi[a][half], n.lo[a][half])
+                } else {
+                    (n.lo[a][half], n.hi[a][half])
+                };
+                let dn = near_face - Vec4::splat(x.o_near);
+                let df = far_face - Vec4::splat(x.o_far);
+                let (lo, hi) = (Vec4::splat(x.i_lo), Vec4::splat(x.i_hi));
+                *near = near.max((dn * lo).min(dn * hi));
+                far = far.min((df * lo).max(df * hi));
+            }
+            mask |= near.cmple(far * SLAB_WIDEN).bitmask() << (4 * half);
+        }
+        (mask, near)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::lanes::{Portable, lanes_of};
+    use super::super::rays::Rows;
+    use super::*;
+    use crate::bvh::wide::EMPTY;
+    use crate::cpu::wide::Slabs;
+    use glam::Vec3;
+
+    /// A node of eight random boxes (some empty) around the origin.
+    fn node(rand: &mut impl FnMut() -> f32) -> WideNode {
+        let mut n = WideNode {
+            lo: [[Vec4::INFINITY; 2]; 3],
+            hi: [[Vec4::NEG_INFINITY; 2]; 3],
+            child: [0; WIDTH],
+            count: [EMPTY; WIDTH],
+        };
+        for l in 0..WIDTH - 1 {
+            for a in 0..3 {
+                let (c, r) = (rand() * 10.0, rand().abs() * 3.0);
+                n.lo[a][l / 4][l % 4] = c - r;
+                n.hi[a][l / 4][l % 4] = c + r;
+            }
+            n.count[l] = 1;
+        }
+        n
+    }
+
+    /// Whatever the packet, a child culled by the interval test is missed by every lane's
+    /// own slab test (`Slabs::test`, the single-ray walk's), and children are culled:
+    /// packets of nearly parallel rays, of rays through one point, and of rays whose
+    /// directions differ in sign on an axis.
+    #[test]
+    fn a_culled_child_is_missed_by_every_lane() {
+        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut rand = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let (mut culled, mut kept) = (0, 0);
+        for case in 0..3000 {
+            let n = node(&mut rand);
+            let base = Vec3::new(rand(), rand(), rand()) * 30.0;
+            let aim = Vec3::new(rand(), rand(), rand()) * 8.0 - base;
+            let spread = [0.001, 0.05, 1.0][case % 3];
+            let mut rows = Rows::default();
+            for k in 0..4 {
+                let o = base + Vec3::new(rand(), rand(), rand()) * spread * (case % 2) as f32;
+                let d = (aim + Vec3::new(rand(), rand(), rand()) * spread * 10.0).normalize();
+                for a in 0..3 {
+                    (rows.origin[a][k], rows.dir[a][k]) = (o[a], d[a]);
+                }
+            }
+            let r = Rays::new(Portable, &rows);
+            let f = Frustum::new(Portable, &r, 0xf);
+            let tmax = if case % 5 == 0 { 20.0 } else { f32::MAX };
+            let (mask, near) = f.cull(&n, 0.0, tmax);
+            for k in 0..4 {
+                let inv = crate::cpu::intersect::safe_inverse(rows.ray(k).dir);
+                assert_eq!(inv, r.inv_of(k));
+                let slabs = Slabs::new(rows.ray(k).origin, inv);
+                let (lane_near, reached) = slabs.test(&n, 0.0, tmax);
+                assert_eq!(
+                    reached & !mask,
+                    0,
+                    "case {case} lane {k}: culled a child it reaches"
+                );
+                for c in lanes_of(reached) {
+                    assert!(near[c / 4][c % 4] <= lane_near[c / 4][c % 4], "case {case}");
+                }
+            }
+            culled += (0x7f & !mask).count_ones();
+            kept += mask.count_ones();
+        }
+        assert!(culled > 1000 && kept > 1000, "culled {culled}, kept {kept}");
+    }
+}

@@ -1,0 +1,100 @@
+//! A lane that walks on alone: where few of a packet's lanes reach a node, each walks the
+//! node's subtree with the single-ray walk (`wide::walk_from`) from the hit it holds, and
+//! hands its answer back to the packet (the hybrid traversal of Benthin's thesis and
+//! Embree). Its leaves are tested as `traverse.rs`'s `closest_in_leaf` and `transmit_leaf`
+//! test them, but for noticing ties and transmitting surfaces, which the packet's caller
+//! leaves to the single-ray walk itself.
+
+use glam::Vec3;
+
+use crate::bvh::wide::WideNode;
+use crate::cpu::intersect;
+use crate::cpu::types::{Bindings, Ray};
+use crate::cpu::wide::{self, Slabs};
+
+/// One lane's nearest hit so far, as `Best` holds it in lanes.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneHit {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+    pub tied: bool,
+}
+
+impl LaneHit {
+    /// `Best::offer` for one lane: `t` is the first crossing past `tmin`; `t0` the walk's
+    /// first interval end.
+    #[inline]
+    fn offer(&mut self, t: f32, (u, v): (f32, f32), prim: u32, tmin: f32, t0: f32) {
+        if t > tmin {
+            self.tied |= t == self.t && self.t < t0;
+            if t < self.t {
+                (self.t, self.prim, self.u, self.v) = (t, prim, u, v);
+            }
+        }
+    }
+}
+
+/// The ray's walk of the subtree under wide node `node`, from the hit `h` it holds.
+#[allow(clippy::too_many_arguments)]
+pub fn closest_from(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    inv_dir: Vec3,
+    (tmin, t0): (f32, f32),
+    node: u32,
+    h: &mut LaneHit,
+) {
+    let slabs = Slabs::new(ray.origin, inv_dir);
+    wide::walk_from::<true>(wide, &slabs, node, tmin, h.t, |first, count| {
+        let leaf = &b.prims[first as usize..(first + count) as usize];
+        if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
+            for k in 0..leaf.len() {
+                h.offer(t[k], (u[k], v[k]), first + k as u32, tmin, t0);
+            }
+        } else {
+            for i in first..first + count {
+                let t = intersect::intersect_prim(&b.prims[i as usize], ray, inv_dir);
+                let first_past = if t.x > tmin { t.x } else { t.y };
+                h.offer(first_past, (t.z, t.w), i, tmin, t0);
+            }
+        }
+        Some(h.t)
+    });
+}
+
+/// The shadow ray's walk of the subtree under wide node `node` over `(0, tmax)`: `None`
+/// when it crosses nothing there, else whether the first crossing it finds is opaque.
+pub fn occluded_from(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    inv_dir: Vec3,
+    tmax: f32,
+    node: u32,
+) -> Option<bool> {
+    let slabs = Slabs::new(ray.origin, inv_dir);
+    let mut found = None;
+    wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, |first, count| {
+        let leaf = &b.prims[first as usize..(first + count) as usize];
+        let inside = |t: f32| t > 0.0 && t < tmax;
+        let crossed = if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
+            (0..leaf.len()).find(|&k| inside(t[k]))
+        } else {
+            (0..leaf.len()).find(|&k| {
+                let t = intersect::intersect_prim(&leaf[k], ray, inv_dir);
+                inside(t.x) || inside(t.y)
+            })
+        };
+        match crossed {
+            Some(k) => {
+                found = Some(b.materials[leaf[k].material() as usize].t <= 0.0);
+                None
+            }
+            None => Some(tmax),
+        }
+    });
+    found
+}

@@ -1,0 +1,281 @@
+//! The packet walks of the eight-wide tree: closest hit and occlusion, written once over
+//! `Lanes` and compiled for each instruction set (`x86.rs`, `mod.rs`).
+//!
+//! The packet goes down the tree together, a stack entry holding per lane where the ray
+//! enters the child (infinity for lanes that do not reach it): a popped entry's lanes are
+//! those whose entry is still within their nearest hit, as the single-ray walk culls a
+//! popped child. At a node the interval test (`frustum.rs`) culls the children no ray of
+//! the packet can reach, then each child left is tested against every active lane with the
+//! single-ray walk's own slab arithmetic (`Slabs::test`, lane by lane), and the children
+//! reached are pushed farthest first by the packet's entry bound, so that the nearest is
+//! taken next. Where few lanes are left at a node (`alone`), each walks its subtree by
+//! itself (`single.rs`) and the packet goes on without them.
+//!
+//! A lane therefore enters a leaf exactly when its own slab test lets it in, against its
+//! own nearest hit, and tests the leaf's primitives with the same arithmetic: it finds the
+//! nearest hit the single-ray walk finds, and the primitive, but where two surfaces lie at
+//! exactly the same distance (`Found::tied`); a shadow lane finds the same first-crossing
+//! verdict, the set of leaves it enters not depending on the order.
+
+use std::mem::MaybeUninit;
+
+use super::frustum::Frustum;
+use super::lanes::{Lanes, lanes_of};
+use super::leaf::{self, Best};
+use super::rays::{Found, Occluded, Rays, Rows};
+use super::single::{self, LaneHit};
+use crate::bvh::wide::{EMPTY, WIDTH, WideNode};
+use crate::cpu::types::Bindings;
+use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
+
+/// Lanes of a node at or below which each walks the node's subtree alone: a quarter of the
+/// packet (two of eight, four of sixteen, one of four).
+fn alone<L: Lanes>() -> u32 {
+    (L::N / 4) as u32
+}
+
+/// A child waiting on the stack, and where each lane enters its box.
+#[derive(Clone, Copy)]
+struct Entry<F> {
+    child: u32,
+    count: u32,
+    near: F,
+}
+
+/// Entries a walk can hold: as `wide.rs`'s stack.
+const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
+
+/// `Slabs::test` of child `c` of `n` for every lane: where each enters it, clamped to
+/// `tmin`, and the lanes that overlap it within `[tmin, tmax]`.
+#[inline(always)]
+fn child_slab<L: Lanes>(l: L, r: &Rays<L>, n: &WideNode, c: usize, tmax: L::F) -> (L::F, L::M) {
+    let (h, q) = (c / 4, c % 4);
+    let mut near = [r.tmin; 3];
+    let mut far = [tmax; 3];
+    for a in 0..3 {
+        let t_lo = l.mul(l.sub(l.splat(n.lo[a][h][q]), r.o[a]), r.inv[a]);
+        let t_hi = l.mul(l.sub(l.splat(n.hi[a][h][q]), r.o[a]), r.inv[a]);
+        near[a] = l.select(r.neg[a], t_hi, t_lo);
+        far[a] = l.select(r.neg[a], t_lo, t_hi);
+    }
+    // The single walk's order: x, y, z, then the interval.
+    let near = l.max(l.max(l.max(near[0], near[1]), near[2]), r.tmin);
+    let far = l.min(l.min(l.min(far[0], far[1]), far[2]), tmax);
+    (near, l.le(near, l.mul(far, l.splat(SLAB_WIDEN))))
+}
+
+/// The stack, not zeroed (as `wide.rs`'s): only entries below `sp` are read.
+struct Stack<F> {
+    entries: [MaybeUninit<Entry<F>>; STACK],
+    sp: usize,
+}
+
+impl<F: Copy> Stack<F> {
+    #[inline(always)]
+    fn new() -> Self {
+        Stack {
+            entries: [const { MaybeUninit::uninit() }; STACK],
+            sp: 0,
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry<F>> {
+        (self.sp > 0).then(|| {
+            self.sp -= 1;
+            // SAFETY: entries below the old `sp` have been written.
+            unsafe { self.entries[self.sp].assume_init() }
+        })
+    }
+
+    /// Pushes `e`, keeping the run pushed since `base` sorted by `keys` (kept beside the
+    /// run), farthest at the bottom.
+    #[inline(always)]
+    fn push_sorted(&mut self, base: usize, keys: &mut [f32; WIDTH], e: Entry<F>, key: f32) {
+        let mut j = self.sp;
+        while j > base && keys[j - 1 - base] < key {
+            self.entries[j] = self.entries[j - 1];
+            keys[j - base] = keys[j - 1 - base];
+            j -= 1;
+        }
+        self.entries[j] = MaybeUninit::new(e);
+        keys[j - base] = key;
+        self.sp += 1;
+    }
+
+    #[inline(always)]
+    fn push(&mut self, e: Entry<F>) {
+        self.entries[self.sp] = MaybeUninit::new(e);
+        self.sp += 1;
+    }
+}
+
+/// The nearest hit of each lane of `rows` (planes first, then the tree), into `found`.
+#[inline(always)]
+pub fn closest<L: Lanes>(
+    l: L,
+    b: &Bindings,
+    wide: &[WideNode],
+    rows: &Rows,
+    lanes: u32,
+    found: &mut Found,
+) {
+    let r = Rays::new(l, rows);
+    let lanes = lanes & r.finite;
+    found.traced = lanes;
+    let mut best = Best::new(l, rows);
+    best.planes(l, b, &r, lanes);
+    if b.globals.n_nodes > 0 && !wide.is_empty() {
+        closest_tree(l, b, wide, rows, lanes, &r, &mut best, found);
+    }
+    best.store(l, found);
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn closest_tree<L: Lanes>(
+    l: L,
+    b: &Bindings,
+    wide: &[WideNode],
+    rows: &Rows,
+    packet: u32,
+    r: &Rays<L>,
+    best: &mut Best<L>,
+    found: &mut Found,
+) {
+    let inf = l.splat(f32::INFINITY);
+    let widen = l.splat(SLAB_WIDEN);
+    let frustum = Frustum::new(l, r, packet);
+    let tmin_lo = l.min_of(r.tmin, packet);
+    let mut tmax_hi = l.max_of(best.t, packet);
+    let mut stack = Stack::new();
+    let mut next = Some(Entry {
+        child: 0,
+        count: 0,
+        near: l.select(l.mask(packet), r.tmin, inf),
+    });
+    while let Some(e) = next {
+        let lanes = l.bits(l.le(e.near, l.mul(best.t, widen)));
+        if lanes == 0 {
+        } else if e.count > 0 {
+            // An empty lane leads nowhere (reached only through NaN distances).
+            if e.count != EMPTY {
+                leaf::closest(l, b, r, rows, (e.child, e.count), lanes, best);
+                tmax_hi = l.max_of(best.t, packet);
+            }
+        } else if lanes.count_ones() <= alone::<L>() {
+            best.store(l, found);
+            for k in lanes_of(lanes) {
+                let mut h = LaneHit {
+                    t: found.t[k],
+                    prim: found.prim[k],
+                    u: found.u[k],
+                    v: found.v[k],
+                    tied: found.tied & (1 << k) != 0,
+                };
+                let interval = (rows.tmin[k], rows.tmax[k]);
+                let (ray, inv) = (rows.ray(k), r.inv_of(k));
+                single::closest_from(b, wide, &ray, inv, interval, e.child, &mut h);
+                (found.t[k], found.prim[k], found.u[k], found.v[k]) = (h.t, h.prim, h.u, h.v);
+                found.tied |= u32::from(h.tied) << k;
+            }
+            best.reload(l, found);
+            tmax_hi = l.max_of(best.t, packet);
+        } else {
+            let n = &wide[e.child as usize];
+            let (children, keys) = frustum.cull(n, tmin_lo, tmax_hi);
+            let active = l.mask(lanes);
+            let base = stack.sp;
+            let mut run_keys = [0.0; WIDTH];
+            for c in lanes_of(children) {
+                let (near, hit) = child_slab(l, r, n, c, best.t);
+                let hit = l.and(hit, active);
+                if l.bits(hit) != 0 {
+                    let entry = Entry {
+                        child: n.child[c],
+                        count: n.count[c],
+                        near: l.select(hit, near, inf),
+                    };
+                    stack.push_sorted(base, &mut run_keys, entry, keys[c / 4][c % 4]);
+                }
+            }
+        }
+        next = stack.pop();
+    }
+}
+
+/// Which shadow rays of `rows` (intervals `(0, tmax)`) the tree blocks or transmits
+/// through, by the first crossing each finds (`leaf::occlusion`).
+#[inline(always)]
+pub fn occluded<L: Lanes>(
+    l: L,
+    b: &Bindings,
+    wide: &[WideNode],
+    rows: &Rows,
+    packet: u32,
+) -> Occluded {
+    let r = Rays::new(l, rows);
+    let packet = packet & r.finite;
+    let mut out = Occluded {
+        traced: packet,
+        ..Occluded::default()
+    };
+    if b.globals.n_nodes == 0 || wide.is_empty() || packet == 0 {
+        return out;
+    }
+    let inf = l.splat(f32::INFINITY);
+    let tmax = l.load(&rows.tmax);
+    let reach = l.mul(tmax, l.splat(SLAB_WIDEN));
+    let frustum = Frustum::new(l, &r, packet);
+    let tmin_lo = l.min_of(r.tmin, packet);
+    let tmax_hi = l.max_of(tmax, packet);
+    let mut alive = packet;
+    let mut stack = Stack::new();
+    let mut next = Some(Entry {
+        child: 0,
+        count: 0,
+        near: l.select(l.mask(alive), r.tmin, inf),
+    });
+    while let Some(e) = next {
+        let lanes = l.bits(l.le(e.near, reach)) & alive;
+        if lanes == 0 {
+        } else if e.count > 0 {
+            if e.count != EMPTY {
+                let o = leaf::occlusion(l, b, &r, rows, (e.child, e.count), lanes, tmax);
+                out.blocked |= o.blocked;
+                out.transmits |= o.transmits;
+                alive &= !(o.blocked | o.transmits);
+            }
+        } else if lanes.count_ones() <= alone::<L>() {
+            for k in lanes_of(lanes) {
+                let (ray, inv) = (rows.ray(k), r.inv_of(k));
+                match single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.child) {
+                    Some(true) => out.blocked |= 1 << k,
+                    Some(false) => out.transmits |= 1 << k,
+                    None => continue,
+                }
+                alive &= !(1 << k);
+            }
+        } else {
+            let n = &wide[e.child as usize];
+            let (children, _) = frustum.cull(n, tmin_lo, tmax_hi);
+            let active = l.mask(lanes);
+            for c in lanes_of(children) {
+                let (near, hit) = child_slab(l, &r, n, c, tmax);
+                let hit = l.and(hit, active);
+                if l.bits(hit) != 0 {
+                    stack.push(Entry {
+                        child: n.child[c],
+                        count: n.count[c],
+                        near: l.select(hit, near, inf),
+                    });
+                }
+            }
+        }
+        if alive == 0 {
+            break;
+        }
+        next = stack.pop();
+    }
+    out
+}

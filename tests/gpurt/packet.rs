@@ -1,0 +1,508 @@
+//! Packets of rays (`cpu::packet`) against the single-ray walk they stand in for, with
+//! every instruction set this processor runs (each forced in turn): the same closest hit
+//! to the bit (distance, primitive, barycentrics) and the same light through each shadow
+//! ray, on incoherent random rays and on coherent ones (camera rays in blocks, their
+//! shadow rays to every light, their mirror rays) of every shared scene and of ours; and
+//! the renderer's images and ray counts with packets and without, across sizes, samples,
+//! depths, lights and AOVs. Each comparison is shown to fail on a perturbed input.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3;
+use gpurt::cpu::main::camera_ray;
+use gpurt::cpu::packet::{Isa, Kernels, MAX_LANES, Packet};
+use gpurt::cpu::shade::{light_ray, offset_origin, reflect_dir, surface};
+use gpurt::cpu::traverse::{closest_hit, transmission};
+use gpurt::cpu::types::{Bindings, Hit, Ray, RayCounts};
+use gpurt::film::Accumulator;
+use gpurt::frame::{self, RenderOptions};
+use gpurt::gpu_types::*;
+use gpurt::pack::{self, SceneBuffers};
+use gpurt::scene;
+
+use crate::common::{XorShift, files_with, own_scenes, shared_scenes};
+
+/// The kernels of every instruction set this processor runs: SSE and the portable ones
+/// everywhere on x86-64, AVX2 and AVX-512 where present.
+fn all_kernels() -> Vec<Kernels> {
+    let found: Vec<Kernels> = Isa::ALL.into_iter().filter_map(Kernels::new).collect();
+    assert!(found.iter().any(|k| k.isa() == Isa::Portable));
+    #[cfg(target_arch = "x86_64")]
+    assert!(found.iter().any(|k| k.isa() == Isa::Sse));
+    found
+}
+
+fn scenes() -> Vec<PathBuf> {
+    let mut all = files_with(&own_scenes(), &[".nff"]);
+    if let Some(dir) = shared_scenes() {
+        all.extend(files_with(&dir, &[".nff", ".nff.gz"]));
+    }
+    all
+}
+
+fn load(path: &Path) -> SceneBuffers {
+    let scene = scene::load(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    pack::pack(scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Why two hits differ, if they do: every field but `cost` (the wide walks count none).
+fn hit_differs(packet: &Hit, alone: &Hit) -> Option<String> {
+    let bits = |h: &Hit| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits());
+    (bits(packet) != bits(alone)).then(|| format!("packet {packet:?}, alone {alone:?}"))
+}
+
+fn light_differs(packet: Vec3, alone: Vec3) -> Option<String> {
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    (bits(packet) != bits(alone)).then(|| format!("packet {packet}, alone {alone}"))
+}
+
+#[test]
+fn the_comparisons_catch_a_last_bit() {
+    let h = Hit {
+        t: 2.5,
+        prim: 7,
+        u: 0.25,
+        v: 0.5,
+        cost: 0,
+    };
+    assert_eq!(hit_differs(&h, &Hit { cost: 9, ..h }), None);
+    for other in [
+        Hit {
+            t: f32::from_bits(h.t.to_bits() + 1),
+            ..h
+        },
+        Hit { prim: 8, ..h },
+        Hit {
+            u: f32::from_bits(h.u.to_bits() + 1),
+            ..h
+        },
+        Hit {
+            v: f32::from_bits(h.v.to_bits() - 1),
+            ..h
+        },
+    ] {
+        assert!(hit_differs(&other, &h).is_some(), "{other:?}");
+    }
+    let l = Vec3::new(0.5, 0.25, 1.0);
+    assert!(light_differs(l, l).is_none());
+    assert!(
+        light_differs(
+            Vec3::new(0.5, f32::from_bits(0.25f32.to_bits() + 1), 1.0),
+            l
+        )
+        .is_some()
+    );
+    assert!(light_differs(Vec3::new(0.5, 0.25, -0.0), Vec3::new(0.5, 0.25, 0.0)).is_some());
+}
+
+/// Rays grouped as packets of `lanes`, each with its interval.
+type Group = Vec<(Ray, f32, f32)>;
+
+/// Traces `groups` both ways with `kernels`; returns the rays the packets answered.
+fn check_closest(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) -> (usize, usize) {
+    let mut p = Packet::default();
+    let mut hits = [Hit {
+        t: 0.0,
+        prim: 0,
+        u: 0.0,
+        v: 0.0,
+        cost: 0,
+    }; MAX_LANES];
+    let (mut packed, mut all) = (0, 0);
+    for (g, group) in groups.iter().enumerate() {
+        p.clear();
+        for (k, (ray, tmin, tmax)) in group.iter().enumerate() {
+            p.set(k, ray, *tmin, *tmax);
+        }
+        packed += kernels.closest_hits(b, &p, &mut hits).count_ones() as usize;
+        all += group.len();
+        for (k, (ray, tmin, tmax)) in group.iter().enumerate() {
+            if let Some(why) = hit_differs(&hits[k], &closest_hit(b, ray, *tmin, *tmax)) {
+                panic!(
+                    "{what}, {}: packet {g} lane {k}, {ray:?}: {why}",
+                    kernels.isa().name()
+                );
+            }
+        }
+    }
+    (packed, all)
+}
+
+fn check_shadows(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) -> usize {
+    let mut p = Packet::default();
+    let mut light = [Vec3::ZERO; MAX_LANES];
+    let mut packed = 0;
+    for (g, group) in groups.iter().enumerate() {
+        p.clear();
+        for (k, (ray, _, tmax)) in group.iter().enumerate() {
+            p.set(k, ray, 0.0, *tmax);
+        }
+        packed += kernels.transmissions(b, &p, &mut light).count_ones() as usize;
+        for (k, (ray, _, tmax)) in group.iter().enumerate() {
+            if let Some(why) = light_differs(light[k], transmission(b, ray, *tmax)) {
+                panic!(
+                    "{what}, {}: shadow packet {g} lane {k}, {ray:?}: {why}",
+                    kernels.isa().name()
+                );
+            }
+        }
+    }
+    packed
+}
+
+/// Random rays: from outside aimed at a random primitive's box, and from inside in a random
+/// direction; a third with a bounded interval. Consecutive ones share a packet: packets
+/// whose lanes go every way.
+fn random_groups(buffers: &SceneBuffers, lanes: usize, seed: u64) -> Vec<Group> {
+    let mut rng = XorShift(seed | 1);
+    let (lo, hi) = (buffers.bounds.min, buffers.bounds.max);
+    let size = buffers.bounds.extent().max(Vec3::splat(1e-3));
+    let rays: Vec<(Ray, f32, f32)> = (0..600)
+        .map(|i| {
+            let (origin, target) = if i % 2 == 0 && !buffers.prims.is_empty() {
+                let p = &buffers.prims[(rng.next_u64() % buffers.prims.len() as u64) as usize];
+                (rng.point_in(lo - size, hi + size), p.p0)
+            } else {
+                let o = rng.point_in(lo, hi);
+                (o, o + rng.direction())
+            };
+            let tmax = if i % 3 == 0 {
+                rng.range(0.0, size.length())
+            } else {
+                NO_HIT
+            };
+            (
+                Ray {
+                    origin,
+                    dir: (target - origin).normalize_or(Vec3::X),
+                },
+                0.0,
+                tmax,
+            )
+        })
+        .collect();
+    rays.chunks(lanes).map(<[_]>::to_vec).collect()
+}
+
+/// A small render's coherent rays, block by block as the renderer packs them: camera
+/// rays (two jittered samples a pixel), the shadow rays from their hits to every light (area
+/// lights' samples too), and mirror rays off every hit (curved surfaces too).
+fn coherent_groups(b: &Bindings, lanes: usize) -> [Vec<Group>; 3] {
+    let g = b.globals;
+    let (bw, bh) = match lanes {
+        16 => (4, 4),
+        8 => (4, 2),
+        _ => (2, 2),
+    };
+    let (mut eye, mut shadow, mut mirror) = (Vec::new(), Vec::new(), Vec::new());
+    for s in 0..2 {
+        for by in (0..g.height).step_by(bh) {
+            for bx in (0..g.width).step_by(bw) {
+                let mut group = Group::new();
+                for y in by..(by + bh as u32).min(g.height) {
+                    for x in bx..(bx + bw as u32).min(g.width) {
+                        let mut rng = (y * g.width + x) ^ s << 20;
+                        let j = (s as f32 * 0.37, s as f32 * 0.61);
+                        let ray = camera_ray(g, x as f32 + j.0, y as f32 + j.1, &mut rng);
+                        group.push((ray, g.hither, NO_HIT));
+                    }
+                }
+                let surfaces: Vec<_> = group
+                    .iter()
+                    .map(|(ray, tmin, tmax)| {
+                        let hit = closest_hit(b, ray, *tmin, *tmax);
+                        (hit.prim != NO_PRIM).then(|| (*ray, surface(b, ray, &hit)))
+                    })
+                    .collect();
+                for light in b.lights {
+                    let mut rng = 12345;
+                    let group: Group = surfaces
+                        .iter()
+                        .flatten()
+                        .filter_map(|(_, s)| light_ray(b, s, light, 0, &mut rng))
+                        .map(|(r, tmax)| (r, 0.0, tmax))
+                        .collect();
+                    shadow.push(group);
+                }
+                let bounce: Group = surfaces
+                    .iter()
+                    .flatten()
+                    .map(|(ray, s)| {
+                        let dir = reflect_dir(ray.dir, s.ns);
+                        (
+                            Ray {
+                                origin: offset_origin(s, dir, g.epsilon),
+                                dir,
+                            },
+                            0.0,
+                            NO_HIT,
+                        )
+                    })
+                    .collect();
+                mirror.push(bounce);
+                eye.push(group);
+            }
+        }
+    }
+    [eye, shadow, mirror]
+}
+
+/// Every scene, every kernel: the packets' answers are the single-ray walk's, and the
+/// packets answer nearly all coherent rays themselves (not handing them to the single walk).
+#[test]
+fn packets_find_the_single_ray_walks_hits_and_shadows_on_every_scene() {
+    let kernels = all_kernels();
+    let (mut packed, mut all, mut shadow_packed, mut shadows) = (0, 0, 0, 0);
+    let paths = scenes();
+    assert!(paths.len() >= 20, "only {} scenes", paths.len());
+    for path in &paths {
+        let buffers = load(path);
+        let opts = RenderOptions {
+            width: 24,
+            height: 18,
+            ..RenderOptions::for_camera(&buffers.camera)
+        };
+        let globals = frame::globals(&buffers, &opts);
+        let b = Bindings::new(&buffers, &globals);
+        let what = path.display().to_string();
+        for k in &kernels {
+            for group in random_groups(&buffers, k.lanes(), 7)
+                .iter()
+                .chain(random_groups(&buffers, k.lanes(), 8).iter())
+            {
+                check_closest(&b, k, std::slice::from_ref(group), &what);
+                check_shadows(&b, k, std::slice::from_ref(group), &what);
+            }
+            let [eye, shadow, mirror] = coherent_groups(&b, k.lanes());
+            let (p, a) = check_closest(&b, k, &eye, &what);
+            (packed, all) = (packed + p, all + a);
+            check_closest(&b, k, &mirror, &what);
+            shadow_packed += check_shadows(&b, k, &shadow, &what);
+            shadows += shadow.iter().map(Vec::len).sum::<usize>();
+        }
+    }
+    assert!(
+        packed as f64 > 0.97 * all as f64,
+        "packets answered {packed} of {all} camera rays"
+    );
+    assert!(
+        shadow_packed as f64 > 0.8 * shadows as f64,
+        "{shadow_packed} of {shadows} shadow rays"
+    );
+}
+
+/// A render's image and its ray counts.
+fn render(
+    b: &SceneBuffers,
+    opts: &RenderOptions,
+    kernels: Option<&Kernels>,
+) -> (Vec<[u32; 3]>, RayCounts) {
+    let g = frame::globals(b, opts);
+    let mut accum = Accumulator::new(g.width, g.height);
+    let never = AtomicBool::new(false);
+    let counts = gpurt::cpu::render_rows_with(
+        b,
+        &g,
+        kernels,
+        0..g.height,
+        0..g.spp,
+        &mut accum,
+        &|_| {},
+        &never,
+    )
+    .expect("renders");
+    let film = accum.into_film();
+    (
+        film.pixels.iter().map(|p| p.map(f32::to_bits)).collect(),
+        counts,
+    )
+}
+
+/// Lights, mirrors and glass beside one another: twelve point lights, a directional one,
+/// an area light, a mirror plane, a flat mirror triangle, a glass sphere, a cone.
+const MANY_LIGHTS: &str = "v\nfrom 0 -6 2.5\nat 0 0 0.5\nup 0 0 1\nangle 50\nhither 0.01\nresolution 8 8\n\
+b 0.1 0.1 0.2\n\
+l 3 3 6\nl -3 3 6\nl 3 -3 6\nl -3 -3 6\nl 0 0 8\nl 5 0 2\nl -5 0 2\nl 0 5 2\nl 0 -5 7\nl 1 1 9\nl -1 2 4\nl 2 -1 5\n\
+dl 1 -1 2\nal -1 -1 5 2 0 0 0 2 0 0.5 0.5 0.5 2 2\n\
+f 0.9 0.9 0.9 0.3 0.7 20 0 1\n\
+pl 0 0 0 1 0 0 0 1 0\n\
+f 0.8 0.3 0.2 0.5 0.3 30 0 1\ns 0 0 1 1\n\
+f 0.9 0.9 0.9 0 0.1 50 0.9 1.5\ns 1.5 -1 0.7 0.6\n\
+f 0.2 0.8 0.3 0.8 0.1 10 0 1\np 3\n-3 2 0\n3 2 0\n0 3 3\n\
+f 0.3 0.3 0.9 0.7 0.2 10 0 1\nc\n-2 -1 0 0.4\n-2 -1 2 0.1\n";
+
+#[test]
+fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
+    let dir = crate::common::temp_dir("packet-lights");
+    let many = dir.join("many-lights.nff");
+    std::fs::write(&many, MANY_LIGHTS).expect("writes");
+    let mut paths: Vec<PathBuf> = files_with(&own_scenes(), &[".nff"]);
+    paths.push(many);
+    if let Some(shared) = shared_scenes() {
+        for s in [
+            "balls-1", "gears-1", "mount-3", "rings-1", "teapot-2", "tetra-3", "tree-1",
+        ] {
+            paths.push(shared.join(format!("spd/{s}.nff")));
+        }
+    }
+    let kernels = all_kernels();
+    let mut packed = RayCounts::default();
+    for (i, path) in paths.iter().enumerate() {
+        let buffers = load(path);
+        // Sizes that leave partial blocks and tiles; samples, depths and AOVs beyond the
+        // defaults, by turns.
+        let base = RenderOptions::for_camera(&buffers.camera);
+        let opts = RenderOptions {
+            width: [37, 21, 50][i % 3],
+            height: [29, 17, 18][i % 3],
+            spp: [3, 1, 5][i % 3],
+            max_depth: [8, 2, 12][i % 3],
+            aov: if i % 5 == 4 { AOV_DEPTH } else { base.aov },
+            ..base
+        };
+        let (want, want_counts) = render(&buffers, &opts, None);
+        assert_eq!(
+            want_counts.eye_packed + want_counts.shadow_packed + want_counts.reflected_packed,
+            0
+        );
+        for k in &kernels {
+            let (got, counts) = render(&buffers, &opts, Some(k));
+            let what = format!("{}, {}", path.display(), k.isa().name());
+            let first = got.iter().zip(&want).position(|(a, b)| a != b);
+            assert_eq!(first, None, "{what}: first differing pixel");
+            let kinds = |c: &RayCounts| (c.eye, c.shadow, c.reflected, c.refracted);
+            assert_eq!(kinds(&counts), kinds(&want_counts), "{what}: rays by kind");
+            packed.add(&counts);
+        }
+        if i == 0 {
+            // The comparison's own teeth: another seed moves the jittered samples.
+            let seeded = RenderOptions { seed: 1, ..opts };
+            let (off, _) = render(&buffers, &seeded, kernels.first());
+            assert!(
+                off.iter().zip(&want).any(|(a, b)| a != b),
+                "{}",
+                path.display()
+            );
+        }
+    }
+    assert!(
+        packed.eye_packed > 0 && packed.shadow_packed > 0 && packed.reflected_packed > 0,
+        "{packed:?}"
+    );
+}
+
+/// `gpurt SCENE --stats` on the CPU with `GPURT_SIMD` set to `simd`.
+fn cli(dir: &Path, simd: &str, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(args)
+        .current_dir(dir)
+        .env("GPURT_SIMD", simd)
+        .output()
+        .expect("gpurt runs")
+}
+
+/// The numbers of `--stats`' `rays` line: eye, packed, shadow, packed, reflected, packed,
+/// refracted.
+fn ray_line(stderr: &str) -> Vec<u64> {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("rays "))
+        .unwrap_or_else(|| panic!("no rays line in:\n{stderr}"));
+    line.split(|c: char| !c.is_ascii_digit())
+        .filter(|w| !w.is_empty())
+        .map(|w| w.parse().expect("a count"))
+        .collect()
+}
+
+#[test]
+fn stats_count_rays_by_kind_and_those_in_packets() {
+    let dir = crate::common::workdir("packet-stats");
+    let scene = own_scenes().join("mirrors.nff");
+    let scene = scene.to_str().expect("a UTF-8 path");
+    let args = [
+        scene,
+        "-o",
+        "out.png",
+        "--width",
+        "33",
+        "--height",
+        "21",
+        "--spp",
+        "2",
+        "--backend",
+        "cpu",
+        "--stats",
+    ];
+    let with = cli(&dir, "", &args);
+    let text = crate::common::stderr(&with);
+    assert!(with.status.success(), "{text}");
+    let packed = ray_line(&text);
+    assert_eq!(packed.len(), 7, "{text}");
+    assert_eq!(packed[0], 33 * 21 * 2, "{text}");
+    // Camera rays go in packets but in a corner block of one pixel; shadow rays from
+    // their hits and reflections off the flat mirrors too, the rest alone.
+    assert!(
+        packed[1] >= packed[0] - 2 && packed[3] > 0 && packed[5] > 0,
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "packets of {} rays",
+            Kernels::new(Isa::best()).expect("best").lanes()
+        )),
+        "{text}"
+    );
+    let without = cli(&dir, "none", &args);
+    let text = crate::common::stderr(&without);
+    let alone = ray_line(&text);
+    assert!(text.contains("no packets"), "{text}");
+    let kinds = |v: &[u64]| [v[0], v[2], v[4], v[6]];
+    assert_eq!(kinds(&alone), kinds(&packed), "the same rays by kind");
+    assert_eq!([alone[1], alone[3], alone[5]], [0, 0, 0], "{text}");
+}
+
+#[test]
+fn a_bad_or_missing_instruction_set_is_an_error_with_no_image() {
+    let dir = crate::common::workdir("packet-simd");
+    let scene = own_scenes().join("spheres.nff");
+    let scene = scene.to_str().expect("a UTF-8 path");
+    let args = [
+        scene,
+        "-o",
+        "out.png",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--backend",
+        "cpu",
+    ];
+    let mut cases = vec![(
+        "bogus",
+        "expected none or one of avx512, avx2, sse, portable",
+    )];
+    if !Isa::Avx512.available() {
+        cases.push(("avx512", "this processor lacks avx512"));
+    }
+    for (simd, message) in cases {
+        let out = cli(&dir, simd, &args);
+        let text = crate::common::stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{simd}: {text}");
+        assert!(
+            text.contains(&format!("GPURT_SIMD={simd}: {message}")),
+            "{simd}: {text}"
+        );
+        assert!(
+            !dir.join("out.png").exists(),
+            "{simd}: an image was written"
+        );
+    }
+    for simd in Isa::ALL
+        .into_iter()
+        .filter(|i| i.available())
+        .map(Isa::name)
+    {
+        assert!(cli(&dir, simd, &args).status.success(), "{simd}");
+    }
+}
