@@ -118,11 +118,13 @@ impl Renderer {
             ..Frame::default()
         };
         let overrides = options::layer(&self.base, &frame.overrides()?);
+        let opts = RenderOptions::for_camera(&self.camera).with_overrides(&overrides);
+        // The scene's own camera frames a bare mesh again for the frame's size, as
+        // `frame::globals` does for the command line; a camera given here is used as is.
         let camera = match camera {
             Some(dict) => options::camera(&self.camera, dict)?,
-            None => self.camera.clone(),
+            None => gpurt::scene::auto::fitted(&self.camera, opts.width, opts.height),
         };
-        let opts = RenderOptions::for_camera(&self.camera).with_overrides(&overrides);
         let mut frames = self.frames()?;
         let globals = frame::globals_from(&frames.buffers, &camera, &opts);
         let film = frames.render(py, &globals)?;

@@ -35,6 +35,9 @@ fn reported(slot: &Mutex<Option<String>>) -> Result<(), JsValue> {
 struct Loaded {
     buffers: SceneBuffers,
     orbit: OrbitCamera,
+    /// Whether the camera was moved from the scene's own: until it is, a bare mesh is
+    /// framed again for each new image size, as the command line frames it.
+    moved: bool,
     /// The scene on the device and the frame it was last made ready for.
     uploaded: Option<(GpuGlobals, GpuScene)>,
 }
@@ -101,6 +104,7 @@ impl Session {
         self.loaded = Some(Loaded {
             buffers,
             orbit,
+            moved: false,
             uploaded: None,
         });
         self.restart();
@@ -256,8 +260,12 @@ impl Session {
         if let Some(opts) = self.options()
             && let Some(loaded) = self.loaded.as_mut()
         {
-            loaded.orbit.camera.width = opts.width;
-            loaded.orbit.camera.height = opts.height;
+            let (w, h) = (opts.width, opts.height);
+            if !loaded.moved && (loaded.orbit.camera.width, loaded.orbit.camera.height) != (w, h) {
+                loaded.orbit = OrbitCamera::new(scene::auto::fitted(&loaded.buffers.camera, w, h));
+            }
+            loaded.orbit.camera.width = w;
+            loaded.orbit.camera.height = h;
         }
     }
 
@@ -265,6 +273,7 @@ impl Session {
         if let Some(loaded) = self.loaded.as_mut()
             && loaded.orbit.apply(input)
         {
+            loaded.moved = !matches!(input, Input::Key(Key::Reset));
             self.restart();
         }
     }
