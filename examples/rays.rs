@@ -119,7 +119,7 @@ fn main() -> anyhow::Result<()> {
         shadow
             .par_iter()
             .with_min_len(CHUNK)
-            .map(|(r, tmax)| transmission(&b, r, *tmax) == Vec3::ZERO)
+            .map(|(r, tmax)| transmission(&b, r, *tmax, &mut 0) == Vec3::ZERO)
             .collect()
     };
     let blocked = trace_shadow();

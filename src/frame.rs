@@ -107,7 +107,8 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         aov: opts.aov,
         // The GPU renderer puts its adapter's choice here (`GpuRenderer::traversal`).
         traversal: TRAVERSAL_SINGLE,
-        _pad: [0; 3],
+        counters: 0,
+        _pad: [0; 2],
     }
 }
 

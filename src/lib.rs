@@ -12,6 +12,7 @@ pub mod bench;
 pub mod bvh;
 pub mod compare;
 pub mod console;
+pub mod counters;
 pub mod cpu;
 pub mod error;
 pub mod fault;

@@ -13,11 +13,13 @@ use std::sync::atomic::AtomicBool;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use crate::bvh::wide::WideNode;
+use crate::counters::{self, Counters};
 use crate::error::{Error, Result};
 use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
 use crate::gpu::{self, GpuContext, GpuScene};
-use crate::gpu_types::GpuGlobals;
+use crate::gpu_types::{AOV_COST, GpuGlobals};
 use crate::pack::SceneBuffers;
 
 /// A backend that traces frames of one packed scene.
@@ -54,6 +56,13 @@ pub trait Renderer {
         self.render_rows(globals, rows, samples, accum, progress, cancel)
     }
 
+    /// What the last `render` or `render_rows` counted, when its frame asked for counts
+    /// (`GpuGlobals::counters`): rays and BVH node fetches by kind of ray, on this
+    /// renderer's own walk.
+    fn counters(&self) -> Option<Counters> {
+        None
+    }
+
     /// `render` for the image rows `rows` only (one shard of a sharded image): the other
     /// rows of `accum` stay as they are. Each pixel gets the value the whole frame gives it.
     fn render_rows(
@@ -70,11 +79,15 @@ pub trait Renderer {
 /// The CPU reference renderer, on all cores (rayon).
 pub struct CpuRenderer {
     scene: Arc<SceneBuffers>,
+    counted: Option<Counters>,
 }
 
 impl CpuRenderer {
     pub fn new(scene: Arc<SceneBuffers>) -> Self {
-        CpuRenderer { scene }
+        CpuRenderer {
+            scene,
+            counted: None,
+        }
     }
 }
 
@@ -99,8 +112,19 @@ impl Renderer for CpuRenderer {
         // The same guard as the GPU's: a frame the fixed-size stacks cannot trace is an
         // error, not a panic.
         self.scene.check(globals)?;
-        crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)
-            .map(|c| c.total())
+        let counts =
+            crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)?;
+        // The CPU walks its own eight-wide tree, but for the cost AOV (`Bindings::new`).
+        let node_bytes = match globals.aov {
+            AOV_COST => counters::gpu_node_bytes(globals.traversal),
+            _ => size_of::<WideNode>() as u64,
+        };
+        self.counted = (globals.counters != 0).then(|| counts.counters(node_bytes));
+        Ok(counts.total())
+    }
+
+    fn counters(&self) -> Option<Counters> {
+        self.counted
     }
 }
 
@@ -196,6 +220,10 @@ impl Renderer for GpuSession {
         gpu::trace_rows(
             device, queue, uploaded, rows, samples, accum, &progress, cancel,
         )
+    }
+
+    fn counters(&self) -> Option<Counters> {
+        self.uploaded.as_ref().and_then(|(_, u)| u.counters())
     }
 }
 

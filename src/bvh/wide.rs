@@ -64,10 +64,32 @@ struct Lane {
     wide: u32,
 }
 
+/// The binary nodes that stand as the children of binary node `i` in a wide node of up to
+/// `width` children: its two children, then repeatedly the two children of the largest
+/// inner one in its place while a lane is free. A tree that is one leaf gives itself.
+pub(crate) fn children(nodes: &[GpuNode], i: u32, width: usize) -> Vec<u32> {
+    let n = &nodes[i as usize];
+    let mut kids: Vec<u32> = if n.count() > 0 {
+        vec![i]
+    } else {
+        vec![i + 1, n.offset]
+    };
+    while kids.len() < width {
+        let open = kids
+            .iter()
+            .enumerate()
+            .filter(|&(_, &k)| nodes[k as usize].count() == 0)
+            .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
+        let Some((j, &k)) = open else { break };
+        kids.swap_remove(j);
+        kids.extend([k + 1, nodes[k as usize].offset]);
+    }
+    kids
+}
+
 /// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
 /// `offset`) into nodes of up to `width` children, root first, as the lanes of each:
-/// each inner node takes its children, then repeatedly replaces its largest inner child
-/// by that child's two children while a lane is free.
+/// each inner node takes its `children`.
 fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
     if nodes.is_empty() {
         return Vec::new();
@@ -76,23 +98,7 @@ fn collapse(nodes: &[GpuNode], width: usize) -> Vec<Vec<Lane>> {
     // (wide node to fill, binary node it stands for)
     let mut todo = vec![(0usize, 0u32)];
     while let Some((w, i)) = todo.pop() {
-        let n = &nodes[i as usize];
-        let mut kids: Vec<u32> = if n.count() > 0 {
-            vec![i] // a tree that is one leaf
-        } else {
-            vec![i + 1, n.offset]
-        };
-        while kids.len() < width {
-            let open = kids
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| nodes[k as usize].count() == 0)
-                .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
-            let Some((j, &k)) = open else { break };
-            kids.swap_remove(j);
-            kids.extend([k + 1, nodes[k as usize].offset]);
-        }
-        let lanes = kids
+        let lanes = children(nodes, i, width)
             .into_iter()
             .map(|k| {
                 let mut lane = Lane { binary: k, wide: 0 };

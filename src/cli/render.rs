@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use gpurt::gpu_types::GpuGlobals;
 use gpurt::run::{self, Prepared};
 use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Probe, Renderer};
 use gpurt::view::wireframe::{self, Wireframe};
@@ -60,7 +61,11 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     })?;
     print_warnings(&warnings);
     let opts = args.options(&buffers.camera);
-    let globals = frame::globals(&buffers, &opts);
+    // `--stats` counts rays and node fetches by kind as the frame renders.
+    let globals = GpuGlobals {
+        counters: u32::from(args.stats),
+        ..frame::globals(&buffers, &opts)
+    };
     let buffers = Arc::new(buffers);
 
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
@@ -124,6 +129,9 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             r.rays,
             r.mrays_per_s()
         ));
+        if let Some(counted) = renderer.counters() {
+            report.extend(counted.report(name));
+        }
         films.push(r.film);
     }
     if let [cpu, gpu] = &films[..] {

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::shade::{surface, trace};
+use super::shade::{count_nodes, surface, trace};
 use super::traverse::closest_hit;
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
@@ -72,16 +72,17 @@ pub fn sample_sum(
         sum += if g.aov == AOV_COLOR {
             trace(b, ray, &mut rng, counts)
         } else {
-            aov(b, &ray)
+            aov(b, &ray, counts)
         };
     }
     sum
 }
 
 /// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
-fn aov(b: &Bindings, ray: &Ray) -> Vec3 {
+fn aov(b: &Bindings, ray: &Ray, counts: &mut RayCounts) -> Vec3 {
     let g = b.globals;
     let hit = closest_hit(b, ray, g.hither, NO_HIT);
+    count_nodes(counts, 1, hit.nodes);
     match g.aov {
         AOV_COST => Vec3::splat(hit.cost as f32),
         _ if hit.prim == NO_PRIM => Vec3::ZERO,

@@ -3,14 +3,17 @@
 //! so it checks the packing and BVH layout as much as the shader.
 //!
 //! One module per WGSL file, same function names, same order of operations:
-//! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
-//! the same tree eight children at a time, which finds the same hits.
+//! `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the compressed
+//! tree's walk), `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of the same
+//! tree eight children at a time, which finds the same hits.
 
+pub mod cwide;
 pub mod intersect;
 pub mod main;
 pub mod shade;
 pub mod traverse;
 pub mod types;
+pub mod walk;
 pub mod wide;
 
 use std::ops::Range;

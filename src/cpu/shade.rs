@@ -104,10 +104,20 @@ pub fn light_samples(light: &GpuLight) -> u32 {
     }
 }
 
-/// Sample `k` of `light` at surface `s` (material `m`, mirror direction `r`): Lambert and
-/// the Phong highlight scaled by the shadow ray's transmission, or `None` when the light
-/// is below the surface (no shadow ray is traced).
-pub fn light_sample(
+/// A light sample's shadow ray and what the sample gives where nothing blocks it,
+/// `intensity * term` (kept apart: `light_sample` multiplies the transmission in first).
+#[derive(Clone, Copy, Debug)]
+pub struct LightRay {
+    pub ray: Ray,
+    pub dist: f32,
+    pub intensity: Vec3,
+    pub term: Vec3,
+}
+
+/// The shadow ray of sample `k` of `light` at surface `s` (material `m`, mirror direction
+/// `r`) and the Lambert and Phong terms it carries, or `None` when the light is below the
+/// surface (no shadow ray is traced).
+pub fn light_ray(
     b: &Bindings,
     s: &Surface,
     m: &GpuMaterial,
@@ -115,7 +125,7 @@ pub fn light_sample(
     light: &GpuLight,
     k: u32,
     rng: &mut u32,
-) -> Option<Vec3> {
+) -> Option<LightRay> {
     let intensity = light.color / light_samples(light) as f32;
     let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
         (light.pos, NO_HIT)
@@ -133,18 +143,43 @@ pub fn light_sample(
     if ndotl <= 0.0 {
         return None;
     }
-    let shadow_ray = Ray {
-        origin: offset_origin(s, l, b.globals.epsilon),
-        dir: l,
-    };
-    let shadow = transmission(b, &shadow_ray, dist);
     let rl = r.dot(l);
     let highlight = if rl > 0.0 {
         m.ks * rl.powf(m.shine)
     } else {
         0.0
     };
-    Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(highlight)))
+    Some(LightRay {
+        ray: Ray {
+            origin: offset_origin(s, l, b.globals.epsilon),
+            dir: l,
+        },
+        dist,
+        intensity,
+        term: m.kd * m.color * ndotl + Vec3::splat(highlight),
+    })
+}
+
+/// Sample `k` of `light` at surface `s` (material `m`, mirror direction `r`): Lambert and
+/// the Phong highlight scaled by the shadow ray's transmission, or `None` when the light
+/// is below the surface (no shadow ray is traced). Adds the shadow ray's node fetches to
+/// `counts`.
+#[allow(clippy::too_many_arguments)]
+pub fn light_sample(
+    b: &Bindings,
+    s: &Surface,
+    m: &GpuMaterial,
+    r: Vec3,
+    light: &GpuLight,
+    k: u32,
+    rng: &mut u32,
+    counts: &mut RayCounts,
+) -> Option<Vec3> {
+    let lr = light_ray(b, s, m, r, light, k, rng)?;
+    let mut nodes = 0;
+    let shadow = transmission(b, &lr.ray, lr.dist, &mut nodes);
+    counts.shadow_nodes += u64::from(nodes);
+    Some(shadow * lr.intensity * lr.term)
 }
 
 /// Direct light at a surface point: ambient plus, per light sample, Lambert and the Phong
@@ -156,7 +191,7 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, s, m, r, light, k, rng) {
+            if let Some(c) = light_sample(b, s, m, r, light, k, rng, counts) {
                 counts.shadow += 1;
                 colour += c;
             }
@@ -175,6 +210,16 @@ pub fn refracted_dir(s: &Surface, m: &GpuMaterial, dir: Vec3) -> Vec3 {
         reflect_dir(dir, s.ns)
     } else {
         (eta * dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
+    }
+}
+
+/// Adds the nodes a ray of depth `depth` fetched to its kind's count: the eye ray's, or a
+/// reflected or refracted ray's.
+pub fn count_nodes(counts: &mut RayCounts, depth: u32, nodes: u32) {
+    if depth == 1 {
+        counts.eye_nodes += u64::from(nodes);
+    } else {
+        counts.secondary_nodes += u64::from(nodes);
     }
 }
 
@@ -201,6 +246,7 @@ pub fn trace(b: &Bindings, eye: Ray, rng: &mut u32, counts: &mut RayCounts) -> V
             dir: ray_in.dir,
         };
         let hit = closest_hit(b, &ray, ray_in.tmin, NO_HIT);
+        count_nodes(counts, ray_in.depth, hit.nodes);
         if hit.prim == NO_PRIM {
             colour += ray_in.weight * g.background;
             continue;

@@ -10,7 +10,8 @@
 //!   queue and hand them to the door;
 //! - `shaders` assembles and validates the WGSL; `specialization` picks the pipeline a
 //!   scene needs;
-//! - `cut` cuts a frame into bounded dispatches, bands and submissions;
+//! - `cut` cuts a frame into bounded dispatches, bands and submissions; `policy` says
+//!   which walk a frame takes on an adapter, and how it is cut;
 //! - `upload` puts a scene's arrays on the device;
 //! - `pipeline` owns the bind group layouts, the shader modules, the compiling of entry
 //!   points and the on-disk pipeline cache;
@@ -24,6 +25,7 @@ pub mod context;
 mod cut;
 pub(crate) mod device;
 mod pipeline;
+mod policy;
 mod renderer;
 mod resume;
 mod scene;

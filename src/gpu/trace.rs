@@ -16,9 +16,13 @@ use super::cut::{Cut, PIXEL_BYTES};
 use super::device::Gpu;
 use super::resume::resume;
 use super::scene::{Bound, GpuScene};
+use crate::counters::Counters;
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
-use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT, RESUME_Y_SHIFT};
+use crate::gpu_types::{GpuPixelCounts, GpuTile, PIXEL_CUT_SHORT, RESUME_X_MASK, RESUME_Y_SHIFT};
+
+/// Bytes of a pixel's counts (`GpuPixelCounts`).
+const COUNT_BYTES: u64 = size_of::<GpuPixelCounts>() as u64;
 
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
 pub fn trace(
@@ -91,6 +95,10 @@ fn trace_band_rows(
     });
     let mut tracing = scene.tracing_cut();
     let all = u64::from(samples.end - samples.start).max(1);
+    let mut counted = scene
+        .bound
+        .counting
+        .then(|| Counters::new(scene.node_bytes));
     for (y0, rows) in bands {
         let pixels = u64::from(cut.width) * u64::from(rows);
         let bytes = pixels * PIXEL_BYTES;
@@ -109,6 +117,10 @@ fn trace_band_rows(
                 if last {
                     let (output, readback) = (&scene.bound.output, &scene.bound.readback);
                     enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
+                    if counted.is_some() {
+                        let (counts, back) = (&scene.bound.counts, &scene.bound.counts_back);
+                        enc.copy_buffer_to_buffer(counts, 0, back, 0, pixels * COUNT_BYTES);
+                    }
                 }
                 gpu.run(enc);
                 dispatches
@@ -116,6 +128,10 @@ fn trace_band_rows(
             if last {
                 let (band_rays, band_cut) =
                     read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
+                if let Some(counted) = &mut counted {
+                    let first = u64::from(y0) * u64::from(cut.width);
+                    read_counts(gpu, scene, pixels, first, &band_cut, counted)?;
+                }
                 rays += band_rays;
                 unfinished.extend(band_cut);
             } else {
@@ -137,7 +153,9 @@ fn trace_band_rows(
         }
     }
     if !unfinished.is_empty() {
-        let (more_rays, cut) = resume(gpu, scene, &unfinished, &samples, &mut accum.sums, cancel)?;
+        let sums = &mut accum.sums;
+        let counts = counted.as_mut();
+        let (more_rays, cut) = resume(gpu, scene, &unfinished, &samples, sums, counts, cancel)?;
         rays += more_rays;
         cut_short += cut;
     }
@@ -152,6 +170,7 @@ fn trace_band_rows(
         )));
     }
     accum.samples = samples.end;
+    *scene.counted.lock().expect("counts lock") = counted;
     Ok(rays)
 }
 
@@ -191,7 +210,7 @@ fn submit_band(
     let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
     let mut enc = gpu.encoder();
     if clear {
-        enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
+        scene.bound.clear(&mut enc, band_bytes / PIXEL_BYTES);
     }
     // `tile_buf` holds the dispatches of a submission of the frame's own cut (`bind`).
     let slots = scene.cut.dispatches_per_submission().max(1) as usize;
@@ -274,5 +293,35 @@ fn read_band(
                     (rays + more, cut)
                 },
             )
+    })
+}
+
+/// Adds the counts of a band's pixels (`pixels` of them, the first being pixel `first` of
+/// the image) to `counted`, but for those cut short (`cut`, as `read_band` lists them),
+/// whose counts `resume` gives.
+fn read_counts(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    pixels: u64,
+    first: u64,
+    cut: &[u32],
+    counted: &mut Counters,
+) -> Result<()> {
+    let width = u64::from(scene.cut.width);
+    let mut skip: Vec<usize> = cut
+        .iter()
+        .map(|&xy| {
+            let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);
+            (u64::from(y) * width + u64::from(x) - first) as usize
+        })
+        .collect();
+    skip.sort_unstable();
+    gpu.read(&scene.bound.counts_back, pixels * COUNT_BYTES, |view| {
+        let px: &[GpuPixelCounts] = bytemuck::cast_slice(view);
+        for (i, p) in px.iter().enumerate() {
+            if skip.binary_search(&i).is_err() {
+                counted.add_pixel(p);
+            }
+        }
     })
 }
