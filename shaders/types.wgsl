@@ -105,7 +105,8 @@ struct Globals {
     aov: u32,
     traversal: u32,
     counters: u32,
-    _pad: array<u32, 2>,
+    wavefront: u32,
+    _pad: u32,
 }
 
 struct Tile {

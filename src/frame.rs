@@ -108,7 +108,8 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         // The GPU renderer puts its adapter's choice here (`GpuRenderer::traversal`).
         traversal: TRAVERSAL_SINGLE,
         counters: 0,
-        _pad: [0; 2],
+        wavefront: 0,
+        _pad: 0,
     }
 }
 

@@ -267,7 +267,10 @@ pub struct GpuGlobals {
     /// 1: count each pixel's rays and node fetches by kind of ray (`GpuPixelCounts`, the
     /// `COUNTERS` specialisation), for `--stats` and `gpurt bench`; 0: count nothing.
     pub counters: u32,
-    pub _pad: [u32; 2],
+    /// 1: trace through the wavefront kernels (`shaders/wavefront.wgsl`) instead of the
+    /// one `main` kernel; colour frames only.
+    pub wavefront: u32,
+    pub _pad: u32,
 }
 
 /// The image region one dispatch traces, which of its samples, and where its pixels go in

@@ -4,7 +4,7 @@
 //!
 //! One module per WGSL file, same function names, same order of operations:
 //! `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the compressed
-//! tree's walk), `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of the same
+//! tree's walk), `traverse`, `shade`, `main`, `wavefront` (the wavefront kernels' steps over queues of pixels); and `wide`, the CPU's own walk of the same
 //! tree eight children at a time, which finds the same hits.
 
 pub mod cwide;
@@ -14,6 +14,7 @@ pub mod shade;
 pub mod traverse;
 pub mod types;
 pub mod walk;
+pub mod wavefront;
 pub mod wide;
 
 use std::ops::Range;

@@ -10,12 +10,12 @@ use crate::gpu_types::*;
 
 /// A ray waiting to be traced, with the product of the Ks / T factors on its path.
 #[derive(Clone, Copy, Debug, Default)]
-struct Pending {
-    origin: Vec3,
-    dir: Vec3,
-    weight: f32,
-    depth: u32,
-    tmin: f32,
+pub(super) struct Pending {
+    pub(super) origin: Vec3,
+    pub(super) dir: Vec3,
+    pub(super) weight: f32,
+    pub(super) depth: u32,
+    pub(super) tmin: f32,
 }
 
 /// Surface data at a hit.
@@ -81,7 +81,13 @@ pub fn offset_origin(s: &Surface, dir: Vec3, eps: f32) -> Vec3 {
 
 /// A ray leaving surface `s` along `dir`, one level deeper than `parent`, its weight
 /// scaled by `factor` (Ks or T).
-fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) -> Pending {
+pub(super) fn secondary(
+    s: &Surface,
+    dir: Vec3,
+    parent: &Pending,
+    factor: f32,
+    eps: f32,
+) -> Pending {
     Pending {
         origin: offset_origin(s, dir, eps),
         dir,
@@ -91,7 +97,7 @@ fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) ->
     }
 }
 
-fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
+pub(super) fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
 

@@ -1,10 +1,12 @@
-//! What a frame takes on this adapter: which walk of the BVH, chosen per adapter by what
-//! was measured and overridable from the environment for measuring the walks side by
-//! side; and how the frame is cut into work.
+//! What a frame takes on this adapter: which walk of the BVH and which kernels (the one
+//! `main` kernel or the wavefront ones), each chosen per adapter and per scene by what
+//! was measured, and overridable from the environment for measuring them side by side;
+//! and how the frame is cut into work.
 
 use super::cut::Cut;
 use crate::error::{Error, Result};
-use crate::gpu_types::{GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use crate::gpu_types::{AOV_COLOR, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use crate::pack::SceneBuffers;
 
 /// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
 /// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
@@ -27,18 +29,53 @@ pub(super) fn traversal_from_env() -> Result<u32> {
     }
 }
 
+/// `GPURT_KERNELS`: `main` (the one kernel) or `wavefront` forces the kernels of every
+/// colour frame; unset or empty, `wavefront_for` chooses.
+pub(super) fn kernels_from_env() -> Result<Option<bool>> {
+    match std::env::var("GPURT_KERNELS").as_deref() {
+        Err(_) | Ok("") => Ok(None),
+        Ok("main") => Ok(Some(false)),
+        Ok("wavefront") => Ok(Some(true)),
+        Ok(v) => Err(Error::Render(format!(
+            "GPURT_KERNELS={v}: expected main or wavefront"
+        ))),
+    }
+}
+
+/// Whether a frame of `scene` traces through the wavefront kernels: as `forced` says
+/// when it says (`GPURT_KERNELS`, `GpuRenderer::with_wavefront`), else by what was
+/// measured. Colour frames only: an AOV traces eye rays alone, which one kernel does
+/// without idle lanes.
+///
+/// Measured on lavapipe (docs/gpu.md, "Wavefront"): the one kernel stays where it wins,
+/// which is everywhere measured so far; on GPUs the wavefront path is not measured yet,
+/// so they keep the one kernel too.
+pub(super) fn wavefront_for(
+    forced: Option<bool>,
+    _software: bool,
+    _scene: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> bool {
+    globals.aov == AOV_COLOR && forced.unwrap_or(false)
+}
+
+/// Pixels a side of a wave's tile at most: a wave holds a `WaveState` per pixel (up to a
+/// kilobyte with the longest ray stack), 16 MiB at this side.
+const WAVE_TILE_SIDE: u32 = 128;
+
 /// How a frame of `globals`' size and samples is cut on this device. Software adapters
 /// get small bands so that Ctrl-C and the progress bar respond within a second, and one
 /// sample per pass: lavapipe ends every loop once an invocation has run 65535 loop
 /// iterations in all, and one sample of an ordinary scene needs far fewer. GPUs take up
-/// to 16 samples per pass, and a band is the most one submission should hold.
+/// to 16 samples per pass, and a band is the most one submission should hold. The
+/// wavefront path's tiles are its waves, at most `WAVE_TILE_SIDE` a side.
 pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, software: bool) -> Cut {
     let (pass_samples, band_samples) = if software {
         (1, 1 << 18)
     } else {
         (16, 1 << 26)
     };
-    Cut::new(
+    let mut cut = Cut::new(
         globals.width,
         globals.height,
         globals.spp,
@@ -50,5 +87,10 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, software: boo
         // Software adapters split a dispatch among their threads in fixed runs; a GPU's
         // own scheduler balances, and neighbouring blocks share its caches.
         software,
-    )
+    );
+    if globals.wavefront != 0 {
+        // Bands stay whole rows of tiles: sides are powers of two.
+        cut.tile_side = cut.tile_side.min(WAVE_TILE_SIDE);
+    }
+    cut
 }

@@ -15,11 +15,12 @@ use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
 };
-use super::policy::{cut_for, traversal_from_env};
+use super::policy::{cut_for, kernels_from_env, traversal_from_env, wavefront_for};
 use super::scene::{GpuScene, bind};
 use super::specialization::Specialization;
 use super::trace::{encode_band, trace};
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
+use super::wavefront::{Wave, WavePipelines};
 use crate::counters::gpu_node_bytes;
 use crate::error::Result;
 use crate::film::Film;
@@ -41,6 +42,10 @@ pub struct GpuRenderer {
     software: bool,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
+    /// The wavefront kernels' pipelines, shared with the uploaded scenes, and whether
+    /// colour frames take them (`None`: as `policy::wavefront_for` chooses).
+    wave: Arc<WavePipelines>,
+    wavefront: Option<bool>,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
     /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
@@ -72,6 +77,9 @@ impl GpuRenderer {
                 )
             })?;
         let modules = Arc::new(Modules::default());
+        let wave = gpu.scoped("compiling the shader", || {
+            WavePipelines::new(gpu, &layout, modules.clone())
+        })?;
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
@@ -87,6 +95,8 @@ impl GpuRenderer {
             compile_time: Mutex::new(start.elapsed()),
             software,
             traversal: traversal_from_env()?,
+            wave: Arc::new(wave),
+            wavefront: kernels_from_env()?,
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
             texture_margin: None,
@@ -145,11 +155,22 @@ impl GpuRenderer {
         GpuRenderer { traversal, ..self }
     }
 
-    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`):
-    /// what its frames of `globals` trace.
+    /// This renderer tracing colour frames through the wavefront kernels (`true`) or
+    /// the one kernel (`false`), whatever its adapter and the scene.
+    pub fn with_wavefront(self, wavefront: bool) -> Self {
+        GpuRenderer {
+            wavefront: Some(wavefront),
+            ..self
+        }
+    }
+
+    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`)
+    /// and its kernels (`policy::wavefront_for`): what its frames of `globals` trace.
     pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
+        let wave = wavefront_for(self.wavefront, self.software, scene, globals);
         GpuGlobals {
             traversal: scene.traversal_for(self.traversal),
+            wavefront: u32::from(wave),
             ..*globals
         }
     }
@@ -287,6 +308,7 @@ impl GpuRenderer {
             cut.band_bytes(),
             cut.dispatches_per_submission(),
         )?;
+        let wave = self.wave_for(gpu, spec, &cut, globals)?;
         // The texture uploads are queued: finish them, so a failure surfaces here.
         gpu.finish()?;
         Ok(GpuScene {
@@ -300,6 +322,7 @@ impl GpuRenderer {
             dispatch_budget: self.dispatch_budget,
             finer: Mutex::new(None),
             node_bytes: gpu_node_bytes(globals.traversal),
+            wave,
             counted: Mutex::new(None),
         })
     }
@@ -322,7 +345,8 @@ impl GpuRenderer {
         let globals = &self.frame(scene, globals);
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        if spec != uploaded.spec {
+        let spec_changed = spec != uploaded.spec;
+        if spec_changed {
             uploaded.pipeline = self.pipeline(gpu, scene, &uploaded.data, globals)?;
             uploaded.spec = spec;
         }
@@ -351,7 +375,30 @@ impl GpuRenderer {
             uploaded.cut = cut;
             *uploaded.finer.lock().expect("cut lock") = None;
         }
+        let wave_fits = |w: &Wave| w.capacity >= cut.tile_side * cut.tile_side;
+        if (globals.wavefront != 0) != uploaded.wave.is_some()
+            || uploaded
+                .wave
+                .as_ref()
+                .is_some_and(|w| !wave_fits(w) || spec_changed)
+        {
+            uploaded.wave = self.wave_for(gpu, spec, &cut, globals)?;
+        }
         Ok(())
+    }
+
+    /// The wave a frame of `globals` (cut as `cut`) runs the wavefront kernels in, when
+    /// it takes them: a pixel's state for each pixel of a tile.
+    fn wave_for(
+        &self,
+        gpu: &Gpu,
+        spec: Specialization,
+        cut: &Cut,
+        globals: &GpuGlobals,
+    ) -> Result<Option<Wave>> {
+        (globals.wavefront != 0)
+            .then(|| Wave::new(gpu, &self.wave, spec, cut.tile_side * cut.tile_side))
+            .transpose()
     }
 
     /// Renders the image described by `globals` on `device`. Returns the film and the

@@ -1,5 +1,6 @@
 //! A scene's state on the device: its arrays (`upload`), what a frame binds besides them
-//! (`Bound`), the pipeline its frame's settings need and how its frames are cut. The
+//! (`Bound`), the pipeline its frame's settings need (and the wave of the wavefront
+//! path) and how its frames are cut. The
 //! renderer makes it and moves it to other frames; the dispatch loop and `resume` trace
 //! it (the loop notes in it a finer cut when dispatches run long), so it sits below all
 //! three.
@@ -12,6 +13,7 @@ use super::device::Device;
 use super::pipeline::ResumePipelines;
 use super::specialization::Specialization;
 use super::upload::SceneData;
+use super::wavefront::Wave;
 use crate::counters::Counters;
 use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuPixelCounts, GpuTile};
@@ -32,6 +34,9 @@ pub struct GpuScene {
     pub(super) finer: Mutex<Option<Cut>>,
     /// Bytes a node fetch of the frame's walk reads (`counters::gpu_node_bytes`).
     pub(super) node_bytes: u64,
+    /// The wave the frame's wavefront kernels run in, when it takes that path
+    /// (`GpuGlobals::wavefront`).
+    pub(super) wave: Option<Wave>,
     /// What the last trace counted, when its frame counts (`GpuGlobals::counters`).
     pub(super) counted: Mutex<Option<Counters>>,
 }
@@ -57,7 +62,8 @@ impl GpuScene {
 
     /// Device memory held by the scene and a band's output and readback buffers, in bytes.
     pub fn device_bytes(&self) -> u64 {
-        self.scene_bytes + 2 * self.cut.band_bytes()
+        let wave = self.wave.as_ref().map_or(0, |w| w.bytes);
+        self.scene_bytes + 2 * self.cut.band_bytes() + wave
     }
 }
 

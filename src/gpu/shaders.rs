@@ -5,7 +5,7 @@
 use crate::gpu_types::{WGSL_CONSTANTS, WgslValue};
 
 /// The files, in the order they are joined; each is mirrored by `src/cpu/<name>.rs`.
-pub const FILES: [(&str, &str); 7] = [
+pub const FILES: [(&str, &str); 8] = [
     ("types.wgsl", include_str!("../../shaders/types.wgsl")),
     (
         "intersect.wgsl",
@@ -16,6 +16,10 @@ pub const FILES: [(&str, &str); 7] = [
     ("traverse.wgsl", include_str!("../../shaders/traverse.wgsl")),
     ("shade.wgsl", include_str!("../../shaders/shade.wgsl")),
     ("main.wgsl", include_str!("../../shaders/main.wgsl")),
+    (
+        "wavefront.wgsl",
+        include_str!("../../shaders/wavefront.wgsl"),
+    ),
 ];
 
 /// The whole shader source, for a `trace` that holds at most `trace_stack` pending rays
@@ -94,7 +98,16 @@ mod tests {
             .iter()
             .filter_map(|(_, o)| o.name.clone())
             .collect();
-        let entries = ["main", "resume"];
+        let entries = [
+            "main",
+            "resume",
+            "wf_generate",
+            "wf_advance_rays",
+            "wf_extend",
+            "wf_shadow",
+            "wf_advance_shade",
+            "wf_shade",
+        ];
         for (entry, on) in entries.iter().flat_map(|&e| [(e, 0.0), (e, 1.0)]) {
             let constants = names
                 .iter()

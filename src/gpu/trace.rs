@@ -16,6 +16,7 @@ use super::cut::{Cut, PIXEL_BYTES};
 use super::device::Gpu;
 use super::resume::resume;
 use super::scene::{Bound, GpuScene};
+use super::waves;
 use crate::counters::Counters;
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
@@ -110,10 +111,10 @@ fn trace_band_rows(
             }
             let last = run.end == samples.end;
             let start = Instant::now();
-            let dispatches = gpu.scoped("tracing a band", || {
+            let dispatches = gpu.scoped("tracing a band", || -> Result<u32> {
                 let first = run.start == samples.start;
                 let (mut enc, dispatches) =
-                    submit_band(gpu, scene, &tracing, y0, rows, &run, first);
+                    submit_band(gpu, scene, &tracing, y0, rows, &run, first)?;
                 if last {
                     let (output, readback) = (&scene.bound.output, &scene.bound.readback);
                     enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
@@ -123,8 +124,8 @@ fn trace_band_rows(
                     }
                 }
                 gpu.run(enc);
-                dispatches
-            })?;
+                Ok(dispatches)
+            })??;
             if last {
                 let (band_rays, band_cut) =
                     read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums)?;
@@ -181,22 +182,44 @@ pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuSc
     let cut = scene.tracing_cut();
     for (y0, rows) in cut.bands() {
         for run in cut.submissions(&(0..cut.spp)) {
-            gpu.scoped("tracing a band", || {
+            gpu.scoped("tracing a band", || -> Result<()> {
                 let first = run.start == 0;
-                let (enc, _) = submit_band(&gpu, scene, &cut, y0, rows, &run, first);
+                let (enc, _) = submit_band(&gpu, scene, &cut, y0, rows, &run, first)?;
                 gpu.run(enc);
-            })?;
+                Ok(())
+            })??;
         }
     }
     gpu.wait()
 }
 
-/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
-/// their dispatches, after the clearing of the band's output when `clear` (the first
-/// samples of the band: each pass adds to what the passes before left). A finer cut than
-/// the one the tile buffer was made for has more tiles than slots: all but the last
-/// buffer-full are submitted here. Returns the encoder of the last, and the dispatches.
+/// Traces the band at row `y0` for `samples` as `cut` cuts it, after the clearing of the
+/// band's output when `clear` (the first samples of the band: each pass adds to what the
+/// passes before left): through the `main` kernel, or the wavefront kernels where the
+/// frame takes them (`waves`). Returns the encoder of the last submission, still open,
+/// and the dispatches.
+#[allow(clippy::too_many_arguments)]
 fn submit_band(
+    gpu: &Gpu,
+    scene: &GpuScene,
+    cut: &Cut,
+    y0: u32,
+    rows: u32,
+    samples: &Range<u32>,
+    clear: bool,
+) -> Result<(wgpu::CommandEncoder, u32)> {
+    match &scene.wave {
+        Some(wave) => waves::submit_band(gpu, scene, wave, cut, y0, rows, samples, clear),
+        None => Ok(submit_main_band(gpu, scene, cut, y0, rows, samples, clear)),
+    }
+}
+
+/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
+/// their dispatches of `main`, after the clearing of the band's output when `clear`. A
+/// finer cut than the one the tile buffer was made for has more tiles than slots: all but
+/// the last buffer-full are submitted here. Returns the encoder of the last, and the
+/// dispatches.
+fn submit_main_band(
     gpu: &Gpu,
     scene: &GpuScene,
     cut: &Cut,

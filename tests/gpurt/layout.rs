@@ -32,6 +32,34 @@ fn rust_layouts() -> Vec<Layout> {
             [origin, exp_inner, child_base, prim_base, tags, quant]
         ),
         layout!(
+            "WaveState",
+            GpuWaveState,
+            [
+                sum,
+                sample,
+                colour,
+                rng,
+                lit,
+                rays,
+                point,
+                sp,
+                ng,
+                light,
+                ns,
+                light_sample,
+                ray_in,
+                shadow,
+                shadow_light,
+                hit,
+                material,
+                entering,
+                cut,
+                phase,
+                counts,
+                stack
+            ]
+        ),
+        layout!(
             "PixelCounts",
             GpuPixelCounts,
             [
@@ -72,6 +100,7 @@ fn rust_layouts() -> Vec<Layout> {
                 aov,
                 traversal,
                 counters,
+                wavefront,
                 _pad,
             ]
         ),
@@ -387,6 +416,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "RayCounts: the CPU counts rays by kind, the GPU one total",
     ),
     ("sample_sum", "the CPU's per-pixel driver, `main` in WGSL"),
+    (
+        "wave_sums",
+        "the rounds of the wavefront kernels, which the host dispatches (gpu/waves.rs)",
+    ),
     (
         "counters",
         "RayCounts as the counts by kind the GPU keeps (`counters::Counters`)",
