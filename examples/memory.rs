@@ -5,6 +5,11 @@
 //! process's peak resident memory (`--stats`) also holds.
 //!
 //!     cargo run --release --example memory -- SCENE
+//!
+//! With a size and an output image, it follows a whole command-line render on the CPU at
+//! one sample per pixel instead, stage by stage, and gives the peaks in bytes a pixel:
+//!
+//!     cargo run --release --example memory -- SCENE 16384x16384 out.png
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::path::Path;
@@ -73,6 +78,9 @@ fn main() -> gpurt::Result<()> {
         ));
     };
 
+    if let (Some(size), Some(out)) = (std::env::args().nth(2), std::env::args().nth(3)) {
+        return image_stages(path, &size, Path::new(&out));
+    }
     let t = Instant::now();
     let scene = gpurt::scene::load(path)?;
     stage("read + parse", t);
@@ -102,6 +110,58 @@ fn main() -> gpurt::Result<()> {
             *peak as f64 / prims as f64,
             mib(*after),
             *after as f64 / prims as f64
+        );
+    }
+    Ok(())
+}
+
+/// A render of `path` at `size` (WxH), one sample per pixel on the CPU, saved to `out`, as
+/// `gpurt SCENE --backend cpu` does it: the heap's peak in each stage, in bytes a pixel.
+fn image_stages(path: &Path, size: &str, out: &Path) -> gpurt::Result<()> {
+    use gpurt::session::CpuRenderer;
+    let (w, h) = size.split_once('x').expect("a size WxH");
+    let (w, h): (u32, u32) = (w.parse().expect("width"), h.parse().expect("height"));
+    let pixels = f64::from(w) * f64::from(h);
+    let mut rows = Vec::new();
+    let mut stage = |name: &str, t: Instant| {
+        let peak = PEAK.swap(CURRENT.load(Relaxed), Relaxed);
+        rows.push((name.to_string(), t.elapsed(), peak, CURRENT.load(Relaxed)));
+    };
+    let t = Instant::now();
+    let prepared = gpurt::run::prepare(path, None, |_| u64::from(w) * u64::from(h))?;
+    stage("read, parse, pack", t);
+    let opts = gpurt::frame::RenderOptions {
+        width: w,
+        height: h,
+        spp: 1,
+        ..gpurt::frame::RenderOptions::for_camera(&prepared.buffers.camera)
+    };
+    let globals = gpurt::frame::globals(&prepared.buffers, &opts);
+    let mut renderer = CpuRenderer::new(std::sync::Arc::new(prepared.buffers));
+    let t = Instant::now();
+    let never = AtomicBool::new(false);
+    let rendered = gpurt::run::render_frame(&mut renderer, &globals, &|_| {}, &never)?;
+    stage("render (accumulator, tiles, film)", t);
+    let t = Instant::now();
+    rendered.film.save_aov(out, opts.aov)?;
+    stage("save (8-bit conversion, encoder)", t);
+    drop(rendered);
+    println!(
+        "{}: {w}x{h}, 1 spp, CPU, into {}",
+        path.display(),
+        out.display()
+    );
+    println!("| stage | time s | peak MiB | peak B/px | after MiB | after B/px |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, time, peak, after) in &rows {
+        let mib = |b: usize| b as f64 / (1 << 20) as f64;
+        println!(
+            "| {name} | {:.2} | {:.1} | {:.2} | {:.1} | {:.2} |",
+            time.as_secs_f64(),
+            mib(*peak),
+            *peak as f64 / pixels,
+            mib(*after),
+            *after as f64 / pixels
         );
     }
     Ok(())

@@ -221,7 +221,7 @@ fn resume(
                 let samples = light_samples(light);
                 if (st.light_sample < samples) {
                     var rng = st.rng;
-                    let c = light_sample(s, m, reflect_dir(ray_in.dir, s.ns), light, st.light_sample, &rng);
+                    let c = light_sample(s, m, ray_in.dir, reflect_dir(ray_in.dir, s.ns), light, st.light_sample, &rng);
                     st.rng = rng;
                     if (c.w > 0.0) {
                         st.rays += 1u;

@@ -76,6 +76,25 @@ fn light_samples(light: Light) -> u32 {
     return 1u;
 }
 
+// The specular highlight of material m towards a light in direction l, for a ray that
+// came along `dir` and mirrors to `r` about the shading normal n: Phong, Ks (R.L)^Shine,
+// or with SHADING_BLINN_PHONG Blinn-Phong, Ks (N.H)^Shine with H halfway between L and
+// the way back to the viewer. SHADING is an override, so Phong pipelines hold only the
+// first branch and Phong images stay as they were.
+fn highlight(m: Material, n: vec3<f32>, dir: vec3<f32>, r: vec3<f32>, l: vec3<f32>) -> f32 {
+    var c: f32;
+    if (SHADING == SHADING_BLINN_PHONG) {
+        // N.L > 0 and N.dir <= 0 here, so L - dir is never zero.
+        c = dot(n, normalize(l - dir));
+    } else {
+        c = dot(r, l);
+    }
+    if (c > 0.0) {
+        return m.ks * pow(c, m.shine);
+    }
+    return 0.0;
+}
+
 // A light sample's shadow ray and what the sample gives where nothing blocks it,
 // `intensity * term` (kept apart: `light_sample` multiplies the transmission in first);
 // `traced` is 0 when the light is below the surface: no ray, no light.
@@ -88,9 +107,9 @@ struct LightRay {
     term: vec3<f32>,
 }
 
-// The shadow ray of sample k of `light` at surface `s` (material m, mirror direction r),
-// and the Lambert and Phong terms it carries.
-fn light_ray(s: Surface, m: Material, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> LightRay {
+// The shadow ray of sample k of `light` at surface `s` (material m, incoming direction
+// dir, mirror direction r), and the Lambert and highlight terms it carries.
+fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> LightRay {
     let intensity = light.color / f32(light_samples(light));
     var l: vec3<f32>;
     var dist: f32;
@@ -112,20 +131,17 @@ fn light_ray(s: Surface, m: Material, r: vec3<f32>, light: Light, k: u32, rng: p
     if (ndotl <= 0.0) {
         return LightRay();
     }
-    let rl = dot(r, l);
-    var highlight = 0.0;
-    if (rl > 0.0) {
-        highlight = m.ks * pow(rl, m.shine);
-    }
-    let term = m.kd * m.color * ndotl + vec3<f32>(highlight);
+    let spec = highlight(m, s.ns, dir, r, l);
+    let term = m.kd * m.color * ndotl + vec3<f32>(spec);
     return LightRay(offset_origin(s, l, globals.epsilon), dist, l, 1u, intensity, term);
 }
 
-// Sample k of `light` at surface `s` (material m, mirror direction r): Lambert and the
-// Phong highlight scaled by the shadow ray's transmission in xyz; w is 1 when the light is
-// above the surface and a shadow ray was traced, else 0 (and xyz is 0).
-fn light_sample(s: Surface, m: Material, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
-    let lr = light_ray(s, m, r, light, k, rng);
+// Sample k of `light` at surface `s` (material m, incoming direction dir, mirror
+// direction r): Lambert and the highlight scaled by the shadow ray's transmission in xyz;
+// w is 1 when the light is above the surface and a shadow ray was traced, else 0 (and xyz
+// is 0).
+fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
+    let lr = light_ray(s, m, dir, r, light, k, rng);
     if (lr.traced == 0u) {
         return vec4<f32>(0.0);
     }
@@ -148,7 +164,7 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
         let samples = light_samples(light);
         var k = 0u;
         for (; k < samples; k++) {
-            let c = light_sample(s, m, r, light, k, rng);
+            let c = light_sample(s, m, dir, r, light, k, rng);
             if (c.w > 0.0) {
                 *rays += 1u;
                 colour += c.xyz;

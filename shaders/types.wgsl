@@ -106,7 +106,7 @@ struct Globals {
     traversal: u32,
     counters: u32,
     wavefront: u32,
-    _pad: u32,
+    shading: u32,
 }
 
 struct Tile {
@@ -210,6 +210,8 @@ override LENS: bool = true;
 override MULTISAMPLE: bool = true;
 // globals.aov, as a constant.
 override AOV: u32 = AOV_COLOR;
+// globals.shading, as a constant: a Phong pipeline holds no Blinn-Phong code.
+override SHADING: u32 = SHADING_PHONG;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
 // globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.

@@ -152,7 +152,7 @@ fn wave_next_light(i: u32) {
         let light = lights[li];
         let samples = light_samples(light);
         for (; k < samples; k++) {
-            let lr = light_ray(s, m, r, light, k, &rng);
+            let lr = light_ray(s, m, ray_in.dir, r, light, k, &rng);
             if (lr.traced != 0u) {
                 wave[i].rng = rng;
                 wave[i].light = li;

@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 use crate::bvh::{self, wide::WideNode};
 use crate::counters::Counters;
 use crate::error::Result;
-use crate::frame::{self, Overrides, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
 use crate::outln;
@@ -41,6 +41,8 @@ pub struct BenchConfig {
     pub sizes: Vec<(u32, u32)>,
     pub spps: Vec<u32>,
     pub depth: u32,
+    /// The highlight's model of every frame.
+    pub shading: Shading,
     /// Timed GPU frames per pass (after one warm-up frame).
     pub frames: u32,
     /// Which backends to time: `Gpu` needs an adapter, `Both` times both, `Auto` the one
@@ -150,12 +152,10 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
-    outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
-    );
-    outln!(
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
+    eprintln!("shading     {}", config.shading.name());
+    // The table's header waits for its first row, so that a scene that cannot be read
+    // is an error alone, not a header and then an error.
+    let mut header = true;
     for path in &config.scenes {
         // Each row traces the tree a render of its size and samples would get: one build
         // per BVH quality the rows need.
@@ -172,6 +172,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     height: Some(height),
                     spp: Some(spp),
                     max_depth: Some(config.depth),
+                    shading: Some(config.shading),
                     ..Overrides::default()
                 };
                 let with_camera =
@@ -208,6 +209,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                         "gpurt: warning: {name} {width}x{height} {spp} spp: the GPU traced {} rays, the CPU {}",
                         g.full.rays, c.rays
                     );
+                }
+                if std::mem::take(&mut header) {
+                    print_header();
                 }
                 print_row(&Row {
                     scene: name.clone(),
@@ -314,6 +318,15 @@ fn per_ray(c: &Counters) -> [String; 3] {
         0 => "-".to_string(),
         _ => format!("{:.1} ({:.0})", c.nodes_per_ray(k), c.bytes_per_ray(k)),
     })
+}
+
+fn print_header() {
+    outln!(
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
+    );
+    outln!(
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
 }
 
 fn print_row(r: &Row) {

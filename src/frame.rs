@@ -1,5 +1,5 @@
 //! A frame of a packed scene: the render options (size, samples, depth, ambient, AOV,
-//! seed), and the `GpuGlobals` both renderers read, built from the scene's camera and the
+//! seed, shading model), and the `GpuGlobals` both renderers read, built from the scene's camera and the
 //! options. Their defaults and limits are in `limits`.
 
 use glam::Vec3;
@@ -20,6 +20,45 @@ pub struct RenderOptions {
     pub ambient: Option<Vec3>,
     pub aov: u32,
     pub seed: u32,
+    pub shading: Shading,
+}
+
+/// The model of the specular highlight (`--shading`); everything else in the shading
+/// model is the same under both (docs/model.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Shading {
+    /// `Ks * max(0, R.L)^Shine`, R the incoming ray mirrored about the normal: NFF's model.
+    #[default]
+    Phong,
+    /// `Ks * max(0, N.H)^Shine`, `H = normalize(L + V)` with V towards the viewer, the
+    /// exponent as the file gives it: the model of the IST P3D course's tracer.
+    BlinnPhong,
+}
+
+impl Shading {
+    /// Every model, in the order `--help` lists them.
+    pub const ALL: [Shading; 2] = [Shading::Phong, Shading::BlinnPhong];
+
+    /// The name `--shading` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Shading::Phong => "phong",
+            Shading::BlinnPhong => "blinn-phong",
+        }
+    }
+
+    /// The model called `name`.
+    pub fn from_name(name: &str) -> Option<Shading> {
+        Shading::ALL.into_iter().find(|s| s.name() == name)
+    }
+
+    /// Its `GpuGlobals::shading` code, `SHADING_*`.
+    pub fn code(self) -> u32 {
+        match self {
+            Shading::Phong => SHADING_PHONG,
+            Shading::BlinnPhong => SHADING_BLINN_PHONG,
+        }
+    }
 }
 
 impl RenderOptions {
@@ -39,6 +78,7 @@ impl RenderOptions {
             ambient: None,
             aov: AOV_COLOR,
             seed: 0,
+            shading: Shading::Phong,
         }
     }
 
@@ -54,12 +94,13 @@ impl RenderOptions {
             ambient: o.ambient.or(self.ambient),
             aov: o.aov.unwrap_or(self.aov),
             seed: o.seed.unwrap_or(self.seed),
+            shading: o.shading.unwrap_or(self.shading),
         }
     }
 }
 
 /// What a caller sets over a scene's camera and the defaults (`--width`, `--height`,
-/// `--spp`, `--depth`, `--ambient`, `--aov`, `--seed`); `None` keeps the scene's value or
+/// `--spp`, `--depth`, `--ambient`, `--aov`, `--seed`, `--shading`); `None` keeps the scene's value or
 /// the default. A new width or height keeps the camera's vertical angle.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Overrides {
@@ -70,6 +111,7 @@ pub struct Overrides {
     pub ambient: Option<Vec3>,
     pub aov: Option<u32>,
     pub seed: Option<u32>,
+    pub shading: Option<Shading>,
 }
 
 /// Per-render constants: the camera basis of shading.md and the options.
@@ -109,7 +151,7 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         traversal: TRAVERSAL_SINGLE,
         counters: 0,
         wavefront: 0,
-        _pad: 0,
+        shading: opts.shading.code(),
     }
 }
 
@@ -159,6 +201,7 @@ mod tests {
             ambient: None,
             aov: AOV_COLOR,
             seed: 0,
+            shading: Shading::Phong,
         };
         assert_eq!(
             defaults.clone().with_overrides(&Overrides::default()),
@@ -169,6 +212,7 @@ mod tests {
             spp: Some(9),
             ambient: Some(Vec3::splat(0.5)),
             seed: Some(3),
+            shading: Some(Shading::BlinnPhong),
             ..Overrides::default()
         };
         let got = defaults.clone().with_overrides(&o);
@@ -180,6 +224,7 @@ mod tests {
                 spp: 9,
                 ambient: Some(Vec3::splat(0.5)),
                 seed: 3,
+                shading: Shading::BlinnPhong,
                 ..defaults
             }
         );

@@ -234,6 +234,14 @@ pub const TRAVERSAL_CWIDE: u32 = 3;
 /// The walks' names, indexed by `TRAVERSAL_*` (`GPURT_TRAVERSAL`, reports).
 pub const TRAVERSAL_NAMES: [&str; 4] = ["single", "pairs", "wide", "cwide"];
 
+/// Shading model of the specular highlight (`--shading`, `frame::Shading`): Phong,
+/// `Ks * max(0, R.L)^Shine` with R the incoming ray mirrored about N (NFF's model, the
+/// default).
+pub const SHADING_PHONG: u32 = 0;
+/// Blinn-Phong, `Ks * max(0, N.H)^Shine` with `H = normalize(L + V)`, V towards the viewer
+/// (the IST P3D course tracer's model).
+pub const SHADING_BLINN_PHONG: u32 = 1;
+
 /// Per-render constants (a read-only storage buffer).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -270,7 +278,9 @@ pub struct GpuGlobals {
     /// 1: trace through the wavefront kernels (`shaders/wavefront.wgsl`) instead of the
     /// one `main` kernel; colour frames only.
     pub wavefront: u32,
-    pub _pad: u32,
+    /// The highlight's model: `SHADING_PHONG` or `SHADING_BLINN_PHONG` (see shade.wgsl's
+    /// `highlight`).
+    pub shading: u32,
 }
 
 /// The image region one dispatch traces, which of its samples, and where its pixels go in
@@ -375,6 +385,8 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
         ("AOV_NORMAL", U32(AOV_NORMAL)),
         ("AOV_DEPTH", U32(AOV_DEPTH)),
         ("AOV_COST", U32(AOV_COST)),
+        ("SHADING_PHONG", U32(SHADING_PHONG)),
+        ("SHADING_BLINN_PHONG", U32(SHADING_BLINN_PHONG)),
         ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
         ("PHASE_RAY", U32(PHASE_RAY)),
         ("PHASE_LIGHT", U32(PHASE_LIGHT)),

@@ -9,6 +9,9 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const DEFAULT_SPP: u32 = 1;
 /// Most samples per pixel a frame may ask for.
 pub const MAX_SPP: u32 = 4096;
+/// Most threads `--threads` may ask for: far more than any machine's cores, few enough
+/// that a mistyped count cannot exhaust the process's threads.
+pub const MAX_THREADS: u32 = 1024;
 
 /// Maximum ray depth when none is asked for (the eye ray counts as 1); at most `MAX_DEPTH`.
 pub const DEFAULT_DEPTH: u32 = 5;

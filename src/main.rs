@@ -11,13 +11,32 @@ use clap::Parser;
 use gpurt::Error;
 
 use cli::args::{Cli, Command};
-use cli::{farm, render, tools};
+use cli::{farm, render, shell, tools};
 
 fn main() -> ExitCode {
     let launch = Instant::now();
     cli::quiet_device_select();
     let args = Cli::parse();
+    if let Some(n) = args.threads
+        && let Err(e) = cli::use_threads(n)
+    {
+        eprintln!("gpurt: --threads {n}: {e}");
+        return ExitCode::from(2);
+    }
+    // `gpurt inof s.nff` is a mistyped command, not two scenes.
+    if args.command.is_none()
+        && let Some(given) = args.render.scenes.first()
+        && let Some(meant) = shell::meant_command(given)
+    {
+        eprintln!(
+            "gpurt: '{}' is neither a scene file nor a command; did you mean `gpurt {meant}`?",
+            given.display()
+        );
+        return ExitCode::from(2);
+    }
     let result = match args.command {
+        Some(Command::Completions { shell }) => shell::completions(shell),
+        Some(Command::Man) => shell::man(),
         Some(Command::Info { scene, json }) => tools::info(&scene, json),
         Some(Command::Diff(diff)) => tools::diff(diff),
         Some(Command::Bench(bench)) => tools::bench(bench),
@@ -36,7 +55,7 @@ fn main() -> ExitCode {
             ExitCode::from(130)
         }
         Err(e) => {
-            eprintln!("gpurt: {e}");
+            cli::report::print_error(&e, "");
             ExitCode::from(2)
         }
     }

@@ -20,6 +20,7 @@ use serde_json::{Value, json};
 use crate::atomic;
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
+use crate::frame::Shading;
 
 /// This process's share, `I/N`: of a batch run as a job array, scenes `index`,
 /// `index + count`, `index + 2 count`, ... of the list every task is given (`take`); of
@@ -153,6 +154,8 @@ pub struct Manifest {
     pub height: u32,
     pub spp: u32,
     pub aov: u32,
+    /// The highlight's model; a manifest without `shading` is Phong's.
+    pub shading: Shading,
     /// The rows and samples this shard traced.
     pub rows: Range<u32>,
     pub samples: Range<u32>,
@@ -185,7 +188,7 @@ fn write<'a>(dir: &Path, m: &Manifest, floats: impl Iterator<Item = &'a f32>) ->
     let base = base(dir, m.shard);
     let bytes: Vec<u8> = floats.flat_map(|c| c.to_le_bytes()).collect();
     atomic::write_atomic(&base.with_extension("rgbf32"), &bytes)?;
-    let manifest = json!({
+    let mut manifest = json!({
         "format": FORMAT,
         "shard": m.shard.index,
         "of": m.shard.count,
@@ -201,6 +204,11 @@ fn write<'a>(dir: &Path, m: &Manifest, floats: impl Iterator<Item = &'a f32>) ->
         "rows": [m.rows.start, m.rows.end],
         "data": base.with_extension("rgbf32").file_name().map(|n| n.to_string_lossy().into_owned()),
     });
+    // Phong, the default, is left out: a Phong shard's manifest is then what a gpurt
+    // without other models wrote, and shards of either merge.
+    if m.shading != Shading::Phong {
+        manifest["shading"] = json!(m.shading.name());
+    }
     let text = serde_json::to_string_pretty(&manifest).expect("JSON of plain values");
     atomic::write_atomic(&base.with_extension("json"), text.as_bytes())
 }
@@ -241,6 +249,13 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
         Some("samples") => By::Samples,
         _ => return Err(bad("'by' is neither tiles nor samples")),
     };
+    let shading = match &v["shading"] {
+        Value::Null => Shading::Phong,
+        name => name
+            .as_str()
+            .and_then(Shading::from_name)
+            .ok_or_else(|| bad(&format!("unknown 'shading' {name}")))?,
+    };
     Ok(Manifest {
         shard,
         by,
@@ -251,6 +266,7 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
         height: num("height")?,
         spp: num("spp")?,
         aov: num("aov")?,
+        shading,
         rows: pair("rows")?,
         samples: pair("samples")?,
     })
@@ -283,8 +299,14 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
             && m.settings == first.settings
             && m.by == first.by
             && m.shard.count == n
-            && (m.width, m.height, m.spp, m.aov)
-                == (first.width, first.height, first.spp, first.aov);
+            && (m.width, m.height, m.spp, m.aov, m.shading)
+                == (
+                    first.width,
+                    first.height,
+                    first.spp,
+                    first.aov,
+                    first.shading,
+                );
         if !same {
             return Err(Error::Render(format!(
                 "{} belongs to another render than {} (scene, view or settings differ: {} against {}); \

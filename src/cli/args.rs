@@ -7,10 +7,10 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use gpurt::film;
-use gpurt::frame::{Overrides, RenderOptions};
+use gpurt::frame::{Overrides, RenderOptions, Shading};
 use gpurt::gpu_types as gt;
 use gpurt::limits::{
-    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP,
+    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS,
 };
 use gpurt::scene::Camera;
 use gpurt::session::Backend;
@@ -20,13 +20,20 @@ use gpurt::session::Backend;
     name = "gpurt",
     version,
     about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ meshes",
-    args_conflicts_with_subcommands = true
+    args_conflicts_with_subcommands = true,
+    // `--spp -1` is a value out of range, not an unknown flag `-1`.
+    allow_negative_numbers = true
 )]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Option<Command>,
     #[command(flatten)]
     pub render: RenderArgs,
+    /// Threads that trace on the CPU and build BVHs, for renders, batches, the viewer's CPU
+    /// path and bench (default: one a core, or RAYON_NUM_THREADS). `-v` says how many.
+    #[arg(short = 'j', long, global = true, value_name = "N",
+          value_parser = clap::value_parser!(u32).range(1..=MAX_THREADS as i64))]
+    pub threads: Option<u32>,
 }
 
 #[derive(Subcommand)]
@@ -52,11 +59,17 @@ pub enum Command {
     },
     /// Open a window on a scene: ray traced progressively, with a wireframe preview that
     /// shares the ray tracer's camera. Without a display, says so and exits 2.
-    #[command(after_help = gpurt::view::controls::key_help())]
+    #[command(after_help = gpurt::view::controls::key_help(), allow_negative_numbers = true)]
     View(ViewArgs),
     /// Time frames on the GPU and the CPU over scenes, sizes and sample counts; prints a
     /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
+    #[command(allow_negative_numbers = true)]
     Bench(BenchArgs),
+    /// Print the completion script for a shell, e.g. `gpurt completions bash >
+    /// ~/.local/share/bash-completion/completions/gpurt` (see the README for each shell).
+    Completions { shell: clap_complete::Shell },
+    /// Print the manual page (roff), e.g. `gpurt man > ~/.local/share/man/man1/gpurt.1`.
+    Man,
 }
 
 #[derive(clap::Args)]
@@ -88,6 +101,9 @@ pub struct BenchArgs {
     /// Maximum ray depth.
     #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub depth: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Timed GPU frames per pass; the median is reported.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub frames: u32,
@@ -127,6 +143,9 @@ pub struct ViewArgs {
     /// Seed of the sample hash.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
@@ -253,6 +272,9 @@ pub struct RenderArgs {
     /// Seed of the sample hash.
     #[arg(long, default_value_t = 0)]
     pub seed: u32,
+    /// Model of the specular highlight; everything else is shaded alike.
+    #[arg(long, default_value = "phong", value_parser = shadings())]
+    pub shading: Shading,
     /// Which renderer traces the rays.
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some(
@@ -302,6 +324,7 @@ impl RenderArgs {
             ambient: self.ambient,
             aov: Some(self.aov.code().unwrap_or(gt::AOV_COLOR)),
             seed: Some(self.seed),
+            shading: Some(self.shading),
         }
     }
 
@@ -347,6 +370,20 @@ fn backends(
     });
     PossibleValuesParser::new(values)
         .map(|name| Backend::from_name(&name).expect("a backend's name"))
+}
+
+/// `--shading`'s parser: every model by its name, with the line `--help` shows for it.
+fn shadings() -> impl clap::builder::TypedValueParser<Value = Shading> {
+    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+    PossibleValuesParser::new(Shading::ALL.map(|s| {
+        PossibleValue::new(s.name()).help(match s {
+            Shading::Phong => "Ks (R.L)^Shine, R the mirrored ray: NFF's model",
+            Shading::BlinnPhong => {
+                "Ks (N.H)^Shine, H halfway between the light and the viewer: the P3D course's"
+            }
+        })
+    }))
+    .map(|name| Shading::from_name(&name).expect("a shading model's name"))
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -405,5 +442,58 @@ mod tests {
             backend(&["gpurt", "bench", "s.nff"]).unwrap(),
             Backend::Both
         );
+    }
+
+    /// `-j`/`--threads` goes before or after any command, and the count is checked.
+    #[test]
+    fn the_thread_count_is_global() {
+        for args in [
+            &["gpurt", "-j", "3", "s.nff"][..],
+            &["gpurt", "s.nff", "--threads", "3"],
+            &["gpurt", "a.nff", "b.nff", "--out-dir", "d", "-j", "3"],
+            &["gpurt", "-j", "3", "view", "s.nff"],
+            &["gpurt", "view", "s.nff", "-j", "3"],
+            &["gpurt", "bench", "s.nff", "--threads", "3"],
+        ] {
+            let cli = Cli::try_parse_from(args).expect("parses");
+            assert_eq!(cli.threads, Some(3), "{args:?}");
+        }
+        assert_eq!(
+            Cli::try_parse_from(["gpurt", "s.nff"]).unwrap().threads,
+            None
+        );
+        for bad in ["0", "-2", "1025", "x"] {
+            assert!(
+                Cli::try_parse_from(["gpurt", "s.nff", "-j", bad]).is_err(),
+                "{bad}"
+            );
+        }
+    }
+
+    /// Renders, batches, shards, the viewer and bench all take `--shading`, Phong unless
+    /// told otherwise.
+    #[test]
+    fn every_command_that_shades_takes_the_model() {
+        let shading = |args: &[&str]| -> Shading {
+            let cli = Cli::try_parse_from(args).expect("parses");
+            match cli.command {
+                Some(Command::View(v)) => v.shading,
+                Some(Command::Bench(b)) => b.shading,
+                _ => cli.render.overrides().shading.expect("always set"),
+            }
+        };
+        for args in [
+            &["gpurt", "s.nff"][..],
+            &["gpurt", "a.nff", "b.nff", "--out-dir", "d"],
+            &["gpurt", "s.nff", "--shard", "0/2", "-o", "d"],
+            &["gpurt", "view", "s.nff"],
+            &["gpurt", "bench", "s.nff"],
+        ] {
+            assert_eq!(shading(args), Shading::Phong, "{args:?}");
+            for s in Shading::ALL {
+                let with = [args, &["--shading", s.name()]].concat();
+                assert_eq!(shading(&with), s, "{with:?}");
+            }
+        }
     }
 }

@@ -16,7 +16,7 @@ use gpurt::{Error, atomic, film, frame};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::args::{Aov, RenderArgs, ShardBy};
-use super::{cancel_on_signals, print_note, print_warnings};
+use super::{cancel_on_signals, print_note, print_threads, print_warnings};
 
 /// `gpurt SCENE... --out-dir DIR`: every scene into DIR, one device, failures skipped.
 pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
@@ -43,6 +43,7 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     let cancel = cancel_on_signals();
     let found = session::choose(args.backend, args.adapter.as_deref(), Missing::Cpu)?;
     print_note(&found, args.verbose || args.stats);
+    print_threads(args.verbose || args.stats);
     let bar = ProgressBar::new(scenes.len() as u64);
     bar.set_style(
         ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {pos}/{len} {msg}")
@@ -67,7 +68,13 @@ pub fn batch(args: &RenderArgs, dir: &Path) -> gpurt::Result<ExitCode> {
     let outcome = outcome?;
     print_warnings(&outcome.warnings);
     for (scene, e) in &outcome.failed {
-        eprintln!("gpurt: {}: skipped: {e}", scene.display());
+        // Most errors start with the scene's name already; the others get it.
+        let named = e.to_string().starts_with(&scene.display().to_string());
+        if named {
+            super::report::print_error(e, " (skipped)");
+        } else {
+            eprintln!("gpurt: {}: {e} (skipped)", scene.display());
+        }
     }
     if args.verbose || args.stats || !outcome.failed.is_empty() {
         let secs = start.elapsed().as_secs_f64();
@@ -128,8 +135,15 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
         Some(ctx) => Box::new(GpuSession::new(ctx, buffers.clone())?),
         None => Box::new(CpuRenderer::new(buffers.clone())),
     };
+    // The shading model is named only when it is not Phong, so that a Phong shard's
+    // settings (and digest) are those of a gpurt that had no other model: shards from
+    // both merge.
+    let shading = match opts.shading {
+        frame::Shading::Phong => String::new(),
+        other => format!(", {} shading", other.name()),
+    };
     let settings = format!(
-        "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}, {backend}",
+        "{}x{}, {} spp, depth {}, ambient {:?}, seed {}, aov {}{shading}, {backend}",
         opts.width, opts.height, opts.spp, opts.max_depth, globals.ambient, opts.seed, opts.aov
     );
     let (rows, samples) = match by {
@@ -146,6 +160,7 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
         height: opts.height,
         spp: opts.spp,
         aov: opts.aov,
+        shading: opts.shading,
         rows: rows.clone(),
         samples: samples.clone(),
     };

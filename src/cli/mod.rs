@@ -6,6 +6,8 @@
 pub mod args;
 pub mod farm;
 pub mod render;
+pub mod report;
+pub mod shell;
 pub mod tools;
 
 use std::sync::Arc;
@@ -21,6 +23,27 @@ pub fn quiet_device_select() {
     if std::env::var_os("NODEVICE_SELECT").is_none() {
         // SAFETY: called first thing in `main`, before any other thread exists.
         unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+    }
+}
+
+/// Makes rayon's global pool, which every CPU render, BVH build and image conversion
+/// runs on, `n` threads (`--threads`); called before anything uses it.
+pub fn use_threads(n: u32) -> Result<(), String> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n as usize)
+        .build_global()
+        .map_err(|e| e.to_string())
+}
+
+/// Prints, with `-v`, how many threads render on the CPU and how that was chosen.
+pub fn print_threads(verbose: bool) {
+    if verbose {
+        let how = if std::env::var_os("RAYON_NUM_THREADS").is_some() {
+            "--threads or RAYON_NUM_THREADS"
+        } else {
+            "--threads/-j to choose; default one a core"
+        };
+        eprintln!("threads     {} ({how})", rayon::current_num_threads());
     }
 }
 

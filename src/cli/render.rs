@@ -15,7 +15,7 @@ use gpurt::{agreement, atomic, film, frame};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use super::args::{Aov, Overlay, RenderArgs};
-use super::{cancel_on_signals, print_note, print_warnings};
+use super::{cancel_on_signals, print_note, print_threads, print_warnings};
 
 /// `gpurt SCENE [-o OUT]`.
 pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
@@ -27,12 +27,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         }
         many => {
             eprintln!(
-                "gpurt: one scene is rendered at a time, but {} were given ({}); give --out-dir DIR to render them all",
-                many.len(),
+                "gpurt: {}: {} scenes, but one is rendered at a time; give --out-dir DIR to render them all",
                 many.iter()
                     .map(|p| p.display().to_string())
                     .collect::<Vec<_>>()
-                    .join(", ")
+                    .join(", "),
+                many.len()
             );
             return Ok(ExitCode::from(2));
         }
@@ -87,6 +87,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             },
         };
         print_note(&found, args.verbose || args.stats);
+        print_threads(args.verbose || args.stats);
         match found.gpu {
             Some(ctx) => {
                 device = Some(ctx.clone());
@@ -163,8 +164,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     }
     if args.stats {
         eprintln!(
-            "image       {}x{}, {} spp, depth {}",
-            opts.width, opts.height, opts.spp, opts.max_depth
+            "image       {}x{}, {} spp, depth {}, {} shading",
+            opts.width,
+            opts.height,
+            opts.spp,
+            opts.max_depth,
+            opts.shading.name()
         );
         eprintln!(
             "scene       {} prims in BVH ({} nodes, depth {}), {} planes, {} lights",

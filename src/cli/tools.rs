@@ -13,7 +13,7 @@ use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
 use super::args::{BenchArgs, DiffArgs, ViewArgs};
-use super::print_warnings;
+use super::{print_threads, print_warnings};
 
 /// `gpurt info SCENE [--json]`.
 pub fn info(path: &Path, json: bool) -> gpurt::Result<ExitCode> {
@@ -77,6 +77,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         u64::from(w) * u64::from(h)
     })?;
     print_warnings(&warnings);
+    print_threads(args.stats);
     window::run(
         buffers,
         ViewOptions {
@@ -87,6 +88,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             depth: args.depth,
             ambient: args.ambient,
             seed: args.seed,
+            shading: args.shading,
             backend: args.backend,
             adapter: args.adapter,
             script,
@@ -105,6 +107,7 @@ pub fn bench(args: BenchArgs) -> gpurt::Result<ExitCode> {
         sizes: args.sizes,
         spps: args.spp,
         depth: args.depth,
+        shading: args.shading,
         frames: args.frames,
         backend: args.backend,
         adapter: args.adapter,

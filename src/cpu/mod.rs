@@ -34,6 +34,9 @@ pub use types::RayCounts;
 /// Side of the square tiles rendered in parallel.
 pub const TILE: u32 = 16;
 
+/// A row of a tile: the image row and its pixels' sums.
+type RowPiece<'a> = (u32, &'a mut [[f32; 3]]);
+
 /// Renders the whole image. `progress` is called with the number of pixels finished by
 /// each tile; `cancel` stops the render early with `Error::Interrupted`.
 pub fn render(
@@ -72,6 +75,12 @@ pub fn render_samples(
 /// `render_samples` for the image rows `rows` only (a shard of the image): the other
 /// rows of `accum` stay as they are. A pixel's value never depends on which others are
 /// traced with it.
+///
+/// Each pixel's sum is traced in place in `accum`, in tiles of TILE x TILE pixels, so a
+/// frame costs no memory beyond its accumulator (at 16384 x 16384, 3 GiB; a second
+/// buffer of the tiles' results would double it). Only a finished pass counts: when
+/// cancelled, the rows traced are put back as they were, from a copy kept of them unless
+/// they held nothing (then they are zeroed, which needs no copy).
 pub fn render_rows(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
@@ -85,51 +94,118 @@ pub fn render_rows(
     accum.check(w, h, globals.spp, &samples)?;
     let rows = rows.start.min(h)..rows.end.min(h);
     let b = Bindings::new(buffers, globals);
-    // Tiles of TILE x TILE pixels, clipped to `rows`: (x0, y0, y1).
-    let tiles: Vec<(u32, u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-        .filter_map(|(x0, y0)| {
-            let (lo, hi) = (y0.max(rows.start), (y0 + TILE).min(h).min(rows.end));
-            (lo < hi).then_some((x0, lo, hi))
+    let span = rows.start as usize * w as usize..rows.end as usize * w as usize;
+    let held = &accum.sums.pixels[span.clone()];
+    let before = held.iter().any(|p| *p != [0.0; 3]).then(|| held.to_vec());
+    let band = (TILE * w) as usize;
+    let traced: Option<RayCounts> = accum
+        .sums
+        .pixels
+        .par_chunks_mut(band.max(1))
+        .enumerate()
+        .flat_map(|(band_index, pixels)| {
+            let y0 = band_index as u32 * TILE;
+            // The band's rows, cut into the TILE-wide pieces of each tile column.
+            let mut columns: Vec<Vec<RowPiece>> =
+                (0..w.div_ceil(TILE)).map(|_| Vec::new()).collect();
+            for (dy, row) in pixels.chunks_mut(w as usize).enumerate() {
+                let y = y0 + dy as u32;
+                if rows.contains(&y) {
+                    for (piece, column) in row.chunks_mut(TILE as usize).zip(&mut columns) {
+                        column.push((y, piece));
+                    }
+                }
+            }
+            columns
+                .into_par_iter()
+                .enumerate()
+                .filter(|(_, c)| !c.is_empty())
         })
-        .collect();
-    let done: Vec<Option<(Vec<[f32; 3]>, RayCounts)>> = tiles
-        .par_iter()
-        .map(|&(x0, y0, y1)| {
+        .map(|(tx, tile)| {
             if cancel.load(Ordering::Relaxed) {
                 return None;
             }
             let mut counts = RayCounts::default();
-            let mut px = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..y1 {
-                for x in x0..(x0 + TILE).min(w) {
-                    let sum = Vec3::from(accum.sums.get(x, y));
-                    let sum = main::sample_sum(&b, x, y, samples.clone(), sum, &mut counts);
-                    px.push(sum.to_array());
+            let mut n = 0;
+            for (y, piece) in tile {
+                for (dx, px) in piece.iter_mut().enumerate() {
+                    let x = tx as u32 * TILE + dx as u32;
+                    let sum =
+                        main::sample_sum(&b, x, y, samples.clone(), Vec3::from(*px), &mut counts);
+                    *px = sum.to_array();
+                    n += 1;
                 }
             }
-            progress(px.len() as u64);
-            Some((px, counts))
+            progress(n);
+            Some(counts)
         })
-        .collect();
-    let mut total = RayCounts::default();
-    // Tiles covering every pixel need no copy of the old sums.
-    let mut sums = if rows == (0..h) {
-        Film::new(w, h)
-    } else {
-        accum.sums.clone()
-    };
-    for (&(x0, y0, _), tile) in tiles.iter().zip(done) {
-        let (px, counts) = tile.ok_or(Error::Interrupted)?;
-        total.add(&counts);
-        let tw = (x0 + TILE).min(w) - x0;
-        for (i, p) in px.into_iter().enumerate() {
-            let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-            sums.pixels[(y * w + x) as usize] = p;
+        // Any tile left untraced (None) leaves the pass unfinished.
+        .reduce(
+            || Some(RayCounts::default()),
+            |a, b| {
+                let (mut a, b) = (a?, b?);
+                a.add(&b);
+                Some(a)
+            },
+        );
+    let Some(total) = traced else {
+        let restored = &mut accum.sums.pixels[span];
+        match before {
+            Some(old) => restored.copy_from_slice(&old),
+            None => restored.fill([0.0; 3]),
         }
-    }
-    // Only a finished pass changes the accumulator.
-    accum.sums = sums;
+        return Err(Error::Interrupted);
+    };
     accum.samples = samples.end;
     Ok(total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::{RenderOptions, globals};
+    use crate::pack::pack;
+    use crate::scene::nff;
+
+    /// A pass cancelled half way leaves the accumulator as it was, whether it held earlier
+    /// samples (restored from the copy) or none (zeroed), though tiles were traced in place.
+    #[test]
+    fn a_cancelled_pass_leaves_the_accumulator_as_it_was() {
+        let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 64 48
+            l 1 -2 3  f 1 0.5 0.2 0.8 0.2 10 0 1  s 0 0 0 1";
+        let scene = nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap();
+        let b = pack(scene.clone()).unwrap();
+        let opts = RenderOptions {
+            spp: 3,
+            ..RenderOptions::for_camera(&scene.camera)
+        };
+        let g = globals(&b, &opts);
+        let never = AtomicBool::new(false);
+        // Cancelled once the first tile is done: the others are skipped or finish.
+        let cancel_after_one = |start: u32, accum: &mut Accumulator| {
+            let cancel = AtomicBool::new(false);
+            let stop = |_| cancel.store(true, Ordering::Relaxed);
+            render_samples(&b, &g, start..start + 1, accum, &stop, &cancel)
+        };
+        let mut fresh = Accumulator::new(64, 48);
+        assert!(matches!(
+            cancel_after_one(0, &mut fresh),
+            Err(Error::Interrupted)
+        ));
+        assert_eq!(fresh, Accumulator::new(64, 48));
+
+        let mut accum = Accumulator::new(64, 48);
+        render_samples(&b, &g, 0..1, &mut accum, &|_| {}, &never).unwrap();
+        let before = accum.clone();
+        assert!(before.sums.pixels.iter().any(|p| *p != [0.0; 3]));
+        assert!(matches!(
+            cancel_after_one(1, &mut accum),
+            Err(Error::Interrupted)
+        ));
+        assert_eq!(accum, before);
+        // And the pass then runs as if never tried: the one-step image to the bit.
+        render_samples(&b, &g, 1..3, &mut accum, &|_| {}, &never).unwrap();
+        let (whole, _) = render(&b, &g, &|_| {}, &never).unwrap();
+        assert_eq!(accum.into_film(), whole);
+    }
 }

@@ -110,6 +110,20 @@ pub fn light_samples(light: &GpuLight) -> u32 {
     }
 }
 
+/// The specular highlight of material `m` towards a light in direction `l`, for a ray
+/// that came along `dir` and mirrors to `r` about the shading normal `n`: Phong,
+/// `Ks (R.L)^Shine`, or under `SHADING_BLINN_PHONG` Blinn-Phong, `Ks (N.H)^Shine` with H
+/// halfway between L and the way back to the viewer.
+pub fn highlight(shading: u32, m: &GpuMaterial, n: Vec3, dir: Vec3, r: Vec3, l: Vec3) -> f32 {
+    let c = if shading == SHADING_BLINN_PHONG {
+        // N.L > 0 and N.dir <= 0 here, so L - dir is never zero.
+        n.dot((l - dir).normalize())
+    } else {
+        r.dot(l)
+    };
+    if c > 0.0 { m.ks * c.powf(m.shine) } else { 0.0 }
+}
+
 /// A light sample's shadow ray and what the sample gives where nothing blocks it,
 /// `intensity * term` (kept apart: `light_sample` multiplies the transmission in first).
 #[derive(Clone, Copy, Debug)]
@@ -120,13 +134,15 @@ pub struct LightRay {
     pub term: Vec3,
 }
 
-/// The shadow ray of sample `k` of `light` at surface `s` (material `m`, mirror direction
-/// `r`) and the Lambert and Phong terms it carries, or `None` when the light is below the
-/// surface (no shadow ray is traced).
+/// The shadow ray of sample `k` of `light` at surface `s` (material `m`, incoming
+/// direction `dir`, mirror direction `r`) and the Lambert and highlight terms it carries,
+/// or `None` when the light is below the surface (no shadow ray is traced).
+#[allow(clippy::too_many_arguments)]
 pub fn light_ray(
     b: &Bindings,
     s: &Surface,
     m: &GpuMaterial,
+    dir: Vec3,
     r: Vec3,
     light: &GpuLight,
     k: u32,
@@ -149,12 +165,7 @@ pub fn light_ray(
     if ndotl <= 0.0 {
         return None;
     }
-    let rl = r.dot(l);
-    let highlight = if rl > 0.0 {
-        m.ks * rl.powf(m.shine)
-    } else {
-        0.0
-    };
+    let spec = highlight(b.globals.shading, m, s.ns, dir, r, l);
     Some(LightRay {
         ray: Ray {
             origin: offset_origin(s, l, b.globals.epsilon),
@@ -162,33 +173,34 @@ pub fn light_ray(
         },
         dist,
         intensity,
-        term: m.kd * m.color * ndotl + Vec3::splat(highlight),
+        term: m.kd * m.color * ndotl + Vec3::splat(spec),
     })
 }
 
-/// Sample `k` of `light` at surface `s` (material `m`, mirror direction `r`): Lambert and
-/// the Phong highlight scaled by the shadow ray's transmission, or `None` when the light
-/// is below the surface (no shadow ray is traced). Adds the shadow ray's node fetches to
-/// `counts`.
+/// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
+/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission, or
+/// `None` when the light is below the surface (no shadow ray is traced). Adds the shadow
+/// ray's node fetches to `counts`.
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample(
     b: &Bindings,
     s: &Surface,
     m: &GpuMaterial,
+    dir: Vec3,
     r: Vec3,
     light: &GpuLight,
     k: u32,
     rng: &mut u32,
     counts: &mut RayCounts,
 ) -> Option<Vec3> {
-    let lr = light_ray(b, s, m, r, light, k, rng)?;
+    let lr = light_ray(b, s, m, dir, r, light, k, rng)?;
     let mut nodes = 0;
     let shadow = transmission(b, &lr.ray, lr.dist, &mut nodes);
     counts.shadow_nodes += u64::from(nodes);
     Some(shadow * lr.intensity * lr.term)
 }
 
-/// Direct light at a surface point: ambient plus, per light sample, Lambert and the Phong
+/// Direct light at a surface point: ambient plus, per light sample, Lambert and the
 /// highlight, each scaled by the shadow ray's transmission.
 fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayCounts) -> Vec3 {
     let g = b.globals;
@@ -197,7 +209,7 @@ fn direct(b: &Bindings, s: &Surface, dir: Vec3, rng: &mut u32, counts: &mut RayC
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, s, m, r, light, k, rng, counts) {
+            if let Some(c) = light_sample(b, s, m, dir, r, light, k, rng, counts) {
                 counts.shadow += 1;
                 colour += c;
             }

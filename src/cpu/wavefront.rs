@@ -165,7 +165,7 @@ impl Wave<'_, '_> {
             while w.light_sample < light_samples(light) {
                 let k = w.light_sample;
                 w.light_sample += 1;
-                if let Some(lr) = light_ray(b, &s, m, r, light, k, &mut rng) {
+                if let Some(lr) = light_ray(b, &s, m, ray_in.dir, r, light, k, &mut rng) {
                     w.rng = rng;
                     w.shadow = Some(lr);
                     self.wave_push(1, i);

@@ -25,6 +25,9 @@ pub struct Specialization {
     pub lens: bool,
     pub multisample: bool,
     pub aov: u32,
+    /// The highlight's model (`GpuGlobals::shading`): a Phong pipeline has no Blinn-Phong
+    /// code.
+    pub shading: u32,
     pub pairs: bool,
     pub wide: bool,
     pub cwide: bool,
@@ -62,6 +65,12 @@ impl Specialization {
             lens: g.aperture > 0.0,
             multisample: g.spp > 1,
             aov: g.aov,
+            // The colour AOV alone shades; the others share the Phong pipeline.
+            shading: if g.aov == AOV_COLOR {
+                g.shading
+            } else {
+                SHADING_PHONG
+            },
             pairs: g.traversal == TRAVERSAL_PAIRS,
             wide: g.traversal == TRAVERSAL_WIDE,
             cwide: g.traversal == TRAVERSAL_CWIDE,
@@ -89,6 +98,7 @@ impl Specialization {
             ("LENS", b(self.lens)),
             ("MULTISAMPLE", b(self.multisample)),
             ("AOV", f64::from(self.aov)),
+            ("SHADING", f64::from(self.shading)),
             ("PAIRS", b(self.pairs)),
             ("WIDE", b(self.wide)),
             ("CWIDE", b(self.cwide)),
@@ -127,6 +137,7 @@ mod tests {
             lens: true,
             multisample: true,
             aov: 0,
+            shading: SHADING_BLINN_PHONG,
             pairs: true,
             wide: true,
             cwide: true,

@@ -6,7 +6,7 @@
 
 use std::fmt::Display;
 
-use crate::error::Error;
+use crate::error::{Error, Excerpt, escape};
 
 /// One whitespace-separated token and where it starts (1-based line and column).
 #[derive(Clone, Copy, Debug)]
@@ -25,26 +25,12 @@ impl Token<'_> {
 
 fn show_bytes(b: &[u8]) -> String {
     const MAX: usize = 40;
-    let s = escape_controls(&String::from_utf8_lossy(&b[..b.len().min(MAX)]));
+    let s = escape(&b[..b.len().min(MAX)]);
     if b.len() > MAX {
         format!("'{s}...'")
     } else {
         format!("'{s}'")
     }
-}
-
-/// Text from an input file, made safe to print: control characters (an ESC sequence would
-/// recolour the terminal) are written as escapes (`\u{1b}`, `\t`); the rest is kept.
-pub fn escape_controls(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_control() {
-                c.escape_default().to_string()
-            } else {
-                c.to_string()
-            }
-        })
-        .collect()
 }
 
 /// The UTF-8 byte-order mark.
@@ -159,24 +145,43 @@ impl<'a> Lexer<'a> {
         self.peek().is_some_and(|t| parse_f32(t.text).is_some())
     }
 
-    /// Error at a token.
+    /// Error at a token, with the token's line (`Excerpt`).
     pub fn error_at(&self, tok: &Token, msg: impl Into<String>) -> Error {
+        // The token lies in `src`: its line starts col - 1 bytes before it.
+        let offset = (tok.text.as_ptr() as usize).wrapping_sub(self.src.as_ptr() as usize);
+        let inside = offset < self.src.len() && offset + tok.text.len() <= self.src.len();
+        let excerpt = inside.then(|| {
+            let line_start = offset.saturating_sub(tok.col as usize - 1);
+            let at = offset - line_start;
+            Box::new(Excerpt::of_line(
+                &self.src[line_start..],
+                at,
+                tok.text.len(),
+            ))
+        });
         Error::Parse {
             file: self.name.to_string(),
             line: tok.line,
             col: tok.col,
             msg: msg.into(),
+            excerpt,
         }
     }
 
     /// Error at the current position (after skipping whitespace): used at end of input.
     pub fn error_here(&mut self, msg: impl Into<String>) -> Error {
         self.skip_space();
+        let at = self.pos - self.line_start;
         Error::Parse {
             file: self.name.to_string(),
             line: self.line,
-            col: (self.pos - self.line_start) as u32 + 1,
+            col: at as u32 + 1,
             msg: msg.into(),
+            excerpt: Some(Box::new(Excerpt::of_line(
+                &self.src[self.line_start..],
+                at,
+                0,
+            ))),
         }
     }
 

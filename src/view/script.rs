@@ -67,6 +67,14 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<Event>> {
             line: i as u32 + 1,
             col: col as u32,
             msg,
+            excerpt: Some(Box::new(crate::error::Excerpt::of_line(
+                line.as_bytes(),
+                col - 1,
+                line[col - 1..]
+                    .split_whitespace()
+                    .next()
+                    .map_or(0, str::len),
+            ))),
         };
         let args = &words[1..];
         let arity = |n: usize| {

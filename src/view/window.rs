@@ -23,7 +23,7 @@ use super::script::Event;
 use super::stats::Stats;
 use super::surface::{Drawn, Surface};
 use crate::error::{Error, Result};
-use crate::frame::{self, Overrides, RenderOptions};
+use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu_types::GpuGlobals;
 use crate::limits::MAX_SPP;
 use crate::pack::SceneBuffers;
@@ -43,6 +43,8 @@ pub struct ViewOptions {
     pub depth: u32,
     pub ambient: Option<Vec3>,
     pub seed: u32,
+    /// The highlight's model.
+    pub shading: Shading,
     /// Which renderer traces the image (`Both`: the GPU).
     pub backend: Backend,
     pub adapter: Option<String>,
@@ -162,6 +164,7 @@ impl App {
             max_depth: Some(self.opts.depth),
             ambient: self.opts.ambient,
             seed: Some(self.opts.seed),
+            shading: Some(self.opts.shading),
             ..Overrides::default()
         });
         frame::globals_from(&self.buffers, c, &opts)

@@ -101,7 +101,7 @@ fn rust_layouts() -> Vec<Layout> {
                 traversal,
                 counters,
                 wavefront,
-                _pad,
+                shading,
             ]
         ),
         layout!(
@@ -215,6 +215,8 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
         ("AOV_NORMAL", U32(AOV_NORMAL)),
         ("AOV_DEPTH", U32(AOV_DEPTH)),
         ("AOV_COST", U32(AOV_COST)),
+        ("SHADING_PHONG", U32(SHADING_PHONG)),
+        ("SHADING_BLINN_PHONG", U32(SHADING_BLINN_PHONG)),
         ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
         ("PHASE_RAY", U32(PHASE_RAY)),
         ("PHASE_LIGHT", U32(PHASE_LIGHT)),

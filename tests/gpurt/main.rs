@@ -14,6 +14,7 @@ mod hostile;
 mod layout;
 mod parse;
 mod session;
+mod shading;
 mod spd;
 /// The SPD generator example, for `spd`'s tests (its `main` goes unused here).
 #[path = "../../examples/spd.rs"]

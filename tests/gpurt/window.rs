@@ -156,36 +156,46 @@ fn after_a_scripted_orbit_the_window_shows_the_offline_render_of_the_view_it_pri
     assert!(agree(&offline, &RgbImage::new(320, 240)).is_err());
 }
 
+/// Under either shading model: the window shows that model's offline render, which the
+/// other model's does not pass for.
 #[test]
 fn an_empty_script_at_one_sample_shows_the_offline_render_of_the_scene() {
     let dir = workdir("window-empty");
     std::fs::write(dir.join("empty.txt"), "").unwrap();
     let scene = own_scenes().join("spheres.nff").display().to_string();
-    let shot = [
-        "--spp",
-        "1",
-        "--script",
-        "empty.txt",
-        "--screenshot",
-        "shot.png",
-    ];
-    let Some(_) = view_in_xvfb(&[&[scene.as_str()][..], &shot].concat(), &dir) else {
-        return;
-    };
-    let offline = gpurt(&[&scene, "-o", "offline.png"], &dir);
+    let mut offline = Vec::new();
+    for model in ["phong", "blinn-phong"] {
+        let (shot, out) = (format!("shot-{model}.png"), format!("offline-{model}.png"));
+        let args = [
+            scene.as_str(),
+            "--spp",
+            "1",
+            "--shading",
+            model,
+            "--script",
+            "empty.txt",
+            "--screenshot",
+            &shot,
+        ];
+        let Some(_) = view_in_xvfb(&args, &dir) else {
+            return;
+        };
+        let o = gpurt(&[&scene, "--shading", model, "-o", &out], &dir);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let (image, shot) = (load(&dir.join(&out)), load(&dir.join(&shot)));
+        assert_eq!(
+            shot.dimensions(),
+            image.dimensions(),
+            "the scene's resolution"
+        );
+        agree(&image, &shot)
+            .unwrap_or_else(|why| panic!("{model}: window vs offline render: {why}"));
+        offline.push((image, shot));
+    }
     assert!(
-        offline.status.success(),
-        "{}",
-        String::from_utf8_lossy(&offline.stderr)
+        agree(&offline[0].0, &offline[1].1).is_err(),
+        "the Blinn-Phong window passes for the Phong render"
     );
-    let offline = load(&dir.join("offline.png"));
-    let shot = load(&dir.join("shot.png"));
-    assert_eq!(
-        shot.dimensions(),
-        offline.dimensions(),
-        "the scene's resolution"
-    );
-    agree(&offline, &shot).unwrap_or_else(|why| panic!("window vs offline render: {why}"));
 }
 
 /// The viewer's screenshot of `scene` after `script`, 400x300 at 4 samples per pixel.

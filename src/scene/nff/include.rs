@@ -5,9 +5,10 @@
 use glam::Vec3;
 
 use super::Parser;
+use crate::error::escape;
 use crate::error::{Error, Result};
 use crate::scene::io::{FileKind, read_file};
-use crate::scene::lex::{Token, escape_controls};
+use crate::scene::lex::Token;
 use crate::scene::mesh::{self, MeshTransform};
 
 impl Parser<'_> {
@@ -52,7 +53,7 @@ impl Parser<'_> {
                 &ptok,
                 format!(
                     "mesh file '{}' must end in .stl or .obj (optionally .gz)",
-                    escape_controls(rel)
+                    escape(rel.as_bytes())
                 ),
             ));
         }
@@ -66,7 +67,7 @@ impl Parser<'_> {
                 &ptok,
                 format!(
                     "cannot read mesh file '{}': {why}",
-                    escape_controls(&path.display().to_string())
+                    escape(path.as_os_str().as_encoded_bytes())
                 ),
             )
         })?;
@@ -76,7 +77,7 @@ impl Parser<'_> {
         if tris.is_empty() {
             self.warn(
                 tok,
-                &format!("mesh '{}' has no triangles", escape_controls(rel)),
+                &format!("mesh '{}' has no triangles", escape(rel.as_bytes())),
             );
         }
         let material = self.current_material();

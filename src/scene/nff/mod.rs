@@ -7,6 +7,7 @@
 //! colours are held to (`material`) are beside it.
 
 mod include;
+mod keywords;
 mod material;
 mod view;
 
@@ -22,6 +23,7 @@ use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, Triangle, nff_default_camera, unit,
 };
 use crate::scene::triangulate::triangulate;
+use keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 
 /// Parses NFF text. `name` is used in messages; `base` is the directory `mesh` paths are
 /// relative to.
@@ -131,9 +133,16 @@ impl Parser<'_> {
                     ));
                 }
                 _ => {
+                    let meant = closest(tok.text, &STATEMENTS)
+                        .or_else(|| closest(tok.text, &VIEW_KEYWORDS).map(|_| "v"));
+                    let hint = match meant {
+                        Some("v") => "; a view keyword belongs in a 'v' block".to_string(),
+                        Some(k) => format!("; did you mean '{k}'?"),
+                        None => String::new(),
+                    };
                     return Err(self.lx.error_at(
                         &tok,
-                        format!("expected an entity keyword, found {}", tok.show()),
+                        format!("expected an entity keyword, found {}{hint}", tok.show()),
                     ));
                 }
             }

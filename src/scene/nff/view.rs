@@ -3,9 +3,10 @@
 //! statement loop because it is a small grammar of its own.
 
 use super::Parser;
+use super::keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 use crate::error::Result;
 use crate::limits::MAX_IMAGE_SIDE;
-use crate::scene::lex::Token;
+use crate::scene::lex::{Token, parse_f32};
 use crate::scene::model::nff_default_camera;
 
 impl Parser<'_> {
@@ -14,10 +15,31 @@ impl Parser<'_> {
         let (mut from, mut at, mut up, mut angle) = (None, None, None, None);
         let mut resolution = None;
         while let Some(t) = self.lx.peek() {
-            match t.text {
-                b"from" | b"at" | b"up" | b"angle" | b"hither" | b"resolution" | b"aperture"
-                | b"focal" => {}
-                _ => break,
+            if !VIEW_KEYWORDS.iter().any(|k| k.as_bytes() == t.text) {
+                // The view ends at the next statement; a word that is neither a statement
+                // nor a number, where the view still lacks a keyword or is close to one
+                // (`angel 40`), is a mistyped view keyword, named where it stands.
+                let required_missing =
+                    [&from, &at, &up].iter().any(|v| v.is_none()) || angle.is_none();
+                let statement = STATEMENTS.iter().any(|k| k.as_bytes() == t.text);
+                let meant = closest(t.text, &VIEW_KEYWORDS);
+                if !statement
+                    && parse_f32(t.text).is_none()
+                    && (required_missing || meant.is_some())
+                {
+                    let hint = meant
+                        .map(|k| format!("; did you mean '{k}'?"))
+                        .unwrap_or_default();
+                    return Err(self.lx.error_at(
+                        &t,
+                        format!(
+                            "expected a view keyword ({}), found {}{hint}",
+                            VIEW_KEYWORDS.join(", "),
+                            t.show()
+                        ),
+                    ));
+                }
+                break;
             }
             self.lx.next_token();
             match t.text {

@@ -19,9 +19,118 @@ fn bad_scene_reports_file_line_column_exits_2_and_writes_nothing() {
     let o = gpurt(&["bad.nff", "-o", "out.png"], &d);
     assert_eq!(o.status.code(), Some(2));
     let err = stderr(&o);
-    assert!(err.contains("bad.nff:10:7:"), "{err}");
+    // The first line names file, line and column; under it the line with a caret under
+    // the offending token, as rustc draws one.
+    assert_eq!(
+        err,
+        "gpurt: bad.nff:10:7: expected sphere centre (a number), found 'zero'\n   |\n10 | s 0 0 zero 1\n   |       ^^^^\n"
+    );
     assert!(!d.join("out.png").exists());
     assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1, "no stray files");
+}
+
+/// The excerpt is the line as the reader had it: from a gzip file too, a tab kept under
+/// its caret, a huge line cut around the column, escaped bytes shown one
+/// way; a misspelt view keyword is named on its own line, with the word it resembles.
+#[test]
+fn parse_errors_show_their_line_from_any_input() {
+    let d = workdir("excerpts");
+    let text = SCENE.replace("angle 40", "angel 40");
+    let gz = crate::common::inputs::gzip(text.as_bytes());
+    crate::common::inputs::write(&d.join("view.nff.gz"), &gz);
+    let o = gpurt(&["view.nff.gz", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("gpurt: view.nff.gz:6:1: expected a view keyword")
+            && err.contains("found 'angel'; did you mean 'angle'?\n  |\n6 | angel 40\n  | ^^^^^\n"),
+        "{err}"
+    );
+    // A tab and an ESC sequence in a CRLF file.
+    let bad = SCENE
+        .replace("s 0 0 0 1", "s 0\t0 \x1b[2J 1")
+        .replace('\n', "\r\n");
+    std::fs::write(d.join("esc.nff"), bad).unwrap();
+    let o = gpurt(&["esc.nff", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.ends_with("found '\\x1b[2J'\n   |\n10 | s 0 0 \\x1b[2J 1\n   |       ^^^^^^^\n"),
+        "{err}"
+    );
+    // A line of 150 000 numbers: the excerpt is a window around the column.
+    let long = format!("{SCENE}p 50000 {}0 0 oops\n", "0 0 0 ".repeat(49_999));
+    std::fs::write(d.join("long.nff"), long).unwrap();
+    let o = gpurt(&["long.nff", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    let shown = err.lines().nth(2).expect("the excerpt's line");
+    assert!(
+        shown.starts_with("11 | ...") && shown.ends_with(" oops"),
+        "{shown}"
+    );
+    assert!(shown.len() < 130, "{} bytes", shown.len());
+    assert!(err.lines().nth(3).unwrap().ends_with("^^^^"), "{err}");
+}
+
+/// The small messages: each starts with what the user gave, says what is wrong with it,
+/// and the command writes nothing.
+#[test]
+fn small_messages_name_what_was_given() {
+    let d = workdir("small-messages");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    std::fs::create_dir(d.join("renders")).unwrap();
+    let cases: [(&[&str], &str); 7] = [
+        (
+            &["ball.nff", "ball.nff"],
+            "gpurt: ball.nff, ball.nff: 2 scenes, but one is rendered at a time; give --out-dir DIR",
+        ),
+        (
+            &["ball.nff", "--spp", "-1"],
+            "error: invalid value '-1' for '--spp <SPP>': -1 is not in 1..=4096",
+        ),
+        (
+            &["ball.nff", "-o", "renders"],
+            "gpurt: renders: is a directory; give an image file name (such as renders/image.png)",
+        ),
+        (
+            &["diff", "ball.nff", "ball.nff"],
+            "gpurt: ball.nff: not an image by its content nor by its extension (images: png, ppm, bmp, exr)",
+        ),
+        (
+            &["bench", "nope.nff", "--backend", "cpu"],
+            "gpurt: nope.nff: No such file or directory",
+        ),
+        (
+            &["ball.nff", "-o", "out.jpeg"],
+            "gpurt: out.jpeg: unsupported image extension '.jpeg'; supported: png, ppm, bmp, exr",
+        ),
+        (
+            &["inof", "ball.nff"],
+            "gpurt: 'inof' is neither a scene file nor a command; did you mean `gpurt info`?",
+        ),
+    ];
+    for (args, first_line) in cases {
+        let o = gpurt(args, &d);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = stderr(&o);
+        // After the lines bench prints about its machine, if any.
+        let first = err
+            .lines()
+            .find(|l| l.starts_with("gpurt: ") || l.starts_with("error: "));
+        assert!(
+            first.is_some_and(|l| l.starts_with(first_line)),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("use '--"), "{args:?}: {err}");
+        // bench prints no table header before its error.
+        assert!(
+            o.stdout.is_empty(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
+    assert_eq!(std::fs::read_dir(&d).unwrap().count(), 2, "nothing written");
 }
 
 #[test]
@@ -138,7 +247,7 @@ fn two_scenes_are_refused_with_a_clear_message() {
     let o = gpurt(&["a.nff", "b.nff", "--backend", "cpu"], &d);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("one scene is rendered at a time"),
+        stderr(&o).contains("2 scenes, but one is rendered at a time"),
         "{}",
         stderr(&o)
     );

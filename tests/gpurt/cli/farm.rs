@@ -27,10 +27,10 @@ fn a_batch_renders_every_scene_it_can_into_its_directory_and_reports_the_rest() 
     );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let err = stderr(&o);
-    assert!(
-        err.contains("gpurt: broken.nff: skipped: broken.nff:3:1: "),
-        "{err}"
-    );
+    // Named once, where the error is, with its line under it.
+    assert!(err.contains("gpurt: broken.nff:3:1: "), "{err}");
+    assert!(err.contains(" (skipped)\n  |\n3 | "), "{err}");
+    assert_eq!(err.matches("broken.nff").count(), 1, "{err}");
     assert!(err.contains("2 of 3 scenes rendered"), "{err}");
     assert!(!d.join("out/broken.png").exists());
     // Each image is the one a render of its scene alone writes, to the byte.
@@ -184,6 +184,49 @@ fn image_shards_run_as_separate_processes_merge_into_the_single_process_image() 
         "{}",
         stderr(&o)
     );
+
+    // A Blinn-Phong shard among Phong ones belongs to another render, and says so.
+    let blinn = [
+        &[glass, "--shard", "1/3", "-o", "blinn"][..],
+        &frame,
+        &["--shading", "blinn-phong"],
+    ];
+    let o = gpurt(&blinn.concat(), &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let manifest = std::fs::read_to_string(d.join("blinn/shard-1-of-3.json")).unwrap();
+    assert!(
+        manifest.contains(r#""shading": "blinn-phong""#),
+        "{manifest}"
+    );
+    std::fs::create_dir_all(d.join("models")).unwrap();
+    for (from, i) in [("parts", 0), ("blinn", 1), ("parts", 2)] {
+        for ext in ["json", "rgbf32"] {
+            let f = format!("shard-{i}-of-3.{ext}");
+            std::fs::copy(d.join(from).join(&f), d.join("models").join(&f)).unwrap();
+        }
+    }
+    let o = gpurt(&["merge", "models", "-o", "models.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("belongs to another render"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("blinn-phong shading"), "{}", stderr(&o));
+    assert!(!d.join("models.png").exists());
+    // The model alone tells them apart: a manifest edited to match in all but the model
+    // is refused too.
+    let phong = std::fs::read_to_string(d.join("parts/shard-1-of-3.json")).unwrap();
+    let edited = phong.replacen('{', r#"{"shading": "blinn-phong","#, 1);
+    std::fs::write(d.join("models/shard-1-of-3.json"), edited).unwrap();
+    std::fs::copy(
+        d.join("parts/shard-1-of-3.rgbf32"),
+        d.join("models/shard-1-of-3.rgbf32"),
+    )
+    .unwrap();
+    let o = gpurt(&["merge", "models", "-o", "models.png"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(!d.join("models.png").exists());
 
     // A missing shard is named, and nothing is written.
     std::fs::create_dir_all(d.join("gap")).unwrap();

@@ -1,8 +1,10 @@
 //! The `gpurt` command as a user runs it: exit codes, messages, files written or not.
 //! `render` (single renders and what they write), `errors` (refusals, interrupts, GPU
-//! faults), `tools` (`info`, `diff`), `farm` (batches, shards, `merge`).
+//! faults), `tools` (`info`, `diff`, `bench`), `farm` (batches, shards, `merge`), `shell`
+//! (completions, the manual page, suggestions, threads).
 
 mod errors;
 mod farm;
 mod render;
+mod shell;
 mod tools;

@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use glam::DVec3;
+use gpurt::frame::Shading;
 use gpurt::scene::{Scene, nff};
 
 use crate::common::inputs::SCENE;
@@ -15,14 +16,14 @@ use crate::common::{gpurt, stderr, workdir};
 /// every pixel away from the ball's outline within one 8-bit level and a half (8-bit
 /// files are quantised; EXR keeps linear values). Returns the ball's pixels and the
 /// background's.
-fn check_ball_image(path: &Path, scene: &Scene) -> (usize, usize) {
+fn check_ball_image(path: &Path, scene: &Scene, shading: Shading) -> (usize, usize) {
     let img = image::open(path)
         .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
         .to_rgb32f();
     let cam = Camera::sized(scene, img.width(), img.height());
     let (mut ball, mut background) = (0, 0);
     for (x, y) in cam.pixels() {
-        let Some(want) = lone_sphere(scene, &cam, x, y) else {
+        let Some(want) = lone_sphere(scene, &cam, x, y, shading) else {
             continue;
         };
         let exr = path.extension().is_some_and(|e| e == "exr");
@@ -57,7 +58,7 @@ fn renders_to_the_default_name_and_to_each_format() {
     assert_eq!((img.width(), img.height()), (32, 32));
     // Background 0.1 0.2 0.3, scaled by 255 and rounded (0.1 as an f32 is a little over).
     assert_eq!(img.to_rgb8().get_pixel(0, 0).0, [26, 51, 77], "a corner");
-    let (ball, background) = check_ball_image(&d.join("ball.png"), &scene);
+    let (ball, background) = check_ball_image(&d.join("ball.png"), &scene, Shading::Phong);
     assert!(
         ball > 300 && background > 500,
         "{ball} ball, {background} background"
@@ -71,12 +72,58 @@ fn renders_to_the_default_name_and_to_each_format() {
         assert!(o.status.success(), "{ext}: {}", stderr(&o));
         let img = image::open(d.join(&out)).unwrap_or_else(|e| panic!("{out}: {e}"));
         assert_eq!(img.width(), 20);
-        let (ball, background) = check_ball_image(&d.join(&out), &scene);
+        let (ball, background) = check_ball_image(&d.join(&out), &scene, Shading::Phong);
         assert!(
             ball > 200 && background > 200,
             "{out}: {ball} ball, {background} background"
         );
     }
+}
+
+/// `--shading blinn-phong` gives the Blinn-Phong highlight docs/model.md describes, on
+/// either backend, and an image that is not the Phong one; a model it does not know is
+/// refused with exit 2 and no file.
+#[test]
+fn the_shading_flag_picks_the_highlight_model_on_both_backends() {
+    let d = workdir("shading");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let scene = nff::parse(SCENE.as_bytes(), "ball.nff", Path::new(".")).expect("parses");
+    for backend in ["cpu", "gpu"] {
+        let out = format!("blinn-{backend}.exr");
+        let args = [
+            "ball.nff",
+            "--shading",
+            "blinn-phong",
+            "--backend",
+            backend,
+            "-o",
+            &out,
+        ];
+        let o = gpurt(&args, &d);
+        assert!(o.status.success(), "{backend}: {}", stderr(&o));
+        let (ball, _) = check_ball_image(&d.join(&out), &scene, Shading::BlinnPhong);
+        assert!(ball > 300, "{backend}: {ball} ball pixels");
+    }
+    let o = gpurt(&["ball.nff", "--backend", "cpu", "-o", "phong.exr"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    check_ball_image(&d.join("phong.exr"), &scene, Shading::Phong);
+    let read = |f: &str| image::open(d.join(f)).unwrap().to_rgb32f();
+    let (phong, blinn) = (read("phong.exr"), read("blinn-cpu.exr"));
+    let most = phong
+        .pixels()
+        .zip(blinn.pixels())
+        .flat_map(|(a, b)| (0..3).map(move |c| (a.0[c] - b.0[c]).abs()))
+        .fold(0.0f32, f32::max);
+    assert!(most > 0.05, "the two models' images differ by only {most}");
+
+    let o = gpurt(&["ball.nff", "--shading", "gouraud", "-o", "no.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("[possible values: phong, blinn-phong]"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("no.png").exists());
 }
 
 /// A successful render prints no `error:` line (Mesa's device-select layer printed two on
@@ -195,7 +242,7 @@ fn a_view_file_replaces_the_scene_camera() {
     assert_eq!(read("a.png").dimensions(), (40, 30));
     assert_eq!(read("a.png"), read("b.png"));
     let seen = nff::parse(moved.as_bytes(), "moved.nff", Path::new(".")).expect("parses");
-    let (ball, background) = check_ball_image(&d.join("a.png"), &seen);
+    let (ball, background) = check_ball_image(&d.join("a.png"), &seen, Shading::Phong);
     assert!(
         ball > 100 && background > 100,
         "{ball} ball, {background} background"

@@ -1,5 +1,6 @@
-//! `gpurt info` and `gpurt diff`: the documented JSON, exit codes and heat maps, and a
-//! reader that goes away ending the command quietly.
+//! `gpurt info`, `gpurt diff` and `gpurt bench`: the documented JSON, exit codes and heat
+//! maps, the shading model bench times, and a reader that goes away ending the command
+//! quietly.
 
 use std::process::Command;
 
@@ -173,4 +174,35 @@ fn closed_stdout_ends_quietly() {
         assert!(!stderr(&o).contains("panicked"), "{args:?}: {}", stderr(&o));
     }
     assert!(d.join("heat.png").is_file());
+}
+
+/// `gpurt bench` under Blinn-Phong: both backends time the model asked for, say which,
+/// and trace the same rays (a mismatch would be a warning).
+#[test]
+fn bench_times_the_shading_model_it_is_given() {
+    let d = workdir("bench-shading");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let args = [
+        "bench",
+        "ball.nff",
+        "--sizes",
+        "24x16",
+        "--frames",
+        "1",
+        "--backend",
+        "both",
+        "--shading",
+        "blinn-phong",
+    ];
+    let o = gpurt(&args, &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("shading     blinn-phong"), "{err}");
+    assert!(!err.contains("warning"), "{err}");
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        table.lines().filter(|l| l.starts_with("| ball ")).count(),
+        1,
+        "{table}"
+    );
 }

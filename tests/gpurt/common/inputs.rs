@@ -15,7 +15,8 @@ pub fn parse_nff(src: &str) -> Result<Scene, Error> {
     nff::parse(src.as_bytes(), "t.nff", Path::new("."))
 }
 
-/// The position and message of the parse error `src` must give.
+/// The position and message of the parse error `src` must give. Its excerpt is the text
+/// of that line of `src`, the span at the column.
 pub fn parse_error(src: &str) -> (u32, u32, String) {
     match parse_nff(src) {
         Err(e @ Error::Parse { .. }) => {
@@ -25,12 +26,29 @@ pub fn parse_error(src: &str) -> (u32, u32, String) {
                 line,
                 col,
                 msg,
+                excerpt,
             } = e
             else {
                 unreachable!()
             };
             assert_eq!(file, "t.nff");
             assert_eq!(shown, format!("t.nff:{line}:{col}: {msg}"), "error display");
+            let x = excerpt.expect("a parse error carries its line");
+            // The sources here are printable ASCII and short: the excerpt is the line, the
+            // span starting at the column, tabs shown as spaces.
+            let text = src
+                .split(['\n', '\r'])
+                .nth(line as usize - 1)
+                .unwrap_or("")
+                .replace('\t', " ");
+            if src.is_ascii() && !src.contains('\r') && text.len() < 100 {
+                assert_eq!(
+                    x.text,
+                    text.trim_start_matches('\u{feff}'),
+                    "excerpt of {src:?}"
+                );
+                assert_eq!(x.span.start, col as usize - 1, "caret of {src:?}");
+            }
             (line, col, msg)
         }
         other => panic!("expected a parse error for {src:?}, got {other:?}"),

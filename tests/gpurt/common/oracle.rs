@@ -5,6 +5,7 @@
 
 use glam::{DVec3, Vec3};
 use gpurt::film::Film;
+use gpurt::frame::Shading;
 use gpurt::limits::DEFAULT_AMBIENT;
 use gpurt::scene::{Light, Scene};
 
@@ -76,13 +77,25 @@ pub fn sphere_hit(o: DVec3, dir: DVec3, c: DVec3, r: f64, tmin: f64) -> (Option<
     (t, clarity)
 }
 
+/// The specular highlight of docs/model.md at a point with unit normal `n` facing the
+/// incoming direction `dir`, towards the light direction `l`: Phong, `Ks max(R.L, 0)^Shine`
+/// with `R` the mirrored ray, or Blinn-Phong, `Ks max(N.H, 0)^Shine` with
+/// `H = normalize(L + V)`, V = -dir.
+pub fn highlight(shading: Shading, n: DVec3, dir: DVec3, l: DVec3, ks: f64, shine: f64) -> f64 {
+    let c = match shading {
+        Shading::Phong => (dir - 2.0 * n.dot(dir) * n).dot(l),
+        Shading::BlinnPhong => n.dot((l - dir).normalize()),
+    };
+    ks * c.max(0.0).powf(shine)
+}
+
 /// What docs/shading.md says the eye ray through the centre of pixel `(x, y)` shows of a
 /// scene of one opaque sphere (convex: it never shadows itself, and what it mirrors is the
 /// background) lit by uncoloured point lights: the background where the ray clearly
-/// misses, ambient + sum over lights of I (Kd C N.L + Ks max(R.L, 0)^Shine) + Ks
-/// background where it clearly hits, with I = 1/sqrt(n_lights); `None` near the
-/// silhouette, where f32 and f64 may disagree.
-pub fn lone_sphere(scene: &Scene, cam: &Camera, x: u32, y: u32) -> Option<DVec3> {
+/// misses, ambient + sum over lights of I (Kd C N.L + `highlight`) + Ks background where
+/// it clearly hits, with I = 1/sqrt(n_lights); `None` near the silhouette, where f32 and
+/// f64 may disagree.
+pub fn lone_sphere(scene: &Scene, cam: &Camera, x: u32, y: u32, shading: Shading) -> Option<DVec3> {
     let [sphere] = &scene.spheres[..] else {
         panic!("{}: one sphere expected", scene.name)
     };
@@ -100,7 +113,6 @@ pub fn lone_sphere(scene: &Scene, cam: &Camera, x: u32, y: u32) -> Option<DVec3>
     let ambient = d(scene.ambient.unwrap_or(Vec3::splat(DEFAULT_AMBIENT)));
     let p = cam.from + t * dir;
     let n = (p - c) / r;
-    let refl = dir - 2.0 * n.dot(dir) * n;
     let intensity = 1.0 / (scene.lights.len() as f64).sqrt();
     let mut colour = ambient * kd_c + ks * bg;
     for light in &scene.lights {
@@ -113,8 +125,8 @@ pub fn lone_sphere(scene: &Scene, cam: &Camera, x: u32, y: u32) -> Option<DVec3>
         };
         let l = (d(*position) - p).normalize();
         if n.dot(l) > 0.0 {
-            let highlight = ks * refl.dot(l).max(0.0).powf(m.shine as f64);
-            colour += intensity * (kd_c * n.dot(l) + DVec3::splat(highlight));
+            let spec = highlight(shading, n, dir, l, ks, m.shine as f64);
+            colour += intensity * (kd_c * n.dot(l) + DVec3::splat(spec));
         }
     }
     Some(colour)

@@ -14,7 +14,7 @@ use std::sync::atomic::AtomicBool;
 use gpurt::agreement::noise_floor;
 use gpurt::compare::{self, DiffStats, Thresholds};
 use gpurt::film::{self, Film};
-use gpurt::frame::{self, RenderOptions};
+use gpurt::frame::{self, RenderOptions, Shading};
 use gpurt::gpu::{GpuContext, GpuRenderer};
 use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
@@ -138,7 +138,8 @@ pub fn check_scene(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) ->
     Ok((label.to_string(), stats))
 }
 
-/// Every comparison a scene gets: colour at 1 and 4 samples per pixel, and each AOV.
+/// Every comparison a scene gets: colour at 1 and 4 samples per pixel, colour under
+/// Blinn-Phong, and each AOV.
 pub fn check_variants(g: &Gpu, label: &str, scene: &Scene) -> Vec<Outcome> {
     let base = opts(scene);
     let variants = [
@@ -147,6 +148,13 @@ pub fn check_variants(g: &Gpu, label: &str, scene: &Scene) -> Vec<Outcome> {
             "spp4",
             RenderOptions {
                 spp: 4,
+                ..base.clone()
+            },
+        ),
+        (
+            "blinn-phong",
+            RenderOptions {
+                shading: Shading::BlinnPhong,
                 ..base.clone()
             },
         ),

@@ -6,7 +6,7 @@
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use gpurt::frame::{self, RenderOptions};
+use gpurt::frame::{self, RenderOptions, Shading};
 use gpurt::gpu::GpuRenderer;
 use gpurt::gpu_types::*;
 use gpurt::pack;
@@ -111,24 +111,29 @@ fn many_samples_per_pixel_match_cpu() {
 }
 
 /// One sample whose work exceeds what one invocation may do on lavapipe (glass at depth
-/// 16; a thousand lights): such pixels continue across dispatches and agree with the CPU.
+/// 16; a thousand lights): such pixels continue across dispatches and agree with the CPU,
+/// under either shading model (the continued pixels sample their lights in `resume`).
 #[test]
 fn heavy_single_samples_match_cpu() {
     let Some(g) = gpu() else {
         return;
     };
     let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
-    let mut cases = vec![check_heavy(
-        g,
-        "glass at depth 16",
-        &glass,
-        &RenderOptions {
-            width: 64,
-            height: 64,
-            max_depth: 16,
-            ..RenderOptions::for_camera(&glass.camera)
-        },
-    )];
+    let mut cases = Vec::new();
+    for shading in Shading::ALL {
+        cases.push(check_heavy(
+            g,
+            &format!("glass at depth 16, {}", shading.name()),
+            &glass,
+            &RenderOptions {
+                width: 64,
+                height: 64,
+                max_depth: 16,
+                shading,
+                ..RenderOptions::for_camera(&glass.camera)
+            },
+        ));
+    }
     if let Some(root) = shared_scenes() {
         let mut src = std::fs::read_to_string(root.join("spd/balls-3.nff")).expect("reads");
         for i in 0..1000 {
@@ -137,12 +142,16 @@ fn heavy_single_samples_match_cpu() {
         }
         let lights = gpurt::scene::nff::parse(src.as_bytes(), "balls-3-lights.nff", Path::new("."))
             .expect("parses");
-        let opts = RenderOptions {
-            width: 48,
-            height: 48,
-            ..RenderOptions::for_camera(&lights.camera)
-        };
-        cases.push(check_heavy(g, "balls-3 with 1000 lights", &lights, &opts));
+        for shading in Shading::ALL {
+            let opts = RenderOptions {
+                width: 48,
+                height: 48,
+                shading,
+                ..RenderOptions::for_camera(&lights.camera)
+            };
+            let label = format!("balls-3 with 1000 lights, {}", shading.name());
+            cases.push(check_heavy(g, &label, &lights, &opts));
+        }
     }
     check_all(cases);
 }

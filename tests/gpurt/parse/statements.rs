@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use gpurt::Error;
 use gpurt::scene::{BoxPrim, Light, Material, MaterialId, Plane, nff, obj, stl};
 
 use crate::common::inputs::{VIEW, ascii_stl, gzip, parse_error, parse_ok, tetra, write};
@@ -198,16 +199,35 @@ fn byte_order_mark_is_accepted() {
     assert_eq!(plain, marked);
 }
 
-/// Input quoted in a message has its control characters escaped: an ESC sequence in a
-/// scene file must not reach the terminal.
+/// Input quoted in a message, and the line excerpt shown under it, escape control
+/// characters and bytes that are not UTF-8 one way, `\xNN`: an ESC sequence in a scene
+/// file must not reach the terminal, and random bytes read the same wherever they stand.
 #[test]
-fn messages_escape_control_characters_from_the_input() {
+fn messages_escape_control_characters_and_bad_bytes_one_way() {
     let err = nff::parse(b"\x1b[31mred 1 2 3\n", "esc.nff", Path::new(".")).unwrap_err();
     let msg = err.to_string();
     assert!(!msg.contains('\x1b'), "{msg:?}");
-    assert!(msg.contains("\\u{1b}[31mred"), "{msg:?}");
+    assert!(msg.contains("\\x1b[31mred"), "{msg:?}");
     let err = nff::parse(b"mesh \"a\x07b.ply\"\n", "esc.nff", Path::new(".")).unwrap_err();
     assert!(!err.to_string().contains('\x07'), "{err}");
+    assert!(err.to_string().contains("a\\x07b.ply"), "{err}");
+    let err = nff::parse(
+        b"s 0 0 0 1\n\xff\xfe\x01zz\xc3\xa9 2\n",
+        "rnd.nff",
+        Path::new("."),
+    )
+    .unwrap_err();
+    let msg = err.to_string();
+    assert!(msg.ends_with("found '\\xff\\xfe\\x01zz\u{e9}'"), "{msg}");
+    assert!(!msg.contains('\u{fffd}') && !msg.contains("\\u{"), "{msg}");
+    let Error::Parse {
+        excerpt: Some(x), ..
+    } = err
+    else {
+        panic!("{err:?}")
+    };
+    assert_eq!(x.text, "\\xff\\xfe\\x01zz\u{e9} 2");
+    assert_eq!(&x.text[x.span.clone()], "\\xff\\xfe\\x01zz\u{e9}");
 }
 
 // ---------------------------------------------------------------------------------------

@@ -5,16 +5,16 @@
 //! BMP) clamp to [0, 1] and round to the nearest of 256 levels; EXR keeps the unclamped
 //! linear floats. There is no gamma curve anywhere.
 
+mod encode;
+
 use std::path::Path;
 
 use rayon::prelude::*;
 
-use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
-use image::{
-    ColorType, DynamicImage, ExtendedColorType, ImageEncoder, ImageFormat, Rgb32FImage, RgbImage,
-};
+pub use encode::Format;
 
-use crate::atomic::write_atomic_with;
+use image::{ColorType, DynamicImage, RgbImage};
+
 use crate::gpu_types::{AOV_COST, AOV_DEPTH};
 use crate::{Error, Result};
 
@@ -66,64 +66,85 @@ impl Film {
             .expect("Film::pixels must hold width * height entries")
     }
 
-    /// The unclamped linear values as an `image` float buffer (for EXR).
-    fn to_rgb32f(&self) -> Rgb32FImage {
-        let raw = self.pixels.iter().flatten().copied().collect();
-        Rgb32FImage::from_raw(self.width, self.height, raw)
-            .expect("Film::pixels must hold width * height entries")
-    }
-
     /// Writes the film to `path`, choosing the format from the extension: `png`, `ppm`
-    /// (binary P6), `bmp` are 8-bit via [`Film::to_rgb8`]; `exr` is 32-bit float RGB with
-    /// the unclamped linear values.
+    /// (binary P6), `bmp` are 8-bit through [`quantize`]; `exr` is 32-bit float RGB with
+    /// the unclamped linear values. Rows go to the encoder one at a time (`encode`): no
+    /// copy of the film is made.
     ///
     /// The write is atomic (see [`crate::atomic::write_atomic`]): on any error no partial file is left and an
     /// existing file at `path` is untouched.
     pub fn save(&self, path: &Path) -> Result<()> {
-        match Format::from_path(path)? {
+        self.save_mapped(path, Format::from_path(path)?, |p| p)
+    }
+
+    /// `save` of each pixel through `map` (which 8-bit formats then quantise).
+    fn save_mapped(
+        &self,
+        path: &Path,
+        format: Format,
+        map: impl Fn([f32; 3]) -> [f32; 3] + Sync,
+    ) -> Result<()> {
+        let w = self.width as usize;
+        if format.is_float() {
             // Stays float: the EXR is the lossless record of the render.
-            Format::Exr => write_atomic_with(path, |w| {
-                self.to_rgb32f()
-                    .write_to(w, ImageFormat::OpenExr)
-                    .map_err(|e| image_error(path, e))
-            }),
-            format => write_rgb8(&self.to_rgb8(), format, path),
+            return encode::write_exr(path, self.width, self.height, |x, y| {
+                map(self.pixels[y * w + x])
+            });
         }
+        encode::write_rgb8_rows(path, format, self.width, self.height, |y, row| {
+            let pixels = &self.pixels[y as usize * w..][..w];
+            for (out, p) in row.chunks_exact_mut(3).zip(pixels) {
+                out.copy_from_slice(&map(*p).map(quantize));
+            }
+        })
     }
 
     /// What an 8-bit image shows of an AOV: depth as grey scaled by the largest finite
     /// distance, cost as a heat ramp scaled by the largest count; colour and normals as
     /// they are.
     pub fn for_display(&self, aov: u32) -> Film {
-        if aov != AOV_DEPTH && aov != AOV_COST {
-            return self.clone();
+        let map = self.display_map(aov);
+        Film {
+            width: self.width,
+            height: self.height,
+            pixels: self.pixels.iter().map(|&p| map(p)).collect(),
         }
-        let max = self
-            .pixels
-            .iter()
-            .map(|p| p[0])
-            .filter(|v| v.is_finite())
-            .fold(0.0f32, f32::max)
-            .max(1e-30);
-        let mut out = self.clone();
-        for p in &mut out.pixels {
+    }
+
+    /// The pixel mapping of `for_display`, for this film's values.
+    fn display_map(&self, aov: u32) -> impl Fn([f32; 3]) -> [f32; 3] + Sync + use<> {
+        let scaled = aov == AOV_DEPTH || aov == AOV_COST;
+        let max = if scaled {
+            self.pixels
+                .iter()
+                .map(|p| p[0])
+                .filter(|v| v.is_finite())
+                .fold(0.0f32, f32::max)
+                .max(1e-30)
+        } else {
+            1.0
+        };
+        move |p: [f32; 3]| {
+            if !scaled {
+                return p;
+            }
             let v = (p[0] / max).clamp(0.0, 1.0);
-            *p = if aov == AOV_DEPTH {
+            if aov == AOV_DEPTH {
                 [v; 3]
             } else {
                 heat_ramp(v)
-            };
+            }
         }
-        out
     }
 
     /// Writes a render of `aov`: float formats (EXR) keep the raw values, 8-bit ones
-    /// get [`Film::for_display`].
+    /// get [`Film::for_display`]'s, converted row by row as they are written.
     pub fn save_aov(&self, path: &Path, aov: u32) -> Result<()> {
-        if Format::from_path(path)?.is_float() {
-            self.save(path)
+        let format = Format::from_path(path)?;
+        if format.is_float() {
+            self.save_mapped(path, format, |p| p)
         } else {
-            self.for_display(aov).save(path)
+            self.save_mapped(path, format, self.display_map(aov))
         }
     }
 
@@ -215,78 +236,19 @@ pub fn quantize(c: f32) -> u8 {
 /// Writes an 8-bit image to `path` atomically, format chosen from the extension as in
 /// [`Film::save`] (an `exr` holds the values divided by 255). Used for heat maps.
 pub fn save_rgb8(img: &RgbImage, path: &Path) -> Result<()> {
-    write_rgb8(img, Format::from_path(path)?, path)
-}
-
-fn write_rgb8(img: &RgbImage, format: Format, path: &Path) -> Result<()> {
-    write_atomic_with(path, |w| {
-        let (width, height) = img.dimensions();
-        let result = match format {
-            // Explicitly P6: image's default PNM header is PAM (P7), which many .ppm readers
-            // reject.
-            Format::Ppm => PnmEncoder::new(w)
-                .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                .write_image(img.as_raw(), width, height, ExtendedColorType::Rgb8),
-            Format::Png => img.write_to(w, ImageFormat::Png),
-            Format::Bmp => img.write_to(w, ImageFormat::Bmp),
-            Format::Exr => DynamicImage::ImageRgb8(img.clone())
-                .into_rgb32f()
-                .write_to(w, ImageFormat::OpenExr),
-        };
-        result.map_err(|e| image_error(path, e))
+    let format = Format::from_path(path)?;
+    let (w, h) = img.dimensions();
+    if format.is_float() {
+        return encode::write_exr(path, w, h, |x, y| {
+            img.get_pixel(x as u32, y as u32)
+                .0
+                .map(|c| f32::from(c) / 255.0)
+        });
+    }
+    let row_len = w as usize * 3;
+    encode::write_rgb8_rows(path, format, w, h, |y, row| {
+        row.copy_from_slice(&img.as_raw()[y as usize * row_len..][..row_len]);
     })
-}
-
-/// The image formats [`Film::save`] and [`save_rgb8`] write, chosen by file extension
-/// (case-insensitive): the one list of them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Format {
-    Png,
-    Ppm,
-    Bmp,
-    Exr,
-}
-
-impl Format {
-    pub const ALL: [Format; 4] = [Format::Png, Format::Ppm, Format::Bmp, Format::Exr];
-
-    pub fn extension(self) -> &'static str {
-        match self {
-            Format::Png => "png",
-            Format::Ppm => "ppm",
-            Format::Bmp => "bmp",
-            Format::Exr => "exr",
-        }
-    }
-
-    /// Whether the format keeps the film's linear floats (unclamped) rather than 8 bits.
-    pub fn is_float(self) -> bool {
-        self == Format::Exr
-    }
-
-    /// The format a path's extension names; an error naming the path and the supported
-    /// extensions otherwise (checked before a render, so one never ends in it).
-    pub fn from_path(path: &Path) -> Result<Format> {
-        let ext = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        let known = Format::ALL
-            .into_iter()
-            .find(|f| Some(f.extension()) == ext.as_deref());
-        known.ok_or_else(|| {
-            let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
-            Error::Image(format!(
-                "{}: {}; supported: {}",
-                path.display(),
-                match ext {
-                    Some(ext) => format!("unsupported image extension '.{ext}'"),
-                    None => "no image file extension".to_string(),
-                },
-                supported.join(", ")
-            ))
-        })
-    }
 }
 
 /// The colour ramp of every heat map gpurt draws (the cost AOV, `gpurt diff`'s
@@ -304,12 +266,19 @@ fn image_error(path: &Path, e: image::ImageError) -> Error {
 /// Reads and decodes an image, recognising the format by content (falling back to the
 /// extension).
 fn decode(path: &Path) -> Result<DynamicImage> {
-    image::ImageReader::open(path)
+    let reader = image::ImageReader::open(path)
         .map_err(|e| Error::io(path, e))?
         .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?
-        .decode()
-        .map_err(|e| image_error(path, e))
+        .map_err(|e| Error::io(path, e))?;
+    if reader.format().is_none() {
+        let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
+        return Err(Error::Image(format!(
+            "{}: not an image by its content nor by its extension (images: {})",
+            path.display(),
+            supported.join(", ")
+        )));
+    }
+    reader.decode().map_err(|e| image_error(path, e))
 }
 
 /// Loads an image as 8-bit RGB for diffing. PNG, PPM and BMP are taken as stored (alpha is

@@ -1,0 +1,190 @@
+//! The two models of the specular highlight (`frame::Shading`): a pixel worked out by
+//! hand for each, on both renderers; every pixel of a shiny sphere against the f64 oracle
+//! under Blinn-Phong; and the GPU specialisation that keeps Blinn-Phong out of Phong
+//! pipelines. GPU against CPU under Blinn-Phong on every scene is a variant of
+//! `common::versus::check_variants`; Phong images byte for byte as before are checked by
+//! rendering the image suite with the binary before and after.
+
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+
+use glam::DVec3;
+use gpurt::film::Film;
+use gpurt::frame::{self, RenderOptions, Shading};
+use gpurt::gpu::specialization::Specialization;
+use gpurt::gpu_types::*;
+use gpurt::pack;
+use gpurt::scene::{Scene, nff};
+
+use crate::common::oracle::{Camera, lone_sphere};
+use crate::common::versus::{self, Gpu};
+
+/// A unit sphere at the origin seen along +y from (0, -5, 0) on a 3 x 3 image, whose
+/// centre pixel's ray is exactly (0, 1, 0): it meets the sphere at P = (0, -1, 0), where
+/// N = V = (0, -1, 0). The light at (3, -4, 0) lies 45 degrees off the normal:
+/// L = (1, -1, 0) / sqrt(2), N.L = cos 45. The mirrored ray R = (0, -1, 0) = N, so Phong's
+/// R.L = cos 45; Blinn-Phong's H lies halfway between L and V, 22.5 degrees off N, so
+/// N.H = cos 22.5, whose square is (1 + cos 45) / 2.
+const HAND: &str = "b 0 0 0
+v from 0 -5 0 at 0 0 0 up 0 0 1 angle 40 hither 0.01 resolution 3 3
+l 3 -4 0
+f 1 1 1 0.5 0.4 2 0 1
+s 0 0 0 1
+";
+
+/// The centre pixel of `HAND` by hand, in each channel: ambient 0.1 x Kd 0.5 (the default
+/// ambient, white material), plus the light (intensity 1, alone) times Kd N.L + the
+/// highlight Ks (c)^2 with Shine 2; the mirror ray leaves towards the black background.
+fn by_hand(shading: Shading) -> f64 {
+    let cos45 = 0.5f64.sqrt();
+    let c_squared = match shading {
+        Shading::Phong => cos45 * cos45,
+        Shading::BlinnPhong => (1.0 + cos45) / 2.0,
+    };
+    0.1 * 0.5 + 0.5 * cos45 + 0.4 * c_squared
+}
+
+fn parse(src: &str) -> Scene {
+    nff::parse(src.as_bytes(), "inline.nff", Path::new(".")).expect("inline scene parses")
+}
+
+/// The image of `scene` in `shading` on the CPU, or on the GPU given one.
+fn render(scene: &Scene, shading: Shading, gpu: Option<&Gpu>) -> Film {
+    let opts = RenderOptions {
+        shading,
+        ..RenderOptions::for_camera(&scene.camera)
+    };
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let globals = frame::globals(&buffers, &opts);
+    let never = AtomicBool::new(false);
+    match gpu {
+        None => gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).map(|r| r.0),
+        Some(g) => g
+            .renderer
+            .render(
+                &g.ctx.device,
+                &g.ctx.queue,
+                &buffers,
+                &globals,
+                &|_| {},
+                &never,
+            )
+            .map(|r| r.0),
+    }
+    .expect("renders")
+}
+
+fn centre(film: &Film) -> DVec3 {
+    DVec3::from(film.get(1, 1).map(f64::from))
+}
+
+/// Checks the centre pixel of `HAND` under each model on one renderer, and that the
+/// check tells the models apart: each render fails the other model's value.
+fn check_by_hand(gpu: Option<&Gpu>, what: &str) {
+    let scene = parse(HAND);
+    // Both renderers compute in f32; the values are around 0.6 to 0.75.
+    let tol = 1e-5;
+    assert!((by_hand(Shading::Phong) - by_hand(Shading::BlinnPhong)).abs() > 0.1);
+    for (shading, other) in [
+        (Shading::Phong, Shading::BlinnPhong),
+        (Shading::BlinnPhong, Shading::Phong),
+    ] {
+        let got = centre(&render(&scene, shading, gpu));
+        let want = DVec3::splat(by_hand(shading));
+        let off = (got - want).abs().max_element();
+        assert!(off <= tol, "{what} {shading:?}: {got}, by hand {want}");
+        let off_other = (got - DVec3::splat(by_hand(other))).abs().max_element();
+        assert!(off_other > tol, "{what} {shading:?} passes as {other:?}");
+    }
+}
+
+#[test]
+fn a_pixel_by_hand_for_each_model_on_the_cpu() {
+    check_by_hand(None, "CPU");
+}
+
+#[test]
+fn a_pixel_by_hand_for_each_model_on_the_gpu() {
+    let Some(g) = versus::gpu() else {
+        return;
+    };
+    check_by_hand(Some(g), "GPU");
+}
+
+/// Every pixel of a shiny sphere under two lights, Blinn-Phong against the f64 oracle
+/// within one 8-bit level, with highlights on it; the Phong render of the same scene
+/// fails that oracle.
+#[test]
+fn every_pixel_of_a_shiny_sphere_is_blinn_phong_on_the_cpu() {
+    let scene = parse(
+        "b 0.05 0.1 0.15
+v from 0 -8 3 at 0 0 0.5 up 0 0 1 angle 35 hither 0.5 resolution 48 48
+l 4 -5 6
+l -6 -2 1
+f 0.3 0.8 0.4 0.6 0.3 20 0 0
+s 0.3 0.2 0.5 1.5
+",
+    );
+    let cam = Camera::of(&scene);
+    let worst = |film: &Film, shading: Shading| {
+        cam.pixels()
+            .filter_map(|(x, y)| {
+                let want = lone_sphere(&scene, &cam, x, y, shading)?;
+                let got = DVec3::from(film.get(x, y).map(f64::from));
+                Some((got - want).abs().max_element())
+            })
+            .fold(0.0, f64::max)
+    };
+    let blinn = render(&scene, Shading::BlinnPhong, None);
+    let phong = render(&scene, Shading::Phong, None);
+    assert!(worst(&blinn, Shading::BlinnPhong) <= 1.0 / 255.0);
+    assert!(worst(&phong, Shading::Phong) <= 1.0 / 255.0);
+    assert!(
+        worst(&phong, Shading::BlinnPhong) > 10.0 / 255.0,
+        "Phong's image passes as Blinn-Phong's"
+    );
+}
+
+/// The model is a pipeline constant of colour frames only: Phong and Blinn-Phong frames
+/// compile apart, and the AOVs, which shade nothing, share one pipeline whatever the model.
+#[test]
+fn the_model_selects_the_pipeline_of_colour_frames_only() {
+    let scene = parse(HAND);
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let spec = |shading: Shading, aov: u32| {
+        let opts = RenderOptions {
+            shading,
+            aov,
+            ..RenderOptions::for_camera(&scene.camera)
+        };
+        Specialization::of(&buffers, &frame::globals(&buffers, &opts))
+    };
+    let constant = |s: Specialization| {
+        s.constants()
+            .into_iter()
+            .find(|(name, _)| *name == "SHADING")
+            .map(|(_, v)| v)
+    };
+    assert_eq!(
+        constant(spec(Shading::Phong, AOV_COLOR)),
+        Some(f64::from(SHADING_PHONG))
+    );
+    assert_eq!(
+        constant(spec(Shading::BlinnPhong, AOV_COLOR)),
+        Some(f64::from(SHADING_BLINN_PHONG))
+    );
+    for aov in [AOV_NORMAL, AOV_DEPTH, AOV_COST] {
+        assert_eq!(spec(Shading::Phong, aov), spec(Shading::BlinnPhong, aov));
+    }
+}
+
+/// Each model's name reads back to it, and nothing else reads as a model.
+#[test]
+fn models_are_named_one_way() {
+    for s in Shading::ALL {
+        assert_eq!(Shading::from_name(s.name()), Some(s));
+    }
+    assert_eq!(Shading::default(), Shading::Phong);
+    assert_eq!(Shading::from_name("Phong"), None);
+    assert_eq!(Shading::from_name("blinn"), None);
+}
