@@ -5,7 +5,9 @@
 
 use super::cut::Cut;
 use crate::error::{Error, Result};
-use crate::gpu_types::{AOV_COLOR, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use crate::gpu_types::{
+    AOV_COLOR, GpuGlobals, GpuWaveState, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WORKGROUP_SIDE,
+};
 use crate::pack::SceneBuffers;
 
 /// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
@@ -60,7 +62,8 @@ pub(super) fn wavefront_for(
 }
 
 /// Pixels a side of a wave's tile at most: a wave holds a `WaveState` per pixel (up to a
-/// kilobyte with the longest ray stack), 16 MiB at this side.
+/// kilobyte with the longest ray stack), 16 MiB at this side, less where the device's
+/// storage bindings are smaller (`cut_for`).
 const WAVE_TILE_SIDE: u32 = 128;
 
 /// How a frame of `globals`' size and samples is cut on this device. Software adapters
@@ -89,8 +92,18 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, software: boo
         software,
     );
     if globals.wavefront != 0 {
-        // Bands stay whole rows of tiles: sides are powers of two.
-        cut.tile_side = cut.tile_side.min(WAVE_TILE_SIDE);
+        // A wave's states are one storage binding: halve the side (bands stay whole rows
+        // of tiles, sides being powers of two) until they fit the device's limit, down
+        // to one workgroup's square.
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let state = size_of::<GpuWaveState>() as u64;
+        let mut side = cut.tile_side.min(WAVE_TILE_SIDE);
+        while side > WORKGROUP_SIDE && u64::from(side * side) * state > limit {
+            side /= 2;
+        }
+        cut.tile_side = side;
     }
     cut
 }
