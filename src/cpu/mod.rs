@@ -80,7 +80,9 @@ pub fn render_samples(
 /// frame costs no memory beyond its accumulator (at 16384 x 16384, 3 GiB; a second
 /// buffer of the tiles' results would double it). Only a finished pass counts: when
 /// cancelled, the rows traced are put back as they were, from a copy kept of them unless
-/// they held nothing (then they are zeroed, which needs no copy).
+/// they held nothing: then only the tiles finished are zeroed, which needs no copy and
+/// leaves the pages of a huge film that no tile reached untouched (zeroing all of a
+/// 16384 x 16384 film would take seconds after Ctrl-C).
 pub fn render_rows(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
@@ -98,6 +100,11 @@ pub fn render_rows(
     let held = &accum.sums.pixels[span.clone()];
     let before = held.iter().any(|p| *p != [0.0; 3]).then(|| held.to_vec());
     let band = (TILE * w) as usize;
+    let columns = w.div_ceil(TILE) as usize;
+    // Which tiles were traced, by band and column: the tiles to zero when cancelled.
+    let finished: Vec<AtomicBool> = (0..h.div_ceil(TILE) as usize * columns)
+        .map(|_| AtomicBool::new(false))
+        .collect();
     let traced: Option<RayCounts> = accum
         .sums
         .pixels
@@ -120,8 +127,9 @@ pub fn render_rows(
                 .into_par_iter()
                 .enumerate()
                 .filter(|(_, c)| !c.is_empty())
+                .map(move |(tx, tile)| (band_index, tx, tile))
         })
-        .map(|(tx, tile)| {
+        .map(|(band_index, tx, tile)| {
             if cancel.load(Ordering::Relaxed) {
                 return None;
             }
@@ -136,6 +144,7 @@ pub fn render_rows(
                     n += 1;
                 }
             }
+            finished[band_index * columns + tx].store(true, Ordering::Relaxed);
             progress(n);
             Some(counts)
         })
@@ -152,7 +161,16 @@ pub fn render_rows(
         let restored = &mut accum.sums.pixels[span];
         match before {
             Some(old) => restored.copy_from_slice(&old),
-            None => restored.fill([0.0; 3]),
+            None => {
+                for (i, row) in restored.chunks_mut((w as usize).max(1)).enumerate() {
+                    let band_index = (rows.start as usize + i) / TILE as usize;
+                    for (tx, piece) in row.chunks_mut(TILE as usize).enumerate() {
+                        if finished[band_index * columns + tx].load(Ordering::Relaxed) {
+                            piece.fill([0.0; 3]);
+                        }
+                    }
+                }
+            }
         }
         return Err(Error::Interrupted);
     };
