@@ -35,7 +35,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use gpurt::cpu::main::camera_ray;
 use gpurt::cpu::packet::{Kernels, MAX_LANES, Packet};
-use gpurt::cpu::shade::{light_ray, offset_origin, surface};
+use gpurt::cpu::shade::{light_ray, offset_origin, reflect_dir, surface};
 use gpurt::cpu::traverse::{closest_hit, transmission};
 use gpurt::cpu::types::{Bindings, Hit, Ray};
 use gpurt::frame::{self, RenderOptions};
@@ -158,6 +158,7 @@ fn main() -> anyhow::Result<()> {
                     u: 0.0,
                     v: 0.0,
                     cost: 0,
+                    nodes: 0,
                 }; MAX_LANES];
                 for (rays, out) in rays.chunks(lanes).zip(out.chunks_mut(lanes)) {
                     p.clear();
@@ -205,11 +206,17 @@ fn main() -> anyhow::Result<()> {
         })
         .collect();
     let mut shadow: Vec<Shadow> = Vec::new();
-    for block in surfaces.chunks(BLOCK) {
+    for (block, rays) in surfaces.chunks(BLOCK).zip(primary.chunks(BLOCK)) {
         for light in b.lights.iter().filter(|l| l.kind == LIGHT_POINT) {
-            let group = block
-                .iter()
-                .map(|s| s.as_ref().and_then(|s| light_ray(&b, s, light, 0, &mut 0)));
+            let group = block.iter().zip(rays).map(|(s, ray)| {
+                let s = s.as_ref()?;
+                let (m, r) = (
+                    &b.materials[s.material as usize],
+                    reflect_dir(ray.dir, s.ns),
+                );
+                let lr = light_ray(&b, s, m, ray.dir, r, light, 0, &mut 0)?;
+                Some((lr.ray, lr.dist))
+            });
             if group.clone().any(|r| r.is_some()) {
                 shadow.extend(group);
             }
@@ -220,7 +227,7 @@ fn main() -> anyhow::Result<()> {
         .zip(&surfaces)
         .filter_map(|(ray, s)| {
             let s = s.as_ref()?;
-            let dir = ray.dir - 2.0 * s.ns.dot(ray.dir) * s.ns;
+            let dir = reflect_dir(ray.dir, s.ns);
             Some(Ray {
                 origin: offset_origin(s, dir, g.epsilon),
                 dir,
@@ -236,7 +243,7 @@ fn main() -> anyhow::Result<()> {
             .for_each(|(rays, out)| {
                 for (r, o) in rays.iter().zip(out) {
                     if let Some((r, tmax)) = r {
-                        *o = transmission(&b, r, *tmax) == Vec3::ZERO;
+                        *o = transmission(&b, r, *tmax, &mut 0) == Vec3::ZERO;
                     }
                 }
             });
@@ -255,7 +262,7 @@ fn main() -> anyhow::Result<()> {
                             p.set(k, r, 0.0, *tmax);
                         }
                     }
-                    kernels.transmissions(&b, &p, &mut light);
+                    kernels.transmissions(&b, &p, &mut light, &mut [0; MAX_LANES]);
                     for (k, o) in out.iter_mut().enumerate() {
                         *o = p.lanes() & 1 << k != 0 && light[k] == Vec3::ZERO;
                     }

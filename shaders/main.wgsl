@@ -40,7 +40,11 @@ fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
 }
 
 fn aov(ray: Ray) -> vec3<f32> {
+    let fetched_before = fetched;
     let hit = closest_hit(ray, globals.hither, NO_HIT);
+    if (COUNTERS) {
+        count_nodes(1u, fetched - fetched_before);
+    }
     if (AOV == AOV_COST) {
         return vec3<f32>(f32(hit.cost));
     }
@@ -86,6 +90,9 @@ fn main(
     var sum = before.color;
     var rays = before.rays & ~PIXEL_CUT_SHORT;
     cut_short = (before.rays & PIXEL_CUT_SHORT) != 0u;
+    if (COUNTERS) {
+        counts = counters[slot];
+    }
     let end = tile.sample_start + tile.sample_count;
     var s = tile.sample_start;
     for (; s < end; s++) {
@@ -93,6 +100,9 @@ fn main(
         let off = sample_offset(s, g.spp, &rng);
         let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
         rays += 1u;
+        if (COUNTERS) {
+            counts.eye_rays += 1u;
+        }
         if (AOV == AOV_COLOR) {
             sum += trace(ray, &rng, &rays);
         } else {
@@ -101,6 +111,9 @@ fn main(
     }
     cut_short = cut_short || s < end;
     output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
+    if (COUNTERS) {
+        counters[slot] = counts;
+    }
 }
 
 // The same computation as `main` for pixels whose work did not fit one invocation, in
@@ -132,6 +145,7 @@ fn resume(
         st.rays = 0u;
         st.phase = PHASE_SAMPLE;
         st.cut = 0u;
+        st.counts = PixelCounts();
     } else {
         st = resume_state[i];
     }
@@ -139,6 +153,7 @@ fn resume(
         return;
     }
     work = 0u;
+    counts = st.counts;
     loop {
         if (work >= RESUME_BUDGET) {
             break;
@@ -153,6 +168,9 @@ fn resume(
             let off = sample_offset(st.sample, g.spp, &rng);
             let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
             st.rays += 1u;
+            if (COUNTERS) {
+                counts.eye_rays += 1u;
+            }
             if (AOV != AOV_COLOR) {
                 st.sum += aov(ray);
                 st.sample += 1u;
@@ -173,7 +191,11 @@ fn resume(
             st.sp -= 1u;
             let ray_in = st.stack[st.sp];
             let ray = Ray(ray_in.origin, ray_in.dir);
+            let fetched_before = fetched;
             let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+            if (COUNTERS) {
+                count_nodes(ray_in.depth, fetched - fetched_before);
+            }
             if (hit.prim == NO_PRIM) {
                 st.colour += ray_in.weight * g.background;
                 continue;
@@ -220,17 +242,24 @@ fn resume(
             }
             if (REFLECTION && m.ks > 0.0) {
                 st.rays += 1u;
+                if (COUNTERS) {
+                    counts.secondary_rays += 1u;
+                }
                 st.stack[st.sp] = secondary(s, reflect_dir(ray_in.dir, s.ns), ray_in, m.ks);
                 st.sp += 1u;
             }
             if (REFRACTION && m.t > 0.0) {
                 st.rays += 1u;
+                if (COUNTERS) {
+                    counts.secondary_rays += 1u;
+                }
                 st.stack[st.sp] = secondary(s, refracted_dir(s, m, ray_in.dir), ray_in, m.t);
                 st.sp += 1u;
             }
         }
     }
     st.cut = st.cut | u32(cut_short);
+    st.counts = counts;
     resume_state[i] = st;
     if (st.phase != PHASE_DONE) {
         atomicAdd(&resume_pending, 1u);

@@ -95,11 +95,21 @@ fn highlight(m: Material, n: vec3<f32>, dir: vec3<f32>, r: vec3<f32>, l: vec3<f3
     return 0.0;
 }
 
-// Sample k of `light` at surface `s` (material m, incoming direction dir, mirror
-// direction r): Lambert and the highlight scaled by the shadow ray's transmission in xyz;
-// w is 1 when the light is above the surface and a shadow ray was traced, else 0 (and xyz
-// is 0).
-fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
+// A light sample's shadow ray and what the sample gives where nothing blocks it,
+// `intensity * term` (kept apart: `light_sample` multiplies the transmission in first);
+// `traced` is 0 when the light is below the surface: no ray, no light.
+struct LightRay {
+    origin: vec3<f32>,
+    dist: f32,
+    dir: vec3<f32>,
+    traced: u32,
+    intensity: vec3<f32>,
+    term: vec3<f32>,
+}
+
+// The shadow ray of sample k of `light` at surface `s` (material m, incoming direction
+// dir, mirror direction r), and the Lambert and highlight terms it carries.
+fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> LightRay {
     let intensity = light.color / f32(light_samples(light));
     var l: vec3<f32>;
     var dist: f32;
@@ -119,12 +129,29 @@ fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Li
     }
     let ndotl = dot(s.ns, l);
     if (ndotl <= 0.0) {
+        return LightRay();
+    }
+    let spec = highlight(m, s.ns, dir, r, l);
+    let term = m.kd * m.color * ndotl + vec3<f32>(spec);
+    return LightRay(offset_origin(s, l, globals.epsilon), dist, l, 1u, intensity, term);
+}
+
+// Sample k of `light` at surface `s` (material m, incoming direction dir, mirror
+// direction r): Lambert and the highlight scaled by the shadow ray's transmission in xyz;
+// w is 1 when the light is above the surface and a shadow ray was traced, else 0 (and xyz
+// is 0).
+fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
+    let lr = light_ray(s, m, dir, r, light, k, rng);
+    if (lr.traced == 0u) {
         return vec4<f32>(0.0);
     }
-    let shadow_ray = Ray(offset_origin(s, l, globals.epsilon), l);
-    let shadow = transmission(shadow_ray, dist);
-    let spec = highlight(m, s.ns, dir, r, l);
-    return vec4<f32>(shadow * intensity * (m.kd * m.color * ndotl + vec3<f32>(spec)), 1.0);
+    let fetched_before = fetched;
+    let shadow = transmission(Ray(lr.origin, lr.dir), lr.dist);
+    if (COUNTERS) {
+        counts.shadow_rays += 1u;
+        counts.shadow_nodes += fetched - fetched_before;
+    }
+    return vec4<f32>(shadow * lr.intensity * lr.term, 1.0);
 }
 
 fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
@@ -161,6 +188,16 @@ fn refracted_dir(s: Surface, m: Material, dir: vec3<f32>) -> vec3<f32> {
     return normalize(eta * dir + (eta * cos_i - sqrt(k)) * s.ns);
 }
 
+// Adds the nodes a ray of depth `depth` fetched to its kind's count (COUNTERS): the eye
+// ray's, or a reflected or refracted ray's.
+fn count_nodes(depth: u32, nodes: u32) {
+    if (depth == 1u) {
+        counts.eye_nodes += nodes;
+    } else {
+        counts.secondary_nodes += nodes;
+    }
+}
+
 // The stack holds at most TRACE_STACK rays on the scene in hand (the host writes that
 // constant into the source: `SceneBuffers::trace_stack`), which keeps lavapipe's compile
 // short where few rays wait.
@@ -173,7 +210,11 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
         sp -= 1u;
         let ray_in = stack[sp];
         let ray = Ray(ray_in.origin, ray_in.dir);
+        let fetched_before = fetched;
         let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+        if (COUNTERS) {
+            count_nodes(ray_in.depth, fetched - fetched_before);
+        }
         if (hit.prim == NO_PRIM) {
             colour += ray_in.weight * globals.background;
             continue;
@@ -187,11 +228,17 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
         if (REFLECTION && m.ks > 0.0) {
             let dir = reflect_dir(ray.dir, s.ns);
             *rays += 1u;
+            if (COUNTERS) {
+                counts.secondary_rays += 1u;
+            }
             stack[sp] = secondary(s, dir, ray_in, m.ks);
             sp += 1u;
         }
         if (REFRACTION && m.t > 0.0) {
             *rays += 1u;
+            if (COUNTERS) {
+                counts.secondary_rays += 1u;
+            }
             stack[sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
             sp += 1u;
         }

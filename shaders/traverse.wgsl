@@ -1,18 +1,6 @@
 // traverse.wgsl: closest-hit and shadow (any-hit) traversal of the flattened BVH with a
 // fixed stack, near child first, plus the planes kept outside it
 // (CPU twin: src/cpu/traverse.rs).
-//
-// The traversal stacks live in workgroup memory, one slice of STACK entries per
-// invocation (the CPU twin uses a local array of TRAVERSAL_STACK). On lavapipe a
-// function-local array indexed at run time costs time in proportion to its length at
-// every push and pop (halving it made traversal 1.6x faster); workgroup memory is indexed
-// directly everywhere. STACK is what the scene's walk needs, at most TRAVERSAL_STACK:
-// 64 invocations x 64 entries x 4 bytes = 16 KiB, the WebGPU minimum of
-// max_compute_workgroup_storage_size; on a real GPU a smaller stack leaves room for more
-// workgroups at once.
-var<workgroup> traversal_stack: array<u32, WORKGROUP_INVOCATIONS * STACK>;
-// First entry of this invocation's slice (set once in main).
-var<private> stack_base: u32;
 
 fn first_in(t: vec4<f32>, tmin: f32, tmax: f32) -> f32 {
     if (t.x > tmin && t.x < tmax) {
@@ -21,28 +9,6 @@ fn first_in(t: vec4<f32>, tmin: f32, tmax: f32) -> f32 {
         return t.y;
     }
     return NO_HIT;
-}
-
-// Where a traversal stands: the node to visit next and how many nodes wait on its stack
-// (this invocation's slice of traversal_stack).
-struct Walk {
-    node: u32,
-    sp: u32,
-}
-
-// Writes entry `k` of this invocation's stack slice.
-fn stack_store(k: u32, entry: u32) {
-    traversal_stack[k * WORKGROUP_INVOCATIONS + stack_base] = entry;
-}
-
-// Takes the next waiting node; false when the traversal is done.
-fn pop(walk: ptr<function, Walk>) -> bool {
-    if ((*walk).sp == 0u) {
-        return false;
-    }
-    (*walk).sp -= 1u;
-    (*walk).node = traversal_stack[(*walk).sp * WORKGROUP_INVOCATIONS + stack_base];
-    return true;
 }
 
 // Walks on until the ray reaches a leaf whose box overlaps [tmin, tmax], entering the
@@ -58,6 +24,9 @@ fn next_leaf(
     tmax: f32,
     cost: ptr<function, u32>,
 ) -> vec2<u32> {
+    if (CWIDE) {
+        return next_leaf_cwide(walk, ray, inv_dir, tmin, tmax, cost);
+    }
     if (WIDE) {
         return next_leaf_wide(walk, ray, inv_dir, tmin, tmax, cost);
     }
@@ -70,6 +39,9 @@ fn next_leaf(
         let n = load_node(node);
         *cost += 1u;
         work += 1u;
+        if (COUNTERS) {
+            fetched += 1u;
+        }
         if (overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax)) {
             let count = node_count(n);
             if (count > 0u) {
@@ -108,6 +80,9 @@ fn next_leaf_pairs(
     var live = overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax);
     *cost += 1u;
     work += 1u;
+    if (COUNTERS) {
+        fetched += 1u;
+    }
     loop {
         if (!live) {
             if (!pop(walk)) {
@@ -117,6 +92,9 @@ fn next_leaf_pairs(
             live = overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax);
             *cost += 1u;
             work += 1u;
+            if (COUNTERS) {
+                fetched += 1u;
+            }
             continue;
         }
         let count = node_count(n);
@@ -129,6 +107,9 @@ fn next_leaf_pairs(
         let b = load_node(second);
         *cost += 2u;
         work += 2u;
+        if (COUNTERS) {
+            fetched += 2u;
+        }
         let ta = slab_entry(a.min, a.max, ray.origin, inv_dir, tmin, tmax);
         let tb = slab_entry(b.min, b.max, ray.origin, inv_dir, tmin, tmax);
         let hit_a = ta != NO_HIT;
@@ -186,6 +167,9 @@ fn next_leaf_wide(
         let n = load_wide_node(e);
         *cost += 4u;
         work += 1u;
+        if (COUNTERS) {
+            fetched += 1u;
+        }
         // `slab` for the four boxes, lane by lane the same arithmetic.
         let o = ray.origin;
         let x0 = (n.lo[0] - o.x) * inv_dir.x;
@@ -245,7 +229,7 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     let inv_dir = safe_inverse(ray.dir);
-    var walk = Walk(0u, 0u);
+    var walk = start_walk(ray);
     // A pointer to hit.cost itself trips naga's SPIR-V writer (an uncached access).
     var cost = 0u;
     var done = false;
@@ -268,7 +252,7 @@ fn closest_hit(ray: Ray, tmin: f32, tmax: f32) -> Hit {
             }
         }
         cut_short = cut_short || i < leaf.x + leaf.y;
-        if (!pop(&walk)) {
+        if (!walk_on(&walk)) {
             done = true;
             break;
         }
@@ -301,7 +285,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
         return light;
     }
     let inv_dir = safe_inverse(ray.dir);
-    var walk = Walk(0u, 0u);
+    var walk = start_walk(ray);
     var visited = 0u;
     var done = false;
     loop {
@@ -328,7 +312,7 @@ fn transmission(ray: Ray, tmax: f32) -> vec3<f32> {
             }
         }
         cut_short = cut_short || i < leaf.x + leaf.y;
-        if (!pop(&walk)) {
+        if (!walk_on(&walk)) {
             done = true;
             break;
         }

@@ -40,6 +40,19 @@ struct WideNode {
     entry: vec4<u32>,
 }
 
+// A node of the compressed eight-wide tree (TRAVERSAL_CWIDE): the grid its children's
+// boxes are quantised on, the first inner child and first primitive of its leaves, a
+// tag byte per lane, and the quantised boxes, a byte per lane (src/gpu_types.rs:
+// GpuCwideNode, which says how they decode).
+struct CwideNode {
+    origin: vec3<f32>,
+    exp_inner: u32,
+    child_base: u32,
+    prim_base: u32,
+    tags: vec2<u32>,
+    quant: array<vec4<u32>, 3>,
+}
+
 struct Plane {
     normal: vec3<f32>,
     d: f32,
@@ -91,8 +104,9 @@ struct Globals {
     n_lights: u32,
     aov: u32,
     traversal: u32,
+    counters: u32,
+    wavefront: u32,
     shading: u32,
-    _pad: array<u32, 2>,
 }
 
 struct Tile {
@@ -107,6 +121,18 @@ struct Tile {
     scatter: u32,
 }
 
+// What one pixel's rays cost, by kind (COUNTERS): rays traced and BVH nodes fetched
+// (src/gpu_types.rs: GpuPixelCounts).
+struct PixelCounts {
+    eye_rays: u32,
+    eye_nodes: u32,
+    shadow_rays: u32,
+    shadow_nodes: u32,
+    secondary_rays: u32,
+    secondary_nodes: u32,
+    _pad: array<u32, 2>,
+}
+
 // One traced pixel: the sum of its samples traced so far in this band (the host divides)
 // and the number of rays traced for it, PIXEL_CUT_SHORT set if any loop was cut.
 struct PixelOut {
@@ -118,6 +144,11 @@ struct PixelOut {
 // ends every loop once an invocation has run 65535 loop iterations in all). Each loop
 // checks after itself; the pixel is then reported, never written darker in silence.
 var<private> cut_short: bool;
+
+// BVH nodes this invocation's walks have fetched (COUNTERS), and its counts so far: the
+// callers of the walks (trace, light_sample, aov) attribute the fetches to a kind of ray.
+var<private> fetched: u32;
+var<private> counts: PixelCounts;
 
 // Loop iterations this invocation has run, counted where the work is (traversal steps,
 // primitive tests, light samples, rays): `resume` suspends a pixel once it passes
@@ -146,6 +177,7 @@ struct PixelState {
     entering: u32,
     phase: u32,
     cut: u32,
+    counts: PixelCounts,
     stack: array<Pending, RAY_STACK>,
 }
 
@@ -184,9 +216,14 @@ override SHADING: u32 = SHADING_PHONG;
 override PAIRS: bool = false;
 // globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.
 override WIDE: bool = false;
+// globals.traversal == TRAVERSAL_CWIDE, as a constant: node_texels then holds CwideNodes
+// and prim_texels the primitives in their order.
+override CWIDE: bool = false;
 // Entries of each invocation's slice of traversal_stack: what the scene's walk needs, at
 // most TRAVERSAL_STACK (src/gpu/specialization.rs).
 override STACK: u32 = TRAVERSAL_STACK;
+// globals.counters != 0, as a constant: count rays and node fetches by kind (`counters`).
+override COUNTERS: bool = false;
 // log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
 override LAYER_SHIFT: u32 = 25u;
 
@@ -210,6 +247,8 @@ alias Texels = texture_storage_2d_array<rgba32uint, read>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
 @group(0) @binding(7) var<storage, read> lights: array<Light>;
 @group(0) @binding(8) var<storage, read_write> output: array<PixelOut>;
+// The band's PixelCounts, beside `output` (COUNTERS; a single unused entry otherwise).
+@group(0) @binding(9) var<storage, read_write> counters: array<PixelCounts>;
 
 struct Ray {
     origin: vec3<f32>,
@@ -259,6 +298,20 @@ fn load_wide_node(i: u32) -> WideNode {
             bitcast<vec4<f32>>(texel(node_texels, b + 5u)),
         ),
         texel(node_texels, b + 6u),
+    );
+}
+
+fn load_cwide_node(i: u32) -> CwideNode {
+    let b = 5u * i;
+    let head = texel(node_texels, b);
+    let bases = texel(node_texels, b + 1u);
+    return CwideNode(
+        bitcast<vec3<f32>>(head.xyz),
+        head.w,
+        bases.x,
+        bases.y,
+        bases.zw,
+        array<vec4<u32>, 3>(texel(node_texels, b + 2u), texel(node_texels, b + 3u), texel(node_texels, b + 4u)),
     );
 }
 

@@ -14,12 +14,17 @@
 //! `direct - eye`, secondary rays (with their own shadow rays) `full - direct`. The CPU
 //! renders the `full` pass once per setting, with its own count of rays by kind, which
 //! should equal the GPU's total: a mismatch is reported as a warning.
+//!
+//! The `full` pass is then traced once more, untimed, counting (`GpuGlobals::counters`):
+//! the BVH nodes fetched per ray of each kind and the bytes they read, on the GPU's walk
+//! (on the CPU's own walk where only the CPU is timed).
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use crate::bvh;
+use crate::bvh::{self, wide::WideNode};
+use crate::counters::Counters;
 use crate::error::Result;
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
@@ -66,6 +71,8 @@ struct GpuRow {
     eye: Pass,
     direct: Pass,
     full: Pass,
+    /// The `full` pass's counts.
+    counted: Counters,
 }
 
 /// One timed pass: median frame time on the device, median time with the image read
@@ -80,9 +87,8 @@ struct Pass {
 struct CpuRow {
     time: Duration,
     rays: u64,
-    eye: u64,
-    shadow: u64,
-    secondary: u64,
+    /// Rays and node fetches by kind, on the CPU's own walk.
+    counted: Counters,
 }
 
 fn mrays(rays: u64, t: Duration) -> f64 {
@@ -97,7 +103,17 @@ fn rate_between(more: Pass, less: Pass) -> String {
     if rays == 0 || t < Duration::from_micros(20) {
         "-".into()
     } else {
-        format!("{:.0}", mrays(rays, t))
+        rate(mrays(rays, t))
+    }
+}
+
+/// Mrays/s with three significant digits or more: a software adapter's rates are a few
+/// Mrays/s, a GPU's thousands.
+fn rate(mrays: f64) -> String {
+    match mrays {
+        m if m < 10.0 => format!("{m:.2}"),
+        m if m < 100.0 => format!("{m:.1}"),
+        m => format!("{m:.0}"),
     }
 }
 
@@ -270,6 +286,13 @@ fn gpu_row(
         max_depth: 1,
         ..*globals
     })?;
+    let counting = GpuGlobals {
+        counters: 1,
+        ..renderer.frame(buffers, globals)
+    };
+    let scene = renderer.upload(device, queue, buffers, &counting)?;
+    gpu::trace(device, queue, &scene, &|_| {}, &AtomicBool::new(false))?;
+    let counted = scene.counters().expect("a counting frame has counts");
     Ok(GpuRow {
         compile,
         upload,
@@ -277,6 +300,7 @@ fn gpu_row(
         eye,
         direct,
         full,
+        counted,
     })
 }
 
@@ -287,17 +311,25 @@ fn cpu_row(buffers: &pack::SceneBuffers, globals: &GpuGlobals) -> Result<CpuRow>
     Ok(CpuRow {
         time: t.elapsed(),
         rays: counts.total(),
-        eye: counts.eye,
-        shadow: counts.shadow,
-        secondary: counts.reflected + counts.refracted,
+        counted: counts.counters(size_of::<WideNode>() as u64),
+    })
+}
+
+/// Nodes fetched and node bytes read per ray of each kind, as cells: `nodes (bytes)`.
+fn per_ray(c: &Counters) -> [String; 3] {
+    [0, 1, 2].map(|k| match c.rays[k] {
+        0 => "-".to_string(),
+        _ => format!("{:.1} ({:.0})", c.nodes_per_ray(k), c.bytes_per_ray(k)),
     })
 }
 
 fn print_header() {
     outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU |"
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
     );
-    outln!("|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    outln!(
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    );
 }
 
 fn print_row(r: &Row) {
@@ -313,8 +345,8 @@ fn print_row(r: &Row) {
         Some(g) => (
             ms(g.full.time),
             ms(g.full.with_readback),
-            format!("{:.0}", mrays(g.full.rays, g.full.time)),
-            format!("{:.0}", mrays(g.eye.rays, g.eye.time)),
+            rate(mrays(g.full.rays, g.full.time)),
+            rate(mrays(g.eye.rays, g.eye.time)),
             rate_between(g.direct, g.eye),
             rate_between(g.full, g.direct),
             ms(g.upload),
@@ -341,8 +373,17 @@ fn print_row(r: &Row) {
         (Some(g), Some(c)) => format!("{:.1}x", c.time.as_secs_f64() / g.full.time.as_secs_f64()),
         _ => dash(),
     };
+    // The GPU's walk where the GPU is timed, else the CPU's.
+    let counted = r
+        .gpu
+        .as_ref()
+        .map(|g| g.counted)
+        .or(r.cpu.as_ref().map(|c| c.counted));
+    let [eye_nodes, shadow_nodes, secondary_nodes] = counted
+        .as_ref()
+        .map_or_else(|| [dash(), dash(), dash()], per_ray);
     outln!(
-        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} |",
+        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} | {eye_nodes} | {shadow_nodes} | {secondary_nodes} |",
         r.scene,
         r.prims,
         r.width,
@@ -351,9 +392,10 @@ fn print_row(r: &Row) {
         rays as f64 / pixels as f64,
     );
     if let Some(c) = &r.cpu {
+        let [eye, shadow, secondary] = c.counted.rays;
         eprintln!(
-            "  {}: rays by kind (CPU count): {} eye, {} shadow, {} secondary",
-            r.scene, c.eye, c.shadow, c.secondary
+            "  {}: rays by kind (CPU count): {eye} eye, {shadow} shadow, {secondary} secondary",
+            r.scene
         );
     }
 }

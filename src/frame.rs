@@ -151,8 +151,9 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         aov: opts.aov,
         // The GPU renderer puts its adapter's choice here (`GpuRenderer::traversal`).
         traversal: TRAVERSAL_SINGLE,
+        counters: 0,
+        wavefront: 0,
         shading: opts.shading.code(),
-        _pad: [0; 2],
     }
 }
 

@@ -7,6 +7,8 @@
 //! lists them, and `gpu::shaders::source` declares each in the header of the generated
 //! shader source, so no WGSL file writes one (the layout test checks both).
 //!
+//! The states a pixel keeps between dispatches, and its counts, are in `pixel`.
+//!
 //! Every `Vec3` is followed by a 4-byte scalar, which gives the WGSL `vec3<f32>` its
 //! 16-byte alignment without hidden padding.
 
@@ -14,6 +16,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec3, Vec4};
 
 use crate::limits::MAX_DEPTH;
+
+mod pixel;
+pub use pixel::*;
 
 /// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
@@ -120,6 +125,44 @@ pub const WIDE_EMPTY: u32 = u32::MAX;
 pub const WIDE_FIRST_SHIFT: u32 = 2;
 pub const WIDE_COUNT_MASK: u32 = (1 << WIDE_FIRST_SHIFT) - 1;
 
+/// A node of the compressed eight-wide BVH the `TRAVERSAL_CWIDE` walk reads
+/// (`bvh::cwide` builds it from the binary tree), 80 bytes, five texels: the layout of
+/// Ylitie, Karras and Laine's compressed wide BVH (HPG 2017), with leaves of up to
+/// `MAX_LEAF_PRIMS` primitives. Each child's box is quantised to 8 bits an axis on a grid
+/// over the node's own box: on axis `a`, lane `l` spans `origin[a] + q * scale[a]` for
+/// its low and high `q`, with `scale[a] = 2^(e[a] - 127)` (an f32 whose exponent bits are
+/// `e[a]`; 0 for a flat axis), computed as both renderers do, rounded outwards when built
+/// so that a decoded box holds the child's. A child sits in the lane of the octant of ray
+/// directions that should visit it first (`bvh::cwide`), so that a walk taking the lanes
+/// in the order `lane ^ octant` goes roughly near to far without sorting.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuCwideNode {
+    /// The low corner of the node's grid.
+    pub origin: Vec3,
+    /// Bytes 0 to 2: the scale exponents `e` of x, y and z; byte 3: a bit per lane that
+    /// holds an inner child.
+    pub exp_inner: u32,
+    /// The node's inner children are nodes `child_base ..`, in lane order.
+    pub child_base: u32,
+    /// The primitives of its leaf children are `prim_base ..` (in the walk's own order of
+    /// primitives, `bvh::cwide::Cwide::order`).
+    pub prim_base: u32,
+    /// A byte per lane (lanes 0 to 3, then 4 to 7): 0 for no child, `CWIDE_INNER` for an
+    /// inner child, `count << CWIDE_COUNT_SHIFT | offset` for a leaf of `count`
+    /// primitives from `prim_base + offset`.
+    pub tags: [u32; 2],
+    /// Per axis, a byte per lane: the low `q` of lanes 0 to 3 and of 4 to 7, then the high.
+    pub quant: [[u32; 4]; 3],
+}
+
+/// `GpuCwideNode::tags` byte of an inner child.
+pub const CWIDE_INNER: u32 = 1;
+/// Where a leaf's `GpuCwideNode::tags` byte holds its primitive count; its offset is the
+/// bits below.
+pub const CWIDE_COUNT_SHIFT: u32 = 5;
+pub const CWIDE_OFFSET_MASK: u32 = (1 << CWIDE_COUNT_SHIFT) - 1;
+
 /// An infinite plane `dot(normal, p) = d`; tested outside the BVH.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -182,8 +225,14 @@ pub const TRAVERSAL_PAIRS: u32 = 1;
 /// the children reached entered nearest first. Every GPU's choice; falls back to `TRAVERSAL_PAIRS` for a
 /// scene whose wide tree does not fit the traversal stack (`SceneBuffers::gpu_wide_nodes`).
 pub const TRAVERSAL_WIDE: u32 = 2;
+/// BVH walk: the compressed eight-wide tree (`GpuCwideNode`), a node's eight boxes
+/// tested together, the inner children reached taken in the order of the ray's octant
+/// and held as one group (base node and bit mask) a level on the stack, the leaves
+/// reached tested at once. Falls back like `TRAVERSAL_WIDE` where the tree does not fit
+/// (`SceneBuffers::gpu_cwide`).
+pub const TRAVERSAL_CWIDE: u32 = 3;
 /// The walks' names, indexed by `TRAVERSAL_*` (`GPURT_TRAVERSAL`, reports).
-pub const TRAVERSAL_NAMES: [&str; 3] = ["single", "pairs", "wide"];
+pub const TRAVERSAL_NAMES: [&str; 4] = ["single", "pairs", "wide", "cwide"];
 
 /// Shading model of the specular highlight (`--shading`, `frame::Shading`): Phong,
 /// `Ks * max(0, R.L)^Shine` with R the incoming ray mirrored about N (NFF's model, the
@@ -223,10 +272,15 @@ pub struct GpuGlobals {
     /// How the BVH is walked: `TRAVERSAL_SINGLE`, `TRAVERSAL_PAIRS` or `TRAVERSAL_WIDE`
     /// (see traverse.wgsl).
     pub traversal: u32,
+    /// 1: count each pixel's rays and node fetches by kind of ray (`GpuPixelCounts`, the
+    /// `COUNTERS` specialisation), for `--stats` and `gpurt bench`; 0: count nothing.
+    pub counters: u32,
+    /// 1: trace through the wavefront kernels (`shaders/wavefront.wgsl`) instead of the
+    /// one `main` kernel; colour frames only.
+    pub wavefront: u32,
     /// The highlight's model: `SHADING_PHONG` or `SHADING_BLINN_PHONG` (see shade.wgsl's
     /// `highlight`).
     pub shading: u32,
-    pub _pad: [u32; 2],
 }
 
 /// The image region one dispatch traces, which of its samples, and where its pixels go in
@@ -256,57 +310,6 @@ impl GpuTile {
         [self.width, self.height].map(|n| n.div_ceil(WORKGROUP_SIDE).max(1))
     }
 }
-
-/// A pixel whose work continues across dispatches (`resume` in `shaders/main.wgsl`). The
-/// host reads `sum` (of the samples traced, once `phase` is `PHASE_DONE`), `rays` and `cut`;
-/// the rest is the shader's own bookkeeping, kept as words here (`ray_in` and `stack` hold
-/// WGSL `Pending` structs of 12 words).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GpuPixelState {
-    pub sum: Vec3,
-    pub sample: u32,
-    pub colour: Vec3,
-    pub rng: u32,
-    pub lit: Vec3,
-    pub rays: u32,
-    pub point: Vec3,
-    pub sp: u32,
-    pub ng: Vec3,
-    pub light: u32,
-    pub ns: Vec3,
-    pub light_sample: u32,
-    pub ray_in: [u32; 12],
-    pub material: u32,
-    pub entering: u32,
-    pub phase: u32,
-    pub cut: u32,
-    pub stack: [[u32; 12]; RAY_STACK],
-}
-
-/// `GpuPixelState::phase` of a pixel about to start its next sample.
-pub const PHASE_SAMPLE: u32 = 0;
-/// `GpuPixelState::phase` of a pixel tracing the pending rays of its sample.
-pub const PHASE_RAY: u32 = 1;
-/// `GpuPixelState::phase` of a pixel sampling the lights of a hit.
-pub const PHASE_LIGHT: u32 = 2;
-/// `GpuPixelState::phase` of a finished pixel.
-pub const PHASE_DONE: u32 = 3;
-
-/// Loop iterations after which `resume` (main.wgsl) suspends a pixel until the next
-/// dispatch. Lavapipe ends every loop once an invocation has run 65535 loop iterations,
-/// and counts the iterations of all eight invocations of a SIMD batch together, so eight
-/// budgets plus one traversal must stay under 65535.
-pub const RESUME_BUDGET: u32 = 2048;
-
-/// A pixel to resume, as `resume_pixels` (main.wgsl) holds it: `x | y << RESUME_Y_SHIFT`.
-pub const RESUME_Y_SHIFT: u32 = 16;
-pub const RESUME_X_MASK: u32 = (1 << RESUME_Y_SHIFT) - 1;
-
-/// Bit of `PixelOut::rays` set when a pixel's work was cut short: the driver ended one of
-/// the shader's loops before it finished (lavapipe ends every loop once one invocation
-/// has run 65535 loop iterations). The other bits count the rays traced.
-pub const PIXEL_CUT_SHORT: u32 = 1 << 31;
 
 /// Pixels a workgroup of `main.wgsl` covers along each axis, and its invocations (8 x 8,
 /// in 4 x 2 blocks of neighbouring pixels).
@@ -372,6 +375,9 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
         ("WIDE_EMPTY", U32(WIDE_EMPTY)),
         ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
         ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
+        ("CWIDE_INNER", U32(CWIDE_INNER)),
+        ("CWIDE_COUNT_SHIFT", U32(CWIDE_COUNT_SHIFT)),
+        ("CWIDE_OFFSET_MASK", U32(CWIDE_OFFSET_MASK)),
         ("LIGHT_POINT", U32(LIGHT_POINT)),
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
         ("LIGHT_AREA", U32(LIGHT_AREA)),
@@ -406,11 +412,11 @@ const _: () = {
     assert!(size_of::<GpuPrim>() == 48);
     assert!(size_of::<GpuTriNormals>() == 48);
     assert!(size_of::<GpuNode>() == 32);
+    assert!(size_of::<GpuCwideNode>() == 80);
     assert!(size_of::<GpuPlane>() == 32);
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 144);
     assert!(size_of::<GpuTile>() == 36);
-    assert!(size_of::<GpuPixelState>() == 160 + 48 * RAY_STACK);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

@@ -21,6 +21,7 @@ pub mod bvh;
 #[cfg(feature = "native")]
 pub mod compare;
 pub mod console;
+pub mod counters;
 #[cfg(feature = "native")]
 pub mod cpu;
 pub mod error;

@@ -5,6 +5,7 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
+use crate::bvh::cwide;
 use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
 use crate::error::{Error, Result};
@@ -47,6 +48,19 @@ pub struct SceneBuffers {
     /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`),
     /// and the stack entries that walk needs, built on its first upload for that walk.
     gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
+    /// `nodes` as the compressed eight-wide tree of the GPU's `TRAVERSAL_CWIDE` walk
+    /// (`gpu_cwide`), built on its first upload for that walk.
+    gpu_cwide: OnceLock<Option<GpuCwide>>,
+}
+
+/// The compressed eight-wide tree (`bvh::cwide`) with `prims` in the order its leaves
+/// index, as the `TRAVERSAL_CWIDE` walk reads them instead of `nodes` and `prims`.
+#[derive(Clone, Debug)]
+pub struct GpuCwide {
+    pub nodes: Vec<GpuCwideNode>,
+    pub prims: Vec<GpuPrim>,
+    /// Traversal-stack words the walk needs.
+    pub stack_words: u32,
 }
 
 /// Flattens a scene for one frame of the camera's own resolution at `DEFAULT_SPP` samples
@@ -146,6 +160,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         ambient,
         wide: OnceLock::new(),
         gpu_wide: OnceLock::new(),
+        gpu_cwide: OnceLock::new(),
     })
 }
 
@@ -205,13 +220,30 @@ impl SceneBuffers {
             .as_ref()
     }
 
-    /// Traversal-stack entries the GPU's walk `traversal` (as `traversal_for` gives it)
-    /// can need on this scene, at most `TRAVERSAL_STACK`: for the binary walks, one per
-    /// inner node on the longest path (the tree's depth bounds it); for the wide walk,
-    /// what `wide::gpu_nodes` found.
+    /// The compressed eight-wide tree and its primitives, built the first time they are
+    /// asked for; `None` when the `TRAVERSAL_CWIDE` walk cannot take this scene
+    /// (`cwide::build`).
+    pub fn gpu_cwide(&self) -> Option<&GpuCwide> {
+        self.gpu_cwide
+            .get_or_init(|| {
+                let tree = cwide::build(&self.nodes)?;
+                Some(GpuCwide {
+                    nodes: tree.nodes,
+                    prims: tree.order.iter().map(|&i| self.prims[i as usize]).collect(),
+                    stack_words: tree.stack_words,
+                })
+            })
+            .as_ref()
+    }
+
+    /// Traversal-stack entries (words) the GPU's walk `traversal` (as `traversal_for`
+    /// gives it) can need on this scene, at most `TRAVERSAL_STACK`: for the binary walks,
+    /// one per inner node on the longest path (the tree's depth bounds it); for the wide
+    /// walks, what `wide::gpu_nodes` and `cwide::build` found.
     pub fn stack_entries(&self, traversal: u32) -> u32 {
-        match self.gpu_wide() {
-            Some(&(_, need)) if traversal == TRAVERSAL_WIDE => need,
+        match (traversal, self.gpu_wide(), self.gpu_cwide()) {
+            (TRAVERSAL_WIDE, Some(&(_, need)), _) => need,
+            (TRAVERSAL_CWIDE, _, Some(c)) => c.stack_words,
             _ => self.bvh_depth.max(1) as u32,
         }
     }
@@ -226,13 +258,15 @@ impl SceneBuffers {
         trace_stack(&self.materials, max_depth)
     }
 
-    /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_WIDE` only
-    /// where the scene's wide tree fits it.
+    /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_CWIDE`
+    /// only where the compressed tree fits it, else the wide walk where the scene's wide
+    /// tree fits it, else pairs.
     pub fn traversal_for(&self, traversal: u32) -> u32 {
-        if traversal == TRAVERSAL_WIDE && self.gpu_wide_nodes().is_none() {
-            TRAVERSAL_PAIRS
-        } else {
-            traversal
+        match traversal {
+            TRAVERSAL_CWIDE if self.gpu_cwide().is_some() => TRAVERSAL_CWIDE,
+            TRAVERSAL_WIDE | TRAVERSAL_CWIDE if self.gpu_wide_nodes().is_some() => TRAVERSAL_WIDE,
+            TRAVERSAL_WIDE | TRAVERSAL_CWIDE => TRAVERSAL_PAIRS,
+            _ => traversal,
         }
     }
 
@@ -268,6 +302,24 @@ impl SceneBuffers {
                         return fail(format!("wide node {i} has a bad child"));
                     }
                 }
+            }
+        }
+        if globals.traversal == TRAVERSAL_CWIDE {
+            let Some(c) = self.gpu_cwide() else {
+                return fail("the compressed walk was chosen for a tree it cannot take".into());
+            };
+            if let Some(i) = c.nodes.iter().enumerate().position(|(i, n)| {
+                let inner = (n.exp_inner >> 24).count_ones() as usize;
+                let leaves = n.tags.iter().flat_map(|w| w.to_le_bytes()).map(u32::from);
+                let past = leaves
+                    .filter(|&m| m > CWIDE_INNER)
+                    .map(|m| n.prim_base + (m & CWIDE_OFFSET_MASK) + (m >> CWIDE_COUNT_SHIFT))
+                    .any(|end| end as usize > c.prims.len());
+                past || inner > 0
+                    && !(n.child_base as usize > i
+                        && n.child_base as usize + inner <= c.nodes.len())
+            }) {
+                return fail(format!("compressed node {i} has a bad child"));
             }
         }
         for (i, p) in self.prims.iter().enumerate() {

@@ -13,12 +13,14 @@ use std::sync::atomic::AtomicBool;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
+use crate::bvh::wide::WideNode;
+use crate::counters::{self, Counters};
 use crate::cpu::RayCounts;
 use crate::error::{Error, Result};
 use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
 use crate::gpu::{self, GpuContext, GpuScene};
-use crate::gpu_types::GpuGlobals;
+use crate::gpu_types::{AOV_COST, GpuGlobals};
 use crate::pack::SceneBuffers;
 
 /// A backend that traces frames of one packed scene.
@@ -55,6 +57,13 @@ pub trait Renderer {
         self.render_rows(globals, rows, samples, accum, progress, cancel)
     }
 
+    /// What the last `render` or `render_rows` counted, when its frame asked for counts
+    /// (`GpuGlobals::counters`): rays and BVH node fetches by kind of ray, on this
+    /// renderer's own walk.
+    fn counters(&self) -> Option<Counters> {
+        None
+    }
+
     /// `render` for the image rows `rows` only (one shard of a sharded image): the other
     /// rows of `accum` stay as they are. Each pixel gets the value the whole frame gives it.
     fn render_rows(
@@ -79,6 +88,8 @@ pub struct CpuRenderer {
     scene: Arc<SceneBuffers>,
     /// The last frame's rays (`ray_kinds`).
     counts: Option<RayCounts>,
+    /// The last frame's counters, when it asked for them (`counters`).
+    counted: Option<Counters>,
 }
 
 impl CpuRenderer {
@@ -86,6 +97,7 @@ impl CpuRenderer {
         CpuRenderer {
             scene,
             counts: None,
+            counted: None,
         }
     }
 }
@@ -118,8 +130,18 @@ impl Renderer for CpuRenderer {
         self.scene.check(globals)?;
         let counts =
             crate::cpu::render_rows(&self.scene, globals, rows, samples, accum, progress, cancel)?;
+        // The CPU walks its own eight-wide tree, but for the cost AOV (`Bindings::new`).
+        let node_bytes = match globals.aov {
+            AOV_COST => counters::gpu_node_bytes(globals.traversal),
+            _ => size_of::<WideNode>() as u64,
+        };
+        self.counted = (globals.counters != 0).then(|| counts.counters(node_bytes));
         self.counts = Some(counts);
         Ok(counts.total())
+    }
+
+    fn counters(&self) -> Option<Counters> {
+        self.counted
     }
 
     fn ray_kinds(&self) -> Option<RayCounts> {
@@ -219,6 +241,10 @@ impl Renderer for GpuSession {
         gpu::trace_rows(
             device, queue, uploaded, rows, samples, accum, &progress, cancel,
         )
+    }
+
+    fn counters(&self) -> Option<Counters> {
+        self.uploaded.as_ref().and_then(|(_, u)| u.counters())
     }
 }
 

@@ -56,10 +56,40 @@ fn area(n: &GpuNode) -> f32 {
     d.x * d.y + d.y * d.z + d.z * d.x
 }
 
+/// The binary nodes that stand as the children of binary node `i` in a wide node of up to
+/// `width` children: its two children, then repeatedly the two children of the largest
+/// inner one in its place while a lane is free. A tree that is one leaf gives itself.
+pub(crate) fn children(nodes: &[GpuNode], i: u32, width: usize) -> Vec<u32> {
+    let mut kids = Vec::with_capacity(width + 1);
+    children_into(nodes, i, width, &mut kids);
+    kids
+}
+
+/// `children` into `kids`, whose earlier contents are dropped (the collapse reuses one
+/// vector for every node).
+fn children_into(nodes: &[GpuNode], i: u32, width: usize, kids: &mut Vec<u32>) {
+    let n = &nodes[i as usize];
+    kids.clear();
+    if n.count() > 0 {
+        kids.push(i); // a tree that is one leaf
+    } else {
+        kids.extend([i + 1, n.offset]);
+    }
+    while kids.len() < width {
+        let open = kids
+            .iter()
+            .enumerate()
+            .filter(|&(_, &k)| nodes[k as usize].count() == 0)
+            .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
+        let Some((j, &k)) = open else { break };
+        kids.swap_remove(j);
+        kids.extend([k + 1, nodes[k as usize].offset]);
+    }
+}
+
 /// Collapses the flattened binary tree (children of inner node `i`: `i + 1` and
 /// `offset`) into nodes of up to `width` children, root first: each inner node takes its
-/// children, then repeatedly replaces its largest inner child by that child's two
-/// children while a lane is free. Each wide node starts as `empty` and gets its lanes from
+/// `children`. Each wide node starts as `empty` and gets its lanes from
 /// `set(node, lane, binary child, wide node standing for it when it is inner)`; `None`
 /// when `set` refuses one. The nodes are written in place as they are found, into an
 /// array of the exact size (counted by a first pass that writes nothing), so that the
@@ -90,23 +120,7 @@ fn collapse_into<N: Copy>(
     let mut todo = vec![(0usize, 0u32)];
     let mut kids: Vec<u32> = Vec::with_capacity(width + 1);
     while let Some((w, i)) = todo.pop() {
-        let n = &nodes[i as usize];
-        kids.clear();
-        if n.count() > 0 {
-            kids.push(i); // a tree that is one leaf
-        } else {
-            kids.extend([i + 1, n.offset]);
-        }
-        while kids.len() < width {
-            let open = kids
-                .iter()
-                .enumerate()
-                .filter(|&(_, &k)| nodes[k as usize].count() == 0)
-                .max_by(|a, b| area(&nodes[*a.1 as usize]).total_cmp(&area(&nodes[*b.1 as usize])));
-            let Some((j, &k)) = open else { break };
-            kids.swap_remove(j);
-            kids.extend([k + 1, nodes[k as usize].offset]);
-        }
+        children_into(nodes, i, width, &mut kids);
         for (lane, &k) in kids.iter().enumerate() {
             let c = &nodes[k as usize];
             let mut inner = 0;

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use gpurt::gpu_types::GpuGlobals;
 use gpurt::run::{self, Prepared};
 use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Probe, Renderer};
 use gpurt::view::wireframe::{self, Wireframe};
@@ -63,7 +64,11 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     )?;
     print_warnings(&warnings);
     let opts = args.options(&buffers.camera);
-    let globals = frame::globals(&buffers, &opts);
+    // `--stats` counts rays and node fetches by kind as the frame renders.
+    let globals = GpuGlobals {
+        counters: u32::from(args.stats),
+        ..frame::globals(&buffers, &opts)
+    };
     let buffers = Arc::new(buffers);
 
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
@@ -139,6 +144,9 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
                 k.reflected_packed,
                 k.refracted
             ));
+        }
+        if let Some(counted) = renderer.counters() {
+            report.extend(counted.report(name));
         }
         films.push(r.film);
     }

@@ -50,7 +50,8 @@ impl<T: Copy> Answer<T> {
 /// mirror ray. Any other ray is walked alone.
 struct Known<'a> {
     eye: Option<Answer<Hit>>,
-    shadows: &'a [Option<Answer<Vec3>>],
+    /// Light arriving along each shadow ray, and the node fetches of its walk.
+    shadows: &'a [Option<Answer<(Vec3, u32)>>],
     mirror: Option<Answer<Hit>>,
     /// Rays answered from packets, by kind.
     counts: RayCounts,
@@ -71,17 +72,18 @@ impl Tracer for Known<'_> {
         Alone.closest_hit(b, ray, tmin, tmax)
     }
 
-    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
+    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
         // Asked in the lights' order: the next shadow ray known, if any, is this one.
         if let Some(i) = self.shadows.iter().position(Option::is_some) {
             let a = self.shadows[i].expect("found");
-            if let Some((light, packed)) = a.of(ray, 0.0, tmax) {
+            if let Some(((light, fetched), packed)) = a.of(ray, 0.0, tmax) {
                 self.shadows = &self.shadows[i + 1..];
                 self.counts.shadow_packed += u64::from(packed);
+                *nodes += fetched;
                 return light;
             }
         }
-        Alone.transmission(b, ray, tmax)
+        Alone.transmission(b, ray, tmax, nodes)
     }
 }
 
@@ -127,8 +129,10 @@ pub fn render_tile(
         u: 0.0,
         v: 0.0,
         cost: 0,
+        nodes: 0,
     }; MAX_LANES];
     let mut light = [Vec3::ZERO; MAX_LANES];
+    let mut shadow_nodes = [0; MAX_LANES];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
@@ -171,7 +175,7 @@ pub fn render_tile(
                             mirror: None,
                             counts: RayCounts::default(),
                         };
-                        sums[i] += aov(b, &mut known, &ray);
+                        sums[i] += aov(b, &mut known, &ray, counts);
                         counts.add(&known.counts);
                     }
                     continue;
@@ -184,23 +188,24 @@ pub fn render_tile(
                 for &li in &shadowed {
                     packet.clear();
                     for (k, s) in surfaces.iter().enumerate() {
-                        if let Some((ray, tmax)) = s
-                            .as_ref()
-                            .and_then(|s| light_ray(b, s, &b.lights[li], 0, &mut 0))
-                        {
-                            packet.set(k, &ray, 0.0, tmax);
+                        let Some(s) = s else { continue };
+                        let m = &b.materials[s.material as usize];
+                        let dir = lanes[k].1.dir;
+                        let r = reflect_dir(dir, s.ns);
+                        if let Some(lr) = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0) {
+                            packet.set(k, &lr.ray, 0.0, lr.dist);
                         }
                     }
                     if packet.lanes() == 0 {
                         continue;
                     }
-                    let packed = kernels.transmissions(b, &packet, &mut light);
+                    let packed = kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes);
                     for k in (0..n).filter(|k| packet.lanes() & 1 << k != 0) {
                         known_shadows[k * b.lights.len() + li] = Some(Answer {
                             ray: packet.ray(k),
                             tmin: 0.0,
                             tmax: packet.tmax(k),
-                            value: light[k],
+                            value: (light[k], shadow_nodes[k]),
                             packed: packed & 1 << k != 0,
                         });
                     }

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::shade::{surface, trace};
+use super::shade::{count_nodes, surface, trace};
 use super::tracer::{Alone, Tracer};
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
@@ -72,16 +72,17 @@ pub fn sample_sum(
         sum += if g.aov == AOV_COLOR {
             trace(b, &mut Alone, ray, &mut rng, counts)
         } else {
-            aov(b, &mut Alone, &ray)
+            aov(b, &mut Alone, &ray, counts)
         };
     }
     sum
 }
 
 /// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
-pub fn aov(b: &Bindings, tracer: &mut impl Tracer, ray: &Ray) -> Vec3 {
+pub fn aov(b: &Bindings, tracer: &mut impl Tracer, ray: &Ray, counts: &mut RayCounts) -> Vec3 {
     let g = b.globals;
     let hit = tracer.closest_hit(b, ray, g.hither, NO_HIT);
+    count_nodes(counts, 1, hit.nodes);
     match g.aov {
         AOV_COST => Vec3::splat(hit.cost as f32),
         _ if hit.prim == NO_PRIM => Vec3::ZERO,

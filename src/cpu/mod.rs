@@ -3,10 +3,15 @@
 //! so it checks the packing and BVH layout as much as the shader.
 //!
 //! One module per WGSL file, same function names, same order of operations:
-//! `types`, `intersect`, `traverse`, `shade`, `main`; and `wide`, the CPU's own walk of
-//! the same tree eight children at a time, which finds the same hits.
+//! `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the compressed
+//! tree's walk), `traverse`, `shade`, `main`, `wavefront` (the wavefront kernels' steps
+//! over queues of pixels); and `wide`, the CPU's own walk of the same tree eight children
+//! at a time, which finds the same hits, with `packet` (coherent rays in SIMD lanes),
+//! `coherent` (tiles traced with packets) and `tracer` (where the shading gets its
+//! rays' answers).
 
 mod coherent;
+pub mod cwide;
 pub mod intersect;
 pub mod main;
 pub mod packet;
@@ -14,6 +19,8 @@ pub mod shade;
 pub mod tracer;
 pub mod traverse;
 pub mod types;
+pub mod walk;
+pub mod wavefront;
 pub mod wide;
 
 use std::ops::Range;

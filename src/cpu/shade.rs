@@ -10,12 +10,12 @@ use crate::gpu_types::*;
 
 /// A ray waiting to be traced, with the product of the Ks / T factors on its path.
 #[derive(Clone, Copy, Debug, Default)]
-struct Pending {
-    origin: Vec3,
-    dir: Vec3,
-    weight: f32,
-    depth: u32,
-    tmin: f32,
+pub(super) struct Pending {
+    pub(super) origin: Vec3,
+    pub(super) dir: Vec3,
+    pub(super) weight: f32,
+    pub(super) depth: u32,
+    pub(super) tmin: f32,
 }
 
 /// Surface data at a hit.
@@ -81,7 +81,13 @@ pub fn offset_origin(s: &Surface, dir: Vec3, eps: f32) -> Vec3 {
 
 /// A ray leaving surface `s` along `dir`, one level deeper than `parent`, its weight
 /// scaled by `factor` (Ks or T).
-fn secondary(s: &Surface, dir: Vec3, parent: &Pending, factor: f32, eps: f32) -> Pending {
+pub(super) fn secondary(
+    s: &Surface,
+    dir: Vec3,
+    parent: &Pending,
+    factor: f32,
+    eps: f32,
+) -> Pending {
     Pending {
         origin: offset_origin(s, dir, eps),
         dir,
@@ -104,39 +110,6 @@ pub fn light_samples(light: &GpuLight) -> u32 {
     }
 }
 
-/// The shadow ray of sample `k` of `light` at surface `s` and the distance to the light
-/// along it, or `None` when the light is below the surface (no shadow ray is traced).
-/// Only an area light draws from `rng`. (`light_sample`'s first half, which the renderer's
-/// occlusion packets also take their rays from: coherent.rs.)
-pub fn light_ray(
-    b: &Bindings,
-    s: &Surface,
-    light: &GpuLight,
-    k: u32,
-    rng: &mut u32,
-) -> Option<(Ray, f32)> {
-    let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
-        (light.pos, NO_HIT)
-    } else {
-        let mut lp = light.pos;
-        if light.kind == LIGHT_AREA {
-            let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
-            let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
-            lp += su * light.u + sv * light.v;
-        }
-        let to = lp - s.point;
-        (to.normalize(), to.length())
-    };
-    if s.ns.dot(l) <= 0.0 {
-        return None;
-    }
-    let shadow_ray = Ray {
-        origin: offset_origin(s, l, b.globals.epsilon),
-        dir: l,
-    };
-    Some((shadow_ray, dist))
-}
-
 /// The specular highlight of material `m` towards a light in direction `l`, for a ray
 /// that came along `dir` and mirrors to `r` about the shading normal `n`: Phong,
 /// `Ks (R.L)^Shine`, or under `SHADING_BLINN_PHONG` Blinn-Phong, `Ks (N.H)^Shine` with H
@@ -151,10 +124,63 @@ pub fn highlight(shading: u32, m: &GpuMaterial, n: Vec3, dir: Vec3, r: Vec3, l: 
     if c > 0.0 { m.ks * c.powf(m.shine) } else { 0.0 }
 }
 
+/// A light sample's shadow ray and what the sample gives where nothing blocks it,
+/// `intensity * term` (kept apart: `light_sample` multiplies the transmission in first).
+#[derive(Clone, Copy, Debug)]
+pub struct LightRay {
+    pub ray: Ray,
+    pub dist: f32,
+    pub intensity: Vec3,
+    pub term: Vec3,
+}
+
+/// The shadow ray of sample `k` of `light` at surface `s` (material `m`, incoming
+/// direction `dir`, mirror direction `r`) and the Lambert and highlight terms it carries,
+/// or `None` when the light is below the surface (no shadow ray is traced).
+#[allow(clippy::too_many_arguments)]
+pub fn light_ray(
+    b: &Bindings,
+    s: &Surface,
+    m: &GpuMaterial,
+    dir: Vec3,
+    r: Vec3,
+    light: &GpuLight,
+    k: u32,
+    rng: &mut u32,
+) -> Option<LightRay> {
+    let intensity = light.color / light_samples(light) as f32;
+    let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
+        (light.pos, NO_HIT)
+    } else {
+        let mut lp = light.pos;
+        if light.kind == LIGHT_AREA {
+            let su = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32;
+            let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
+            lp += su * light.u + sv * light.v;
+        }
+        let to = lp - s.point;
+        (to.normalize(), to.length())
+    };
+    let ndotl = s.ns.dot(l);
+    if ndotl <= 0.0 {
+        return None;
+    }
+    let spec = highlight(b.globals.shading, m, s.ns, dir, r, l);
+    Some(LightRay {
+        ray: Ray {
+            origin: offset_origin(s, l, b.globals.epsilon),
+            dir: l,
+        },
+        dist,
+        intensity,
+        term: m.kd * m.color * ndotl + Vec3::splat(spec),
+    })
+}
+
 /// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
-/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission (as
-/// `tracer` answers it), or `None` when the light is below the surface (no shadow ray is
-/// traced).
+/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission, or
+/// `None` when the light is below the surface (no shadow ray is traced). The shadow ray is
+/// answered by `tracer`; adds its node fetches to `counts`.
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample(
     b: &Bindings,
@@ -166,14 +192,13 @@ pub fn light_sample(
     light: &GpuLight,
     k: u32,
     rng: &mut u32,
+    counts: &mut RayCounts,
 ) -> Option<Vec3> {
-    let intensity = light.color / light_samples(light) as f32;
-    let (shadow_ray, dist) = light_ray(b, s, light, k, rng)?;
-    let l = shadow_ray.dir;
-    let ndotl = s.ns.dot(l);
-    let shadow = tracer.transmission(b, &shadow_ray, dist);
-    let spec = highlight(b.globals.shading, m, s.ns, dir, r, l);
-    Some(shadow * intensity * (m.kd * m.color * ndotl + Vec3::splat(spec)))
+    let lr = light_ray(b, s, m, dir, r, light, k, rng)?;
+    let mut nodes = 0;
+    let shadow = tracer.transmission(b, &lr.ray, lr.dist, &mut nodes);
+    counts.shadow_nodes += u64::from(nodes);
+    Some(shadow * lr.intensity * lr.term)
 }
 
 /// Direct light at a surface point: ambient plus, per light sample, Lambert and the
@@ -192,7 +217,7 @@ fn direct(
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, tracer, s, m, dir, r, light, k, rng) {
+            if let Some(c) = light_sample(b, tracer, s, m, dir, r, light, k, rng, counts) {
                 counts.shadow += 1;
                 colour += c;
             }
@@ -211,6 +236,16 @@ pub fn refracted_dir(s: &Surface, m: &GpuMaterial, dir: Vec3) -> Vec3 {
         reflect_dir(dir, s.ns)
     } else {
         (eta * dir + (eta * cos_i - k.sqrt()) * s.ns).normalize()
+    }
+}
+
+/// Adds the nodes a ray of depth `depth` fetched to its kind's count: the eye ray's, or a
+/// reflected or refracted ray's.
+pub fn count_nodes(counts: &mut RayCounts, depth: u32, nodes: u32) {
+    if depth == 1 {
+        counts.eye_nodes += u64::from(nodes);
+    } else {
+        counts.secondary_nodes += u64::from(nodes);
     }
 }
 
@@ -244,6 +279,7 @@ pub fn trace(
             dir: ray_in.dir,
         };
         let hit = tracer.closest_hit(b, &ray, ray_in.tmin, NO_HIT);
+        count_nodes(counts, ray_in.depth, hit.nodes);
         if hit.prim == NO_PRIM {
             colour += ray_in.weight * g.background;
             continue;

@@ -10,7 +10,8 @@ use super::types::{Bindings, Hit, Ray};
 /// `closest_hit` and `transmission`, as the shading code asks for them.
 pub trait Tracer {
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit;
-    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32) -> Vec3;
+    /// Adds the node fetches of the shadow ray's walk to `nodes`.
+    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3;
 }
 
 /// Every ray walked alone, when it is asked for.
@@ -22,7 +23,7 @@ impl Tracer for Alone {
         traverse::closest_hit(b, ray, tmin, tmax)
     }
     #[inline]
-    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
-        traverse::transmission(b, ray, tmax)
+    fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
+        traverse::transmission(b, ray, tmax, nodes)
     }
 }

@@ -3,11 +3,13 @@
 
 use glam::{Vec3, Vec4};
 
+use super::cwide::next_leaf_cwide;
 use super::types::{Bindings, Hit, Ray};
+use super::walk::{Walk, start_walk};
 use super::{intersect, wide};
 use crate::gpu_types::{
     GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
-    TRAVERSAL_STACK, WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
+    WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
@@ -21,42 +23,7 @@ fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
     }
 }
 
-/// Where a traversal stands: the node to visit next and the nodes waiting on its stack.
-struct Walk {
-    node: u32,
-    sp: usize,
-    stack: [u32; TRAVERSAL_STACK],
-    /// Entries of the stack ever written, kept or not (`stack_high_water`): what the
-    /// shader's slice must hold.
-    high: usize,
-}
-
 impl Walk {
-    fn new() -> Self {
-        Walk {
-            node: 0,
-            sp: 0,
-            stack: [0; TRAVERSAL_STACK],
-            high: 0,
-        }
-    }
-
-    /// Writes stack entry `k`.
-    fn stack_store(&mut self, k: usize, entry: u32) {
-        self.stack[k] = entry;
-        self.high = self.high.max(k + 1);
-    }
-
-    /// Takes the next waiting node; false when the traversal is done.
-    fn pop(&mut self) -> bool {
-        if self.sp == 0 {
-            return false;
-        }
-        self.sp -= 1;
-        self.node = self.stack[self.sp];
-        true
-    }
-
     /// Walks on until the ray reaches a leaf whose box overlaps `[tmin, tmax]`, entering
     /// the child nearer along the split axis first and pushing the other. Returns the
     /// leaf's (first primitive, count), count 0 when the tree is done; adds the nodes
@@ -71,6 +38,9 @@ impl Walk {
         tmax: f32,
         cost: &mut u32,
     ) -> (u32, u32) {
+        if let Some(cwide) = b.gpu_cwide {
+            return next_leaf_cwide(self, cwide, ray, inv_dir, tmin, tmax, cost);
+        }
         if let Some(wide) = b.gpu_wide {
             return self.next_leaf_wide(wide, ray, inv_dir, tmin, tmax, cost);
         }
@@ -82,6 +52,7 @@ impl Walk {
             let node = self.node;
             let n = &b.nodes[node as usize];
             *cost += 1;
+            self.fetched += 1;
             if intersect::overlaps(n.min, n.max, ray.origin, inv_dir, tmin, tmax) {
                 let count = n.count();
                 if count > 0 {
@@ -116,6 +87,7 @@ impl Walk {
         let mut n = &b.nodes[self.node as usize];
         let mut live = overlaps(n);
         *cost += 1;
+        self.fetched += 1;
         loop {
             if !live {
                 if !self.pop() {
@@ -124,6 +96,7 @@ impl Walk {
                 n = &b.nodes[self.node as usize];
                 live = overlaps(n);
                 *cost += 1;
+                self.fetched += 1;
                 continue;
             }
             let count = n.count();
@@ -133,6 +106,7 @@ impl Walk {
             let (first, second) = (self.node + 1, n.offset);
             let (a, c) = (&b.nodes[first as usize], &b.nodes[second as usize]);
             *cost += 2;
+            self.fetched += 2;
             let ta = intersect::slab_entry(a.min, a.max, ray.origin, inv_dir, tmin, tmax);
             let tc = intersect::slab_entry(c.min, c.max, ray.origin, inv_dir, tmin, tmax);
             let (hit_a, hit_c) = (ta != NO_HIT, tc != NO_HIT);
@@ -180,6 +154,7 @@ impl Walk {
             }
             let n = &wide[e as usize];
             *cost += 4;
+            self.fetched += 1;
             // `intersect::slab` for the four boxes, lane by lane the same arithmetic.
             let o = ray.origin;
             let (x0, x1) = ((n.lo[0] - o.x) * inv_dir.x, (n.hi[0] - o.x) * inv_dir.x);
@@ -264,6 +239,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         u: 0.0,
         v: 0.0,
         cost: 0,
+        nodes: 0,
     };
     for (i, pl) in b.planes.iter().enumerate() {
         let t = intersect::intersect_plane(pl, ray);
@@ -278,23 +254,26 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     let inv_dir = intersect::safe_inverse(ray.dir);
     if let Some(wide) = b.wide {
         let slabs = wide::Slabs::new(ray.origin, inv_dir);
-        wide::walk::<true>(wide, &slabs, tmin, hit.t, |first, count| {
+        let mut nodes = 0;
+        wide::walk::<true>(wide, &slabs, tmin, hit.t, &mut nodes, |first, count| {
             closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
             Some(hit.t)
         });
+        hit.nodes = nodes;
         return hit;
     }
-    let mut walk = Walk::new();
+    let mut walk = start_walk(ray);
     loop {
         let (first, count) = walk.next_leaf(b, ray, inv_dir, tmin, hit.t, &mut hit.cost);
         if count == 0 {
             break;
         }
         closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
-        if !walk.pop() {
+        if !walk.walk_on(b) {
             break;
         }
     }
+    hit.nodes = walk.fetched;
     hit
 }
 
@@ -307,9 +286,9 @@ pub fn stack_high_water(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> usize 
         return 0;
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
-    let mut walk = Walk::new();
+    let mut walk = start_walk(ray);
     let mut cost = 0;
-    while walk.next_leaf(b, ray, inv_dir, tmin, tmax, &mut cost).1 > 0 && walk.pop() {}
+    while walk.next_leaf(b, ray, inv_dir, tmin, tmax, &mut cost).1 > 0 && walk.walk_on(b) {}
     walk.high
 }
 
@@ -375,7 +354,8 @@ pub fn transmit_planes(b: &Bindings, ray: &Ray, tmax: f32) -> Option<Vec3> {
 
 /// Light reaching the end of the segment `origin + t*dir, t in (0, tmax)`: an opaque
 /// occluder blocks it, each crossing of a transmitting surface multiplies it by `T * C`.
-pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
+/// Adds the nodes the walk fetched to `nodes`.
+pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
     let Some(mut light) = transmit_planes(b, ray, tmax) else {
         return Vec3::ZERO;
     };
@@ -386,13 +366,13 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
     if let Some(wide) = b.wide {
         let slabs = wide::Slabs::new(ray.origin, inv_dir);
         let mut blocked = false;
-        wide::walk::<false>(wide, &slabs, 0.0, tmax, |first, count| {
+        wide::walk::<false>(wide, &slabs, 0.0, tmax, nodes, |first, count| {
             blocked = !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light);
             (!blocked).then_some(tmax)
         });
         return if blocked { Vec3::ZERO } else { light };
     }
-    let mut walk = Walk::new();
+    let mut walk = start_walk(ray);
     let mut visited = 0;
     loop {
         let (first, count) = walk.next_leaf(b, ray, inv_dir, 0.0, tmax, &mut visited);
@@ -400,11 +380,13 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32) -> Vec3 {
             break;
         }
         if !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light) {
+            *nodes += walk.fetched;
             return Vec3::ZERO;
         }
-        if !walk.pop() {
+        if !walk.walk_on(b) {
             break;
         }
     }
+    *nodes += walk.fetched;
     light
 }

@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use crate::bvh::wide::WideNode;
+use crate::counters::Counters;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
 
@@ -23,21 +24,19 @@ pub struct Bindings<'a> {
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
     /// is `TRAVERSAL_WIDE` and `wide` is `None`.
     pub gpu_wide: Option<&'a [GpuWideNode]>,
+    /// The GPU's compressed eight-wide tree, walked as the shader walks it, when
+    /// `globals.traversal` is `TRAVERSAL_CWIDE` and `wide` is `None`; `prims` are then in
+    /// its order (`pack::GpuCwide`).
+    pub gpu_cwide: Option<&'a [GpuCwideNode]>,
 }
 
 impl<'a> Bindings<'a> {
     /// What the CPU renderer reads: the buffers, walked through the eight-wide tree, but
     /// for the `cost` AOV, which counts the nodes of the GPU's walk.
     pub fn new(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
-        Bindings {
-            wide: (globals.aov != AOV_COST).then(|| buffers.wide_nodes()),
-            ..Self::gpu_walk(buffers, globals)
+        if globals.aov == AOV_COST {
+            return Self::gpu_walk(buffers, globals);
         }
-    }
-
-    /// The bindings as the shader has them, walking the binary tree its way: for tests
-    /// of the GPU's traversal on the CPU.
-    pub fn gpu_walk(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
         Bindings {
             globals,
             nodes: &buffers.nodes,
@@ -46,10 +45,31 @@ impl<'a> Bindings<'a> {
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,
+            wide: Some(buffers.wide_nodes()),
+            gpu_wide: None,
+            gpu_cwide: None,
+        }
+    }
+
+    /// The bindings as the shader has them, walking the tree its way: for tests of the
+    /// GPU's traversal on the CPU.
+    pub fn gpu_walk(buffers: &'a SceneBuffers, globals: &'a GpuGlobals) -> Self {
+        let cwide = (globals.traversal == TRAVERSAL_CWIDE)
+            .then(|| buffers.gpu_cwide())
+            .flatten();
+        Bindings {
+            globals,
+            nodes: &buffers.nodes,
+            prims: cwide.map_or(&buffers.prims, |c| &c.prims),
+            tri_normals: &buffers.tri_normals,
+            planes: &buffers.planes,
+            materials: &buffers.materials,
+            lights: &buffers.lights,
             wide: None,
             gpu_wide: (globals.traversal == TRAVERSAL_WIDE)
                 .then(|| buffers.gpu_wide_nodes())
                 .flatten(),
+            gpu_cwide: cwide.map(|c| &c.nodes[..]),
         }
     }
 }
@@ -60,7 +80,9 @@ pub struct Ray {
     pub dir: Vec3,
 }
 
-/// Closest hit: distance, what was hit, triangle barycentrics, and BVH nodes visited.
+/// Closest hit: distance, what was hit, triangle barycentrics, the boxes the walk tested
+/// (the `cost` AOV) and the nodes it fetched (the counters; the shader keeps those in a
+/// private variable).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     pub t: f32,
@@ -68,6 +90,7 @@ pub struct Hit {
     pub u: f32,
     pub v: f32,
     pub cost: u32,
+    pub nodes: u32,
 }
 
 /// PCG hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", 2020): wrapping u32
@@ -89,8 +112,10 @@ pub fn rand(state: &mut u32) -> f32 {
     (*state >> 8) as f32 * (1.0 / 16777216.0)
 }
 
-/// Per-pixel count of the rays traced, by kind (the shader sums them into one), and of
-/// those the CPU traced in packets (`cpu::packet`), which are counted in their kind too.
+/// Count of the rays traced, by kind (the shader sums them into one), of those the CPU
+/// traced in packets (`cpu::packet`), which are counted in their kind too, and of the BVH
+/// nodes their walks fetched (the shader's `PixelCounts`; a packet's fetch of a node is
+/// shared by the rays it answered, `packet::Kernels::closest_hits`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct RayCounts {
     pub eye: u64,
@@ -100,6 +125,10 @@ pub struct RayCounts {
     pub eye_packed: u64,
     pub shadow_packed: u64,
     pub reflected_packed: u64,
+    pub eye_nodes: u64,
+    pub shadow_nodes: u64,
+    /// Of reflected and refracted rays.
+    pub secondary_nodes: u64,
 }
 
 impl RayCounts {
@@ -114,5 +143,16 @@ impl RayCounts {
         self.eye_packed += o.eye_packed;
         self.shadow_packed += o.shadow_packed;
         self.reflected_packed += o.reflected_packed;
+        self.eye_nodes += o.eye_nodes;
+        self.shadow_nodes += o.shadow_nodes;
+        self.secondary_nodes += o.secondary_nodes;
+    }
+    /// The counts by the kinds the GPU counts, for a walk of `node_bytes` nodes.
+    pub fn counters(&self, node_bytes: u64) -> Counters {
+        Counters {
+            rays: [self.eye, self.shadow, self.reflected + self.refracted],
+            nodes: [self.eye_nodes, self.shadow_nodes, self.secondary_nodes],
+            node_bytes,
+        }
     }
 }

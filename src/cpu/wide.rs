@@ -79,16 +79,17 @@ impl Slabs {
 
 /// Depth-first walk of the wide tree, nearest child first: calls `leaf(first, count)`
 /// for each leaf the ray reaches, which returns the interval end to cull with from then
-/// on (the nearest hit so far), or `None` to stop.
+/// on (the nearest hit so far), or `None` to stop. Adds the nodes it fetched to `nodes`.
 #[inline]
 pub fn walk<const NEAREST_FIRST: bool>(
     wide: &[WideNode],
     slabs: &Slabs,
     tmin: f32,
     tmax: f32,
+    nodes: &mut u32,
     leaf: impl FnMut(u32, u32) -> Option<f32>,
 ) {
-    walk_from::<NEAREST_FIRST>(wide, slabs, 0, tmin, tmax, leaf);
+    walk_from::<NEAREST_FIRST>(wide, slabs, 0, tmin, tmax, nodes, leaf);
 }
 
 /// `walk` of the subtree under the wide node `node` (its children, not its own box): where
@@ -100,6 +101,7 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
     node: u32,
     tmin: f32,
     mut tmax: f32,
+    nodes: &mut u32,
     mut leaf: impl FnMut(u32, u32) -> Option<f32>,
 ) {
     // Not zeroed: a ray's walk touches a few of these 193 entries, and clearing all
@@ -125,6 +127,7 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             }
         } else {
             let n = &wide[next.child as usize];
+            *nodes += 1;
             let (near, mut mask) = slabs.test(n, tmin, tmax);
             let entry = |lane: usize| Entry {
                 child: n.child[lane],
@@ -200,7 +203,7 @@ mod tests {
         let origin = Vec3::new(f32::INFINITY, f32::NEG_INFINITY, f32::INFINITY);
         let slabs = Slabs::new(origin, Vec3::new(1.25, 1.75, -11.25));
         let mut leaves = Vec::new();
-        walk::<true>(&wide, &slabs, 0.0, f32::MAX, |first, count| {
+        walk::<true>(&wide, &slabs, 0.0, f32::MAX, &mut 0, |first, count| {
             leaves.push((first, count));
             Some(f32::MAX)
         });

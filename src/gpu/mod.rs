@@ -10,12 +10,15 @@
 //!   queue and hand them to the door;
 //! - `shaders` assembles and validates the WGSL; `specialization` picks the pipeline a
 //!   scene needs;
-//! - `cut` cuts a frame into bounded dispatches, bands and submissions;
+//! - `cut` cuts a frame into bounded dispatches, bands and submissions; `policy` says
+//!   which walk and which kernels a frame takes on an adapter, and how it is cut;
 //! - `upload` puts a scene's arrays on the device;
 //! - `pipeline` owns the bind group layouts, the shader modules, the compiling of entry
 //!   points and the on-disk pipeline cache;
+//! - `wavefront` owns the wavefront kernels' pipelines and a scene's wave of pixels;
 //! - `scene` holds a scene's GPU state (`GpuScene`) and what a frame binds besides it;
 //! - `resume` finishes the pixels whose work did not fit one invocation;
+//! - `waves` runs a band's tiles through the wavefront kernels, wave by wave;
 //! - `trace` is the dispatch loop: band by band, then the readback;
 //! - `renderer` (`GpuRenderer`) uploads scenes, moves them to other frames and compiles
 //!   and warms up the pipelines they need;
@@ -27,6 +30,7 @@ pub(crate) mod device;
 #[cfg(feature = "native")]
 mod oneshot;
 mod pipeline;
+mod policy;
 mod renderer;
 mod resume;
 mod scene;
@@ -34,6 +38,8 @@ pub mod shaders;
 pub mod specialization;
 mod trace;
 mod upload;
+mod wavefront;
+mod waves;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on, request};
 pub use cut::DISPATCH_BUDGET;

@@ -140,7 +140,7 @@ impl ResumePipelines {
 /// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform, one
 /// record per dispatch), nodes, primitives and triangle normals (texture arrays, split
 /// into layers as large as the device allows), the other scene arrays (read-only
-/// storage), the tile's output (read-write storage).
+/// storage), the tile's output and its counts (read-write storage).
 pub(super) fn bind_group_layout(gpu: &Device) -> wgpu::BindGroupLayout {
     use Slot::*;
     let tile = UniformRecord {
@@ -150,6 +150,7 @@ pub(super) fn bind_group_layout(gpu: &Device) -> wgpu::BindGroupLayout {
         "gpurt",
         &[
             ReadOnly, tile, Texels, Texels, Texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
+            ReadWrite,
         ],
     )
 }
@@ -169,7 +170,7 @@ pub(super) fn pipeline_layouts(
     resume_layout: &wgpu::BindGroupLayout,
 ) -> (wgpu::PipelineLayout, wgpu::PipelineLayout) {
     (
-        gpu.pipeline_layout("gpurt", &[layout]),
-        gpu.pipeline_layout("gpurt resume", &[layout, resume_layout]),
+        gpu.pipeline_layout("gpurt", &[Some(layout)]),
+        gpu.pipeline_layout("gpurt resume", &[Some(layout), Some(resume_layout)]),
     )
 }

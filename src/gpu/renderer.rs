@@ -16,12 +16,15 @@ use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
 };
+use super::policy::{cut_for, kernels_from_env, traversal_from_env, wavefront_for};
 use super::scene::{GpuScene, bind};
 use super::specialization::Specialization;
 use super::trace::encode_band;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
-use crate::error::{Error, Result};
-use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use super::wavefront::{Wave, WavePipelines};
+use crate::counters::gpu_node_bytes;
+use crate::error::Result;
+use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
 use crate::pack::SceneBuffers;
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
@@ -39,6 +42,10 @@ pub struct GpuRenderer {
     software: bool,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
+    /// The wavefront kernels' pipelines, shared with the uploaded scenes, and whether
+    /// colour frames take them (`None`: as `policy::wavefront_for` chooses).
+    wave: Arc<WavePipelines>,
+    wavefront: Option<bool>,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
     /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
@@ -47,26 +54,6 @@ pub struct GpuRenderer {
     /// The address space each texture of a scene is allocated with, above the process's
     /// size (`GPURT_FAULT=out-of-memory`, `fault::AddressSpaceCap`); `None`: no cap.
     texture_margin: Option<u64>,
-}
-
-/// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
-/// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
-/// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
-/// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
-/// is 2 to 19% faster than single (docs/gpu.md has the figures). `GPURT_TRAVERSAL`
-/// (`single`, `pairs` or `wide`: `TRAVERSAL_NAMES`) overrides it, for measuring them on
-/// one adapter.
-fn traversal_for() -> Result<u32> {
-    match std::env::var("GPURT_TRAVERSAL").as_deref() {
-        Err(_) | Ok("") => Ok(TRAVERSAL_WIDE),
-        Ok(v) => match TRAVERSAL_NAMES.iter().position(|&n| n == v) {
-            Some(t) => Ok(t as u32),
-            None => Err(Error::Render(format!(
-                "GPURT_TRAVERSAL={v}: expected one of {}",
-                TRAVERSAL_NAMES.join(", ")
-            ))),
-        },
-    }
 }
 
 impl GpuRenderer {
@@ -90,6 +77,9 @@ impl GpuRenderer {
                 )
             })?;
         let modules = Arc::new(Modules::default());
+        let wave = gpu.scoped("compiling the shader", || {
+            WavePipelines::new(gpu, &layout, modules.clone())
+        })?;
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
@@ -104,7 +94,9 @@ impl GpuRenderer {
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
             software,
-            traversal: traversal_for()?,
+            traversal: traversal_from_env()?,
+            wave: Arc::new(wave),
+            wavefront: kernels_from_env()?,
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
             texture_margin: None,
@@ -163,11 +155,22 @@ impl GpuRenderer {
         GpuRenderer { traversal, ..self }
     }
 
-    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`):
-    /// what its frames of `globals` trace.
+    /// This renderer tracing colour frames through the wavefront kernels (`true`) or
+    /// the one kernel (`false`), whatever its adapter and the scene.
+    pub fn with_wavefront(self, wavefront: bool) -> Self {
+        GpuRenderer {
+            wavefront: Some(wavefront),
+            ..self
+        }
+    }
+
+    /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`)
+    /// and its kernels (`policy::wavefront_for`): what its frames of `globals` trace.
     pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
+        let wave = wavefront_for(self.wavefront, self.software, scene, globals);
         GpuGlobals {
             traversal: scene.traversal_for(self.traversal),
+            wavefront: u32::from(wave),
             ..*globals
         }
     }
@@ -267,31 +270,9 @@ impl GpuRenderer {
         gpu.wait()
     }
 
-    /// How a frame of `globals`' size and samples is cut on this device. Software
-    /// adapters get small bands so that Ctrl-C and the progress bar respond within a
-    /// second, and one sample per pass: lavapipe ends every loop once an invocation has run
-    /// 65535 loop iterations in all, and one sample of an ordinary scene needs far fewer.
-    /// GPUs take up to 16 samples per pass, and a band is the most one submission should
-    /// hold.
+    /// How a frame of `globals` is cut on this device (`policy::cut_for`).
     fn cut(&self, limits: &wgpu::Limits, globals: &GpuGlobals) -> Cut {
-        let (pass_samples, band_samples) = if self.software {
-            (1, 1 << 18)
-        } else {
-            (16, 1 << 26)
-        };
-        Cut::new(
-            globals.width,
-            globals.height,
-            globals.spp,
-            pass_samples,
-            band_samples,
-            limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size),
-            // Software adapters split a dispatch among their threads in fixed runs; a
-            // GPU's own scheduler balances, and neighbouring blocks share its caches.
-            self.software,
-        )
+        cut_for(limits, globals, self.software)
     }
 
     /// Uploads a scene for the frame described by `globals` and gets its pipeline ready.
@@ -327,6 +308,7 @@ impl GpuRenderer {
             cut.band_bytes(),
             cut.dispatches_per_submission(),
         )?;
+        let wave = self.wave_for(gpu, spec, &cut, globals)?;
         // The texture uploads are queued: finish them, so a failure surfaces here.
         gpu.finish()?;
         Ok(GpuScene {
@@ -339,6 +321,9 @@ impl GpuRenderer {
             spec,
             dispatch_budget: self.dispatch_budget,
             finer: Mutex::new(None),
+            node_bytes: gpu_node_bytes(globals.traversal),
+            wave,
+            counted: Mutex::new(None),
         })
     }
 
@@ -360,12 +345,16 @@ impl GpuRenderer {
         let globals = &self.frame(scene, globals);
         scene.check(globals)?;
         let spec = self.spec(scene, globals);
-        if spec != uploaded.spec {
+        let spec_changed = spec != uploaded.spec;
+        if spec_changed {
             uploaded.pipeline = self.pipeline(gpu, scene, &uploaded.data, globals)?;
             uploaded.spec = spec;
         }
+        uploaded.node_bytes = gpu_node_bytes(globals.traversal);
+        *uploaded.counted.lock().expect("counts lock") = None;
         let cut = self.cut(&limits, globals);
-        if cut == uploaded.cut {
+        let counts_alike = (globals.counters != 0) == uploaded.bound.counting;
+        if cut == uploaded.cut && counts_alike {
             gpu.write(&uploaded.bound.globals, 0, bytemuck::bytes_of(globals));
         } else {
             check_sizes(
@@ -386,7 +375,30 @@ impl GpuRenderer {
             uploaded.cut = cut;
             *uploaded.finer.lock().expect("cut lock") = None;
         }
+        let wave_fits = |w: &Wave| w.capacity >= cut.tile_side * cut.tile_side;
+        if (globals.wavefront != 0) != uploaded.wave.is_some()
+            || uploaded
+                .wave
+                .as_ref()
+                .is_some_and(|w| !wave_fits(w) || spec_changed)
+        {
+            uploaded.wave = self.wave_for(gpu, spec, &cut, globals)?;
+        }
         Ok(())
+    }
+
+    /// The wave a frame of `globals` (cut as `cut`) runs the wavefront kernels in, when
+    /// it takes them: a pixel's state for each pixel of a tile.
+    fn wave_for(
+        &self,
+        gpu: &Gpu<'_>,
+        spec: Specialization,
+        cut: &Cut,
+        globals: &GpuGlobals,
+    ) -> Result<Option<Wave>> {
+        (globals.wavefront != 0)
+            .then(|| Wave::new(gpu, &self.wave, spec, cut.tile_side * cut.tile_side))
+            .transpose()
     }
 
     /// Gets `uploaded` ready for the frame `globals` of `scene`: uploads the scene the

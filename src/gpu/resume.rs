@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::device::Gpu;
 use super::scene::GpuScene;
+use crate::counters::Counters;
 use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{
@@ -18,13 +19,15 @@ pub(super) const RESUME_CHUNK: usize = 16384;
 
 /// Traces `samples` of the pixels (x | y << RESUME_Y_SHIFT) whose work did not fit one invocation,
 /// with the `resume` entry point, one dispatch after another until none is left, and adds
-/// them to `sums`. Returns their rays and how many were still cut short.
+/// them to `sums`, and their counts to `counted` when the frame counts. Returns their
+/// rays and how many were still cut short.
 pub(super) async fn resume(
     gpu: &Gpu<'_>,
     scene: &GpuScene,
     pixels: &[u32],
     samples: &Range<u32>,
     sums: &mut Film,
+    mut counted: Option<&mut Counters>,
     cancel: &AtomicBool,
 ) -> Result<(u64, u64)> {
     let pipeline = &scene.resume.get(gpu, scene.spec)?;
@@ -92,6 +95,9 @@ pub(super) async fn resume(
                 let sum = sums.get(x, y);
                 sums.set(x, y, [0, 1, 2].map(|c| sum[c] + st.sum[c]));
                 rays += u64::from(st.rays);
+                if let Some(c) = counted.as_deref_mut() {
+                    c.add_pixel(&st.counts);
+                }
                 cut_short += u64::from(st.cut != 0 || st.phase != PHASE_DONE);
             }
         })

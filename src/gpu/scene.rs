@@ -1,5 +1,6 @@
 //! A scene's state on the device: its arrays (`upload`), what a frame binds besides them
-//! (`Bound`), the pipeline its frame's settings need and how its frames are cut. The
+//! (`Bound`), the pipeline its frame's settings need (and the wave of the wavefront
+//! path) and how its frames are cut. The
 //! renderer makes it and moves it to other frames; the dispatch loop and `resume` trace
 //! it (the loop notes in it a finer cut when dispatches run long), so it sits below all
 //! three.
@@ -7,13 +8,15 @@
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use super::cut::Cut;
+use super::cut::{Cut, PIXEL_BYTES};
 use super::device::Device;
 use super::pipeline::ResumePipelines;
 use super::specialization::Specialization;
 use super::upload::SceneData;
+use super::wavefront::Wave;
+use crate::counters::Counters;
 use crate::error::Result;
-use crate::gpu_types::{GpuGlobals, GpuTile};
+use crate::gpu_types::{GpuGlobals, GpuPixelCounts, GpuTile};
 
 /// A scene on the device with the bindings and pipeline for one frame's settings.
 pub struct GpuScene {
@@ -29,6 +32,13 @@ pub struct GpuScene {
     /// The cut that dispatches over `dispatch_budget` made `trace_rows` switch to, kept
     /// for the frames after (until `set_frame` changes the cut).
     pub(super) finer: Mutex<Option<Cut>>,
+    /// Bytes a node fetch of the frame's walk reads (`counters::gpu_node_bytes`).
+    pub(super) node_bytes: u64,
+    /// The wave the frame's wavefront kernels run in, when it takes that path
+    /// (`GpuGlobals::wavefront`).
+    pub(super) wave: Option<Wave>,
+    /// What the last trace counted, when its frame counts (`GpuGlobals::counters`).
+    pub(super) counted: Mutex<Option<Counters>>,
 }
 
 impl GpuScene {
@@ -43,9 +53,17 @@ impl GpuScene {
         self.finer.lock().expect("cut lock").unwrap_or(self.cut)
     }
 
+    /// The rays and node fetches by kind of the last frame traced, when its frame counts
+    /// them (`GpuGlobals::counters`): every rows and samples traced since the frame was
+    /// set, the frame's last trace only.
+    pub fn counters(&self) -> Option<Counters> {
+        *self.counted.lock().expect("counts lock")
+    }
+
     /// Device memory held by the scene and a band's output and readback buffers, in bytes.
     pub fn device_bytes(&self) -> u64 {
-        self.scene_bytes + 2 * self.cut.band_bytes()
+        let wave = self.wave.as_ref().map_or(0, |w| w.bytes);
+        self.scene_bytes + 2 * self.cut.band_bytes() + wave
     }
 }
 
@@ -60,6 +78,23 @@ pub(super) struct Bound {
     pub(super) tile_stride: u32,
     pub(super) output: wgpu::Buffer,
     pub(super) readback: wgpu::Buffer,
+    /// The band's `GpuPixelCounts` and the buffer they are read back through, when the
+    /// frame counts (`GpuGlobals::counters`); one unused entry each otherwise.
+    pub(super) counts: wgpu::Buffer,
+    pub(super) counts_back: wgpu::Buffer,
+    pub(super) counting: bool,
+}
+
+impl Bound {
+    /// Encodes the clearing of the output (and counts) of a band of `pixels` pixels,
+    /// before its first samples: each pass adds to what the passes before left.
+    pub(super) fn clear(&self, enc: &mut wgpu::CommandEncoder, pixels: u64) {
+        enc.clear_buffer(&self.output, 0, Some(pixels * PIXEL_BYTES));
+        if self.counting {
+            let count_bytes = pixels * size_of::<GpuPixelCounts>() as u64;
+            enc.clear_buffer(&self.counts, 0, Some(count_bytes));
+        }
+    }
 }
 
 /// Creates a frame's constants and tile slots, its band output and readback buffers, and the bind
@@ -78,6 +113,13 @@ pub(super) fn bind(
         let (tile_buf, tile_stride) = gpu.uniform_records("tiles", tile_size, tile_slots);
         let output = gpu.output("output", out_bytes);
         let readback = gpu.readback("readback", out_bytes);
+        // Twice the output when counting (`GpuPixelCounts` is twice `PixelOut`).
+        let count_bytes = match globals.counters {
+            0 => size_of::<GpuPixelCounts>() as u64,
+            _ => out_bytes / PIXEL_BYTES * size_of::<GpuPixelCounts>() as u64,
+        };
+        let counts = gpu.output("counts", count_bytes);
+        let counts_back = gpu.readback("counts readback", count_bytes);
         let resources = vec![
             globals_buf.as_entire_binding(),
             wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -92,6 +134,7 @@ pub(super) fn bind(
             data.materials.as_entire_binding(),
             data.lights.as_entire_binding(),
             output.as_entire_binding(),
+            counts.as_entire_binding(),
         ];
         let bind_group = gpu.bind_group("gpurt", layout, resources);
         Bound {
@@ -101,6 +144,9 @@ pub(super) fn bind(
             tile_stride,
             output,
             readback,
+            counts,
+            counts_back,
+            counting: globals.counters != 0,
         }
     })
 }

@@ -5,15 +5,21 @@
 use crate::gpu_types::{WGSL_CONSTANTS, WgslValue};
 
 /// The files, in the order they are joined; each is mirrored by `src/cpu/<name>.rs`.
-pub const FILES: [(&str, &str); 5] = [
+pub const FILES: [(&str, &str); 8] = [
     ("types.wgsl", include_str!("../../shaders/types.wgsl")),
     (
         "intersect.wgsl",
         include_str!("../../shaders/intersect.wgsl"),
     ),
+    ("walk.wgsl", include_str!("../../shaders/walk.wgsl")),
+    ("cwide.wgsl", include_str!("../../shaders/cwide.wgsl")),
     ("traverse.wgsl", include_str!("../../shaders/traverse.wgsl")),
     ("shade.wgsl", include_str!("../../shaders/shade.wgsl")),
     ("main.wgsl", include_str!("../../shaders/main.wgsl")),
+    (
+        "wavefront.wgsl",
+        include_str!("../../shaders/wavefront.wgsl"),
+    ),
 ];
 
 /// The whole shader source, for a `trace` that holds at most `trace_stack` pending rays
@@ -118,7 +124,7 @@ mod tests {
         }
     }
 
-    /// Writes SPIR-V (what wgpu hands Vulkan drivers) of both entry points with the
+    /// Writes SPIR-V (what wgpu hands Vulkan drivers) of every entry point with the
     /// override constants of every primitive kind on and off: naga's SPIR-V writer has
     /// rejected valid WGSL before.
     #[test]
@@ -129,12 +135,17 @@ mod tests {
             .iter()
             .filter_map(|(_, o)| o.name.clone())
             .collect();
-        for (entry, on) in [
-            ("main", 0.0),
-            ("main", 1.0),
-            ("resume", 0.0),
-            ("resume", 1.0),
-        ] {
+        let entries = [
+            "main",
+            "resume",
+            "wf_generate",
+            "wf_advance_rays",
+            "wf_extend",
+            "wf_shadow",
+            "wf_advance_shade",
+            "wf_shade",
+        ];
+        for (entry, on) in entries.iter().flat_map(|&e| [(e, 0.0), (e, 1.0)]) {
             let constants = names
                 .iter()
                 .map(|n| {

@@ -30,6 +30,9 @@ pub struct Specialization {
     pub shading: u32,
     pub pairs: bool,
     pub wide: bool,
+    pub cwide: bool,
+    /// Count rays and node fetches by kind (`GpuGlobals::counters`).
+    pub counters: bool,
     /// Entries of each invocation's traversal stack in workgroup memory: what the walk
     /// needs on this scene (`SceneBuffers::stack_entries`), rounded up to a multiple of 8
     /// so that few sizes are compiled. A smaller stack lets more workgroups share a
@@ -70,6 +73,8 @@ impl Specialization {
             },
             pairs: g.traversal == TRAVERSAL_PAIRS,
             wide: g.traversal == TRAVERSAL_WIDE,
+            cwide: g.traversal == TRAVERSAL_CWIDE,
+            counters: g.counters != 0,
             stack: scene.stack_entries(g.traversal).next_multiple_of(8),
             trace_stack: scene.trace_stack(g.max_depth),
             layer_shift: 0,
@@ -96,6 +101,8 @@ impl Specialization {
             ("SHADING", f64::from(self.shading)),
             ("PAIRS", b(self.pairs)),
             ("WIDE", b(self.wide)),
+            ("CWIDE", b(self.cwide)),
+            ("COUNTERS", b(self.counters)),
             ("STACK", f64::from(self.stack)),
             ("LAYER_SHIFT", f64::from(self.layer_shift)),
         ]
@@ -133,6 +140,8 @@ mod tests {
             shading: SHADING_BLINN_PHONG,
             pairs: true,
             wide: true,
+            cwide: true,
+            counters: true,
             stack: 64,
             trace_stack: 16,
             layer_shift: 25,

@@ -17,9 +17,15 @@ use super::cut::{Cut, PIXEL_BYTES};
 use super::device::Gpu;
 use super::resume::resume;
 use super::scene::{Bound, GpuScene};
+#[cfg(feature = "native")]
+use super::waves;
+use crate::counters::Counters;
 use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
-use crate::gpu_types::{GpuTile, PIXEL_CUT_SHORT, RESUME_Y_SHIFT};
+use crate::gpu_types::{GpuPixelCounts, GpuTile, PIXEL_CUT_SHORT, RESUME_X_MASK, RESUME_Y_SHIFT};
+
+/// Bytes of a pixel's counts (`GpuPixelCounts`).
+const COUNT_BYTES: u64 = size_of::<GpuPixelCounts>() as u64;
 
 /// Traces an uploaded scene's image. Returns the film and the number of rays traced.
 #[cfg(feature = "native")]
@@ -115,6 +121,10 @@ async fn trace_band_rows(
     });
     let mut tracing = scene.tracing_cut();
     let all = u64::from(samples.end - samples.start).max(1);
+    let mut counted = scene
+        .bound
+        .counting
+        .then(|| Counters::new(scene.node_bytes));
     for (y0, rows) in bands {
         let pixels = u64::from(cut.width) * u64::from(rows);
         let bytes = pixels * PIXEL_BYTES;
@@ -126,20 +136,28 @@ async fn trace_band_rows(
             }
             let last = run.end == samples.end;
             let start = Instant::now();
-            let dispatches = gpu.scoped("tracing a band", || {
+            let dispatches = gpu.scoped("tracing a band", || -> Result<u32> {
                 let first = run.start == samples.start;
                 let (mut enc, dispatches) =
-                    submit_band(gpu, scene, &tracing, y0, rows, &run, first);
+                    submit_band(gpu, scene, &tracing, y0, rows, &run, first)?;
                 if last {
                     let (output, readback) = (&scene.bound.output, &scene.bound.readback);
                     enc.copy_buffer_to_buffer(output, 0, readback, 0, bytes);
+                    if counted.is_some() {
+                        let (counts, back) = (&scene.bound.counts, &scene.bound.counts_back);
+                        enc.copy_buffer_to_buffer(counts, 0, back, 0, pixels * COUNT_BYTES);
+                    }
                 }
                 gpu.run(enc);
-                dispatches
-            })?;
+                Ok(dispatches)
+            })??;
             if last {
                 let (band_rays, band_cut) =
                     read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums).await?;
+                if let Some(counted) = &mut counted {
+                    let first = u64::from(y0) * u64::from(cut.width);
+                    read_counts(gpu, scene, pixels, first, &band_cut, counted).await?;
+                }
                 rays += band_rays;
                 unfinished.extend(band_cut);
             } else {
@@ -161,7 +179,8 @@ async fn trace_band_rows(
         }
     }
     if !unfinished.is_empty() {
-        let resumed = resume(gpu, scene, &unfinished, &samples, &mut accum.sums, cancel);
+        let (sums, counts) = (&mut accum.sums, counted.as_mut());
+        let resumed = resume(gpu, scene, &unfinished, &samples, sums, counts, cancel);
         let (more_rays, cut) = resumed.await?;
         rays += more_rays;
         cut_short += cut;
@@ -177,6 +196,7 @@ async fn trace_band_rows(
         )));
     }
     accum.samples = samples.end;
+    *scene.counted.lock().expect("counts lock") = counted;
     Ok(rays)
 }
 
@@ -187,23 +207,46 @@ pub fn trace_on_device(device: &wgpu::Device, queue: &wgpu::Queue, scene: &GpuSc
     let cut = scene.tracing_cut();
     for (y0, rows) in cut.bands() {
         for run in cut.submissions(&(0..cut.spp)) {
-            gpu.scoped("tracing a band", || {
+            gpu.scoped("tracing a band", || -> Result<()> {
                 let first = run.start == 0;
-                let (enc, _) = submit_band(&gpu, scene, &cut, y0, rows, &run, first);
+                let (enc, _) = submit_band(&gpu, scene, &cut, y0, rows, &run, first)?;
                 gpu.run(enc);
-            })?;
+                Ok(())
+            })??;
         }
     }
     gpu.wait()
 }
 
-/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
-/// their dispatches, after the clearing of the band's output when `clear` (the first
-/// samples of the band: each pass adds to what the passes before left). A finer cut than
-/// the one the tile buffer was made for has more tiles than slots: all but the last
-/// buffer-full are submitted here. Returns the encoder of the last, and the dispatches.
+/// Traces the band at row `y0` for `samples` as `cut` cuts it, after the clearing of the
+/// band's output when `clear` (the first samples of the band: each pass adds to what the
+/// passes before left): through the `main` kernel, or the wavefront kernels where the
+/// frame takes them (`waves`, which waits on the device between rounds: never in the
+/// browser). Returns the encoder of the last submission, still open, and the dispatches.
+#[allow(clippy::too_many_arguments)]
 fn submit_band(
-    gpu: &Gpu,
+    gpu: &Gpu<'_>,
+    scene: &GpuScene,
+    cut: &Cut,
+    y0: u32,
+    rows: u32,
+    samples: &Range<u32>,
+    clear: bool,
+) -> Result<(wgpu::CommandEncoder, u32)> {
+    match &scene.wave {
+        #[cfg(feature = "native")]
+        Some(wave) => waves::submit_band(gpu, scene, wave, cut, y0, rows, samples, clear),
+        _ => Ok(submit_main_band(gpu, scene, cut, y0, rows, samples, clear)),
+    }
+}
+
+/// Writes the tiles of the band at row `y0` for `samples` as `cut` cuts it and encodes
+/// their dispatches of `main`, after the clearing of the band's output when `clear`. A
+/// finer cut than the one the tile buffer was made for has more tiles than slots: all but
+/// the last buffer-full are submitted here. Returns the encoder of the last, and the
+/// dispatches.
+fn submit_main_band(
+    gpu: &Gpu<'_>,
     scene: &GpuScene,
     cut: &Cut,
     y0: u32,
@@ -216,7 +259,7 @@ fn submit_band(
     let band_bytes = u64::from(cut.width) * u64::from(rows) * PIXEL_BYTES;
     let mut enc = gpu.encoder();
     if clear {
-        enc.clear_buffer(&scene.bound.output, 0, Some(band_bytes));
+        scene.bound.clear(&mut enc, band_bytes / PIXEL_BYTES);
     }
     // `tile_buf` holds the dispatches of a submission of the frame's own cut (`bind`).
     let slots = scene.cut.dispatches_per_submission().max(1) as usize;
@@ -307,6 +350,37 @@ async fn read_band(
         return parts.reduce(|| (0, Vec::new()), join);
         #[cfg(not(feature = "native"))]
         return parts.fold((0, Vec::new()), join);
+    })
+    .await
+}
+
+/// Adds the counts of a band's pixels (`pixels` of them, the first being pixel `first` of
+/// the image) to `counted`, but for those cut short (`cut`, as `read_band` lists them),
+/// whose counts `resume` gives.
+async fn read_counts(
+    gpu: &Gpu<'_>,
+    scene: &GpuScene,
+    pixels: u64,
+    first: u64,
+    cut: &[u32],
+    counted: &mut Counters,
+) -> Result<()> {
+    let width = u64::from(scene.cut.width);
+    let mut skip: Vec<usize> = cut
+        .iter()
+        .map(|&xy| {
+            let (x, y) = (xy & RESUME_X_MASK, xy >> RESUME_Y_SHIFT);
+            (u64::from(y) * width + u64::from(x) - first) as usize
+        })
+        .collect();
+    skip.sort_unstable();
+    gpu.read_async(&scene.bound.counts_back, pixels * COUNT_BYTES, |view| {
+        let px: &[GpuPixelCounts] = bytemuck::cast_slice(view);
+        for (i, p) in px.iter().enumerate() {
+            if skip.binary_search(&i).is_err() {
+                counted.add_pixel(p);
+            }
+        }
     })
     .await
 }

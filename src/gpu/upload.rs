@@ -5,7 +5,7 @@
 use super::device::Gpu;
 use crate::error::{Error, Result};
 use crate::fault::AddressSpaceCap;
-use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_WIDE};
+use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 
 /// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
@@ -18,13 +18,23 @@ pub(super) struct SceneData {
     pub(super) lights: wgpu::Buffer,
 }
 
-/// The bytes of the BVH the walk `traversal` reads: the wide nodes for `TRAVERSAL_WIDE`
-/// (which `SceneBuffers::traversal_for` picks only where they exist), else the binary
-/// nodes.
+/// The bytes of the BVH the walk `traversal` reads: the wide nodes for `TRAVERSAL_WIDE`,
+/// the compressed ones for `TRAVERSAL_CWIDE` (which `SceneBuffers::traversal_for` picks
+/// only where they exist), else the binary nodes.
 fn node_bytes(scene: &SceneBuffers, traversal: u32) -> &[u8] {
-    match scene.gpu_wide_nodes() {
-        Some(wide) if traversal == TRAVERSAL_WIDE => bytemuck::cast_slice(wide),
+    match (traversal, scene.gpu_wide_nodes(), scene.gpu_cwide()) {
+        (TRAVERSAL_WIDE, Some(wide), _) => bytemuck::cast_slice(wide),
+        (TRAVERSAL_CWIDE, _, Some(c)) => bytemuck::cast_slice(&c.nodes),
         _ => bytemuck::cast_slice(&scene.nodes),
+    }
+}
+
+/// The primitives the walk `traversal` reads: in the compressed tree's order for
+/// `TRAVERSAL_CWIDE`, else in the binary tree's.
+fn prim_bytes(scene: &SceneBuffers, traversal: u32) -> &[u8] {
+    match scene.gpu_cwide() {
+        Some(c) if traversal == TRAVERSAL_CWIDE => bytemuck::cast_slice(&c.prims),
+        _ => bytemuck::cast_slice(&scene.prims),
     }
 }
 
@@ -62,7 +72,7 @@ pub(super) fn upload_scene(
     gpu.scoped("uploading the scene", || {
         let texels = |label, bytes| texels(gpu, label, bytes, layer_rows, texture_margin);
         let nodes = texels("nodes", node_bytes(scene, traversal))?;
-        let prims = texels("prims", bytemuck::cast_slice(&scene.prims))?;
+        let prims = texels("prims", prim_bytes(scene, traversal))?;
         let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?;
         let array = wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),

@@ -27,7 +27,7 @@ const LAYERS: &[&[&str]] = &[
     &["agreement", "compare"],
     &["gpu"],
     &["cpu"],
-    &["film"],
+    &["film", "counters"],
     &["frame"],
     &["pack"],
     &["bvh"],

@@ -243,12 +243,18 @@ fn check_rays(
         traversal: buffers.traversal_for(TRAVERSAL_WIDE),
         ..globals
     };
-    // The GPU's two walks of the binary tree and its walk of the wide one, and the CPU
-    // renderer's walk of the wide one.
+    let cwide = GpuGlobals {
+        traversal: buffers.traversal_for(TRAVERSAL_CWIDE),
+        ..globals
+    };
+    // The GPU's two walks of the binary tree, its walk of the wide one and of the
+    // compressed one (whose primitives are in its own order), and the CPU renderer's
+    // walk of its wide one.
     let walks = [
         Bindings::gpu_walk(buffers, &globals),
         Bindings::gpu_walk(buffers, &pairs),
         Bindings::gpu_walk(buffers, &wide),
+        Bindings::gpu_walk(buffers, &cwide),
         Bindings::new(buffers, &globals),
     ];
     let b = &walks[0];
@@ -266,7 +272,7 @@ fn check_rays(
         };
         let context = || format!("{name}: ray {k} {ray:?} in ({tmin}, {tmax})");
         // The GPU's walks stay within the stack slice the scene is given.
-        for w in &walks[..3] {
+        for w in &walks[..4] {
             let high = stack_high_water(w, ray, tmin, tmax);
             let slice = buffers.stack_entries(w.globals.traversal) as usize;
             assert!(
@@ -289,7 +295,7 @@ fn check_rays(
         };
         let want = brute_transmission(b, ray, seg);
         for w in &walks {
-            let got = transmission(w, ray, seg);
+            let got = transmission(w, ray, seg, &mut 0);
             assert!(
                 close3(got, want),
                 "{}: transmission to {seg}: BVH walk {} {got}, brute force {want}",
@@ -498,8 +504,8 @@ fn planes_only_scene_has_no_nodes_and_still_hits() {
     let hit = closest_hit(&b, &ray, 0.0, NO_HIT);
     assert_eq!(hit.prim, PLANE_FLAG);
     assert!((hit.t - 5.0).abs() < 1e-6);
-    assert_eq!(transmission(&b, &ray, 10.0), Vec3::ZERO);
-    assert_eq!(transmission(&b, &ray, 4.0), Vec3::ONE);
+    assert_eq!(transmission(&b, &ray, 10.0, &mut 0), Vec3::ZERO);
+    assert_eq!(transmission(&b, &ray, 4.0, &mut 0), Vec3::ONE);
 }
 
 /// Largest distance from the true surface, as a fraction of the radius, of the hit points

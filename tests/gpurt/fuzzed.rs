@@ -214,6 +214,7 @@ fn surface_normals_are_finite_where_the_geometry_has_none() {
             u,
             v,
             cost: 0,
+            nodes: 0,
         };
         let s = surface(&b, &ray, &hit);
         for n in [s.ng, s.ns] {

@@ -26,6 +26,52 @@ fn rust_layouts() -> Vec<Layout> {
         ),
         layout!("Node", GpuNode, [min, offset, max, count_axis]),
         layout!("WideNode", GpuWideNode, [lo, hi, entry]),
+        layout!(
+            "CwideNode",
+            GpuCwideNode,
+            [origin, exp_inner, child_base, prim_base, tags, quant]
+        ),
+        layout!(
+            "WaveState",
+            GpuWaveState,
+            [
+                sum,
+                sample,
+                colour,
+                rng,
+                lit,
+                rays,
+                point,
+                sp,
+                ng,
+                light,
+                ns,
+                light_sample,
+                ray_in,
+                shadow,
+                shadow_light,
+                hit,
+                material,
+                entering,
+                cut,
+                phase,
+                counts,
+                stack
+            ]
+        ),
+        layout!(
+            "PixelCounts",
+            GpuPixelCounts,
+            [
+                eye_rays,
+                eye_nodes,
+                shadow_rays,
+                shadow_nodes,
+                secondary_rays,
+                secondary_nodes,
+                _pad
+            ]
+        ),
         layout!("Material", GpuMaterial, [color, kd, ks, shine, t, ior]),
         layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, _pad]),
         layout!(
@@ -53,8 +99,9 @@ fn rust_layouts() -> Vec<Layout> {
                 n_lights,
                 aov,
                 traversal,
+                counters,
+                wavefront,
                 shading,
-                _pad,
             ]
         ),
         layout!(
@@ -158,6 +205,9 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
         ("WIDE_EMPTY", U32(WIDE_EMPTY)),
         ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
         ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
+        ("CWIDE_INNER", U32(CWIDE_INNER)),
+        ("CWIDE_COUNT_SHIFT", U32(CWIDE_COUNT_SHIFT)),
+        ("CWIDE_OFFSET_MASK", U32(CWIDE_OFFSET_MASK)),
         ("LIGHT_POINT", U32(LIGHT_POINT)),
         ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
         ("LIGHT_AREA", U32(LIGHT_AREA)),
@@ -336,6 +386,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
         "load_wide_node",
         "texture fetch: the CPU indexes the arrays",
     ),
+    (
+        "load_cwide_node",
+        "texture fetch: the CPU indexes the arrays",
+    ),
     ("node_count", "bit field the CPU's GpuNode methods read"),
     ("node_axis", "bit field the CPU's GpuNode methods read"),
     ("cone_valid", "inlined in the CPU's intersect_cone"),
@@ -365,6 +419,14 @@ const CPU_ONLY: &[(&str, &str)] = &[
     ),
     ("sample_sum", "the CPU's per-pixel driver, `main` in WGSL"),
     (
+        "wave_sums",
+        "the rounds of the wavefront kernels, which the host dispatches (gpu/waves.rs)",
+    ),
+    (
+        "counters",
+        "RayCounts as the counts by kind the GPU keeps (`counters::Counters`)",
+    ),
+    (
         "gpu_walk",
         "Bindings for the binary walk: the CPU renders through the wide tree (wide.rs)",
     ),
@@ -388,10 +450,6 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "transmit_planes",
         "transmission's planes, which the CPU's occlusion packets test lane by lane first",
     ),
-    (
-        "light_ray",
-        "light_sample's shadow ray, which the CPU also traces ahead in occlusion packets",
-    ),
 ];
 
 /// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.
@@ -402,6 +460,7 @@ fn function_names(src: &str) -> Vec<String> {
             let l = l.trim_start();
             let l = l
                 .strip_prefix("pub(crate) ")
+                .or_else(|| l.strip_prefix("pub(super) "))
                 .or_else(|| l.strip_prefix("pub "))
                 .unwrap_or(l);
             let rest = l.strip_prefix("fn ")?;

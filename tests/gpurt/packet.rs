@@ -65,6 +65,7 @@ fn the_comparisons_catch_a_last_bit() {
         u: 0.25,
         v: 0.5,
         cost: 0,
+        nodes: 0,
     };
     assert_eq!(hit_differs(&h, &Hit { cost: 9, ..h }), None);
     for other in [
@@ -108,6 +109,7 @@ fn check_closest(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) 
         u: 0.0,
         v: 0.0,
         cost: 0,
+        nodes: 0,
     }; MAX_LANES];
     let (mut packed, mut all) = (0, 0);
     for (g, group) in groups.iter().enumerate() {
@@ -138,9 +140,11 @@ fn check_shadows(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) 
         for (k, (ray, _, tmax)) in group.iter().enumerate() {
             p.set(k, ray, 0.0, *tmax);
         }
-        packed += kernels.transmissions(b, &p, &mut light).count_ones() as usize;
+        packed += kernels
+            .transmissions(b, &p, &mut light, &mut [0; MAX_LANES])
+            .count_ones() as usize;
         for (k, (ray, _, tmax)) in group.iter().enumerate() {
-            if let Some(why) = light_differs(light[k], transmission(b, ray, *tmax)) {
+            if let Some(why) = light_differs(light[k], transmission(b, ray, *tmax, &mut 0)) {
                 panic!(
                     "{what}, {}: shadow packet {g} lane {k}, {ray:?}: {why}",
                     kernels.isa().name()
@@ -220,8 +224,12 @@ fn coherent_groups(b: &Bindings, lanes: usize) -> [Vec<Group>; 3] {
                     let group: Group = surfaces
                         .iter()
                         .flatten()
-                        .filter_map(|(_, s)| light_ray(b, s, light, 0, &mut rng))
-                        .map(|(r, tmax)| (r, 0.0, tmax))
+                        .filter_map(|(ray, s)| {
+                            let m = &b.materials[s.material as usize];
+                            let r = reflect_dir(ray.dir, s.ns);
+                            light_ray(b, s, m, ray.dir, r, light, 0, &mut rng)
+                        })
+                        .map(|lr| (lr.ray, 0.0, lr.dist))
                         .collect();
                     shadow.push(group);
                 }

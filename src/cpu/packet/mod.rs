@@ -207,7 +207,8 @@ impl Kernels {
     }
 
     /// `closest_hit(b, ray, tmin, tmax)` of every ray of `p`, into `hits` (lane by lane;
-    /// `cost` 0, as the wide walk counts none). Returns the lanes the packet answered; the
+    /// `cost` 0, as the wide walk counts none; `nodes`, the packet's node fetches shared
+    /// among the lanes it traced, `share`, plus a lane's own walk if it took one). Returns the lanes the packet answered; the
     /// others went alone: all of them where `b` has no wide tree or the packet is nearly
     /// empty, rays from or towards infinity, and lanes that met two surfaces at one distance.
     pub fn closest_hits(&self, b: &Bindings, p: &Packet, hits: &mut [Hit; MAX_LANES]) -> u32 {
@@ -219,24 +220,39 @@ impl Kernels {
             }
             _ => 0,
         };
+        let nodes = share(found.nodes, found.traced);
         // Field by field: a `Hit` built whole on the stack and copied stalls on store
         // forwarding, a tenth of a packet's time.
         for k in lanes_of(packed) {
             let h = &mut hits[k];
-            (h.t, h.prim, h.u, h.v, h.cost) =
-                (found.t[k], found.prim[k], found.u[k], found.v[k], 0);
+            (h.t, h.prim, h.u, h.v, h.cost, h.nodes) = (
+                found.t[k],
+                found.prim[k],
+                found.u[k],
+                found.v[k],
+                0,
+                nodes[k],
+            );
         }
         for k in lanes_of(p.rows.lanes & !packed) {
             hits[k] = closest_hit(b, &p.rows.ray(k), p.rows.tmin[k], p.rows.tmax[k]);
+            hits[k].nodes += nodes[k];
         }
         packed
     }
 
     /// `transmission(b, ray, tmax)` of every ray of `p` (whose `tmin` must be 0), into
-    /// `light`. Returns the lanes the occlusion packet answered: blocked, or crossing
+    /// `light`, and the node fetches of each lane into `nodes` (as `closest_hits` counts
+    /// them). Returns the lanes the occlusion packet answered: blocked, or crossing
     /// nothing; the planes are each lane's own, and lanes crossing a surface that transmits
     /// light go alone, as do all where the packet cannot (see `closest_hits`).
-    pub fn transmissions(&self, b: &Bindings, p: &Packet, light: &mut [Vec3; MAX_LANES]) -> u32 {
+    pub fn transmissions(
+        &self,
+        b: &Bindings,
+        p: &Packet,
+        light: &mut [Vec3; MAX_LANES],
+        nodes: &mut [u32; MAX_LANES],
+    ) -> u32 {
         let mut open = 0u32;
         for k in lanes_of(p.rows.lanes) {
             debug_assert_eq!(p.rows.tmin[k], 0.0, "a shadow ray starts at its origin");
@@ -255,16 +271,32 @@ impl Kernels {
             }
             _ => (0, Occluded::default()),
         };
+        *nodes = share(found.nodes, found.traced);
         for k in lanes_of(open) {
             let bit = 1 << k;
             if packed & bit == 0 || found.transmits & bit != 0 {
-                light[k] = transmission(b, &p.rows.ray(k), p.rows.tmax[k]);
+                light[k] = transmission(b, &p.rows.ray(k), p.rows.tmax[k], &mut nodes[k]);
             } else if found.blocked & bit != 0 {
                 light[k] = Vec3::ZERO;
             }
         }
         packed & !found.transmits
     }
+}
+
+/// A packet's `nodes` fetches shared among its `lanes` (a bit each), so that they add up
+/// to the packet's: a node fetched once for the packet serves each of its rays, and the
+/// count per ray is the memory traffic a ray cost (`counters`). The first lanes take the
+/// remainder; lanes outside `lanes` take none.
+fn share(nodes: u32, lanes: u32) -> [u32; MAX_LANES] {
+    let mut out = [0; MAX_LANES];
+    let n = lanes.count_ones();
+    if let Some(each) = nodes.checked_div(n) {
+        for (i, k) in lanes_of(lanes).enumerate() {
+            out[k] = each + u32::from((i as u32) < nodes % n);
+        }
+    }
+    out
 }
 
 /// Up to `MAX_LANES` rays with their intervals, lane `k` the `k`-th.

@@ -122,6 +122,9 @@ pub struct Found {
     pub tied: u32,
     /// The lanes the kernel traced (`Rays::finite`).
     pub traced: u32,
+    /// Wide nodes the walk fetched: once a node for the whole packet, and those of the
+    /// lanes' walks alone.
+    pub nodes: u32,
 }
 
 impl Default for Found {
@@ -133,6 +136,7 @@ impl Default for Found {
             v: [0.0; MAX_LANES],
             tied: 0,
             traced: 0,
+            nodes: 0,
         }
     }
 }
@@ -146,4 +150,6 @@ pub struct Occluded {
     pub transmits: u32,
     /// The lanes the kernel traced (`Rays::finite`).
     pub traced: u32,
+    /// Wide nodes the walk fetched, as `Found::nodes`.
+    pub nodes: u32,
 }

@@ -46,9 +46,10 @@ pub fn closest_from(
     (tmin, t0): (f32, f32),
     node: u32,
     h: &mut LaneHit,
+    nodes: &mut u32,
 ) {
     let slabs = Slabs::new(ray.origin, inv_dir);
-    wide::walk_from::<true>(wide, &slabs, node, tmin, h.t, |first, count| {
+    wide::walk_from::<true>(wide, &slabs, node, tmin, h.t, nodes, |first, count| {
         let leaf = &b.prims[first as usize..(first + count) as usize];
         if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
             for k in 0..leaf.len() {
@@ -74,10 +75,11 @@ pub fn occluded_from(
     inv_dir: Vec3,
     tmax: f32,
     node: u32,
+    nodes: &mut u32,
 ) -> Option<bool> {
     let slabs = Slabs::new(ray.origin, inv_dir);
     let mut found = None;
-    wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, |first, count| {
+    wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, nodes, |first, count| {
         let leaf = &b.prims[first as usize..(first + count) as usize];
         let inside = |t: f32| t > 0.0 && t < tmax;
         let crossed = if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {

@@ -175,7 +175,16 @@ fn closest_tree<L: Lanes>(
                 };
                 let interval = (rows.tmin[k], rows.tmax[k]);
                 let (ray, inv) = (rows.ray(k), r.inv_of(k));
-                single::closest_from(b, wide, &ray, inv, interval, e.child, &mut h);
+                single::closest_from(
+                    b,
+                    wide,
+                    &ray,
+                    inv,
+                    interval,
+                    e.child,
+                    &mut h,
+                    &mut found.nodes,
+                );
                 (found.t[k], found.prim[k], found.u[k], found.v[k]) = (h.t, h.prim, h.u, h.v);
                 found.tied |= u32::from(h.tied) << k;
             }
@@ -183,6 +192,7 @@ fn closest_tree<L: Lanes>(
             tmax_hi = l.max_of(best.t, packet);
         } else {
             let n = &wide[e.child as usize];
+            found.nodes += 1;
             let (children, keys) = frustum.cull(n, tmin_lo, tmax_hi);
             let active = l.mask(lanes);
             let base = stack.sp;
@@ -249,7 +259,15 @@ pub fn occluded<L: Lanes>(
         } else if lanes.count_ones() <= alone::<L>() {
             for k in lanes_of(lanes) {
                 let (ray, inv) = (rows.ray(k), r.inv_of(k));
-                match single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.child) {
+                match single::occluded_from(
+                    b,
+                    wide,
+                    &ray,
+                    inv,
+                    rows.tmax[k],
+                    e.child,
+                    &mut out.nodes,
+                ) {
                     Some(true) => out.blocked |= 1 << k,
                     Some(false) => out.transmits |= 1 << k,
                     None => continue,
@@ -258,6 +276,7 @@ pub fn occluded<L: Lanes>(
             }
         } else {
             let n = &wide[e.child as usize];
+            out.nodes += 1;
             let (children, _) = frustum.cull(n, tmin_lo, tmax_hi);
             let active = l.mask(lanes);
             for c in lanes_of(children) {

@@ -56,17 +56,17 @@ impl Device<'_> {
             })
     }
 
-    /// The layout of a pipeline whose group `i` is `groups[i]`.
+    /// The layout of a pipeline whose group `i` is `groups[i]` (none: a group it does not
+    /// use).
     pub(crate) fn pipeline_layout(
         &self,
         label: &str,
-        groups: &[&wgpu::BindGroupLayout],
+        groups: &[Option<&wgpu::BindGroupLayout>],
     ) -> wgpu::PipelineLayout {
-        let groups: Vec<_> = groups.iter().map(|&g| Some(g)).collect();
         self.device
             .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(label),
-                bind_group_layouts: &groups,
+                bind_group_layouts: groups,
                 immediate_size: 0,
             })
     }

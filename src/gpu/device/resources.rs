@@ -79,6 +79,13 @@ impl Device<'_> {
         self.buffer(label, size, U::STORAGE | U::COPY_SRC | U::COPY_DST)
     }
 
+    /// Storage the shaders write the sizes of indirect dispatches into
+    /// (`ComputePass::dispatch_workgroups_indirect`).
+    pub(crate) fn indirect_args(&self, label: &str, size: u64) -> wgpu::Buffer {
+        use wgpu::BufferUsages as U;
+        self.buffer(label, size, U::STORAGE | U::INDIRECT | U::COPY_DST)
+    }
+
     /// A buffer an `output` is copied into, to be `read` by the host.
     pub(crate) fn readback(&self, label: &str, size: u64) -> wgpu::Buffer {
         use wgpu::BufferUsages as U;

@@ -16,25 +16,30 @@ use crate::common::versus::{
 };
 use crate::common::{files_with, own_scenes, shared_scenes};
 
-/// The same GPU with each traversal its adapter does not use by default (two of single,
-/// pairs and wide), so that every walk is checked against the CPU on every adapter the
-/// suite runs on.
+/// The same GPU with each traversal its adapter does not use by default (three of single,
+/// pairs, wide and cwide), so that every walk is checked against the CPU on every adapter
+/// the suite runs on.
 fn other_traversals() -> &'static [Gpu] {
     static OTHERS: OnceLock<Vec<Gpu>> = OnceLock::new();
     OTHERS.get_or_init(|| {
         let Some(g) = gpu() else {
             return Vec::new();
         };
-        [TRAVERSAL_SINGLE, TRAVERSAL_PAIRS, TRAVERSAL_WIDE]
-            .into_iter()
-            .filter(|&t| t != g.renderer.traversal())
-            .map(|t| Gpu {
-                ctx: g.ctx.clone(),
-                renderer: GpuRenderer::new(&g.ctx.device, None)
-                    .expect("shader compiles")
-                    .with_traversal(t),
-            })
-            .collect()
+        [
+            TRAVERSAL_SINGLE,
+            TRAVERSAL_PAIRS,
+            TRAVERSAL_WIDE,
+            TRAVERSAL_CWIDE,
+        ]
+        .into_iter()
+        .filter(|&t| t != g.renderer.traversal())
+        .map(|t| Gpu {
+            ctx: g.ctx.clone(),
+            renderer: GpuRenderer::new(&g.ctx.device, None)
+                .expect("shader compiles")
+                .with_traversal(t),
+        })
+        .collect()
     })
 }
 

@@ -1,0 +1,219 @@
+//! The counters (`GpuGlobals::counters`, for `--stats` and `gpurt bench`): the rays and BVH
+//! node fetches the GPU counts by kind of ray, on every walk, against what the CPU twin of
+//! that walk counts on the same frame; a walk's counts do not pass for another walk's;
+//! counting changes no pixel; and pixels continued across dispatches are counted too.
+
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3;
+use gpurt::counters::{Counters, KINDS, gpu_node_bytes};
+use gpurt::cpu::RayCounts;
+use gpurt::cpu::main::sample_sum;
+use gpurt::cpu::types::Bindings;
+use gpurt::film::Film;
+use gpurt::frame::{self, RenderOptions};
+use gpurt::gpu::GpuRenderer;
+use gpurt::gpu_types::*;
+use gpurt::pack::{self, SceneBuffers};
+use gpurt::scene::{self, Scene};
+
+use crate::common::versus::{Gpu, features_scene, gpu};
+use crate::common::{own_scenes, shared_scenes};
+
+/// What the CPU twin of the GPU's walk `globals.traversal` counts on the frame.
+fn twin(buffers: &SceneBuffers, globals: &GpuGlobals) -> Counters {
+    let b = Bindings::gpu_walk(buffers, globals);
+    let mut counts = RayCounts::default();
+    for y in 0..globals.height {
+        for x in 0..globals.width {
+            sample_sum(&b, x, y, 0..globals.spp, Vec3::ZERO, &mut counts);
+        }
+    }
+    counts.counters(gpu_node_bytes(globals.traversal))
+}
+
+/// The GPU's image, rays and counts of the frame, on `renderer`.
+fn on_gpu(
+    g: &Gpu,
+    renderer: &GpuRenderer,
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> (Film, u64, Option<Counters>) {
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let scene = renderer
+        .upload(device, queue, buffers, globals)
+        .expect("uploads");
+    let never = AtomicBool::new(false);
+    let (film, rays) = gpurt::gpu::trace(device, queue, &scene, &|_| {}, &never).expect("traces");
+    (film, rays, scene.counters())
+}
+
+/// Counts equal kind by kind within one in 10^4 for rays (the drift of lights grazing a
+/// surface, as in `dispatch.rs`) and one in 10^3 for node fetches (a ray that moves by an
+/// ulp may take another path), with the same node size.
+fn agree(gpu: &Counters, cpu: &Counters) -> Result<(), String> {
+    let near = |a: u64, b: u64, tol: f64| a.abs_diff(b) as f64 <= tol * a.max(b).max(1) as f64;
+    for (k, kind) in KINDS.iter().enumerate() {
+        if !near(gpu.rays[k], cpu.rays[k], 1e-4) || !near(gpu.nodes[k], cpu.nodes[k], 1e-3) {
+            return Err(format!(
+                "{kind} rays: the GPU counted {} rays and {} nodes, the CPU twin {} and {}",
+                gpu.rays[k], gpu.nodes[k], cpu.rays[k], cpu.nodes[k]
+            ));
+        }
+    }
+    if gpu.node_bytes != cpu.node_bytes {
+        return Err(format!(
+            "node sizes {} and {}",
+            gpu.node_bytes, cpu.node_bytes
+        ));
+    }
+    Ok(())
+}
+
+/// The scenes counted: every primitive and light kind with glass and a mirror (at depth
+/// 5 and 4 samples a pixel), and balls-3, whose mirror spheres send many secondary rays.
+fn scenes() -> Vec<(String, Scene, RenderOptions)> {
+    let features = features_scene("");
+    let mut out = vec![(
+        "features".to_string(),
+        features.clone(),
+        RenderOptions {
+            width: 64,
+            height: 64,
+            spp: 4,
+            max_depth: 5,
+            ..RenderOptions::for_camera(&features.camera)
+        },
+    )];
+    if let Some(root) = shared_scenes() {
+        let balls = scene::load(&root.join("spd/balls-3.nff")).expect("loads");
+        let opts = RenderOptions {
+            width: 48,
+            height: 40,
+            max_depth: 5,
+            ..RenderOptions::for_camera(&balls.camera)
+        };
+        out.push(("balls-3".to_string(), balls, opts));
+    }
+    out
+}
+
+/// On every walk the GPU counts the rays of each kind and the node fetches of their
+/// walks as the CPU twin of that walk does, and its kinds add up to the rays it reports.
+/// The comparison fails the twin's counts with one node fetch in 500 more of one kind,
+/// and on balls-3 the twin's counts of another walk: the check tells walks apart.
+#[test]
+fn the_gpu_counts_what_the_cpu_twin_of_its_walk_counts() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let walks = [
+        TRAVERSAL_SINGLE,
+        TRAVERSAL_PAIRS,
+        TRAVERSAL_WIDE,
+        TRAVERSAL_CWIDE,
+    ];
+    let mut failures = Vec::new();
+    for (name, scene, opts) in scenes() {
+        let buffers = pack::pack(scene).expect("packs");
+        let base = GpuGlobals {
+            counters: 1,
+            ..frame::globals(&buffers, &opts)
+        };
+        let mut twins = Vec::new();
+        for t in walks {
+            let renderer = GpuRenderer::new(&g.ctx.device, None)
+                .expect("shader compiles")
+                .with_traversal(t);
+            let globals = renderer.frame(&buffers, &base);
+            assert_eq!(globals.traversal, t, "{name} takes every walk");
+            let (_, rays, counted) = on_gpu(g, &renderer, &buffers, &globals);
+            let counted = counted.expect("a counting frame has counts");
+            let label = format!("{name} ({})", TRAVERSAL_NAMES[t as usize]);
+            assert_eq!(counted.total_rays(), rays, "{label}: the kinds add up");
+            assert_eq!(
+                counted.rays[0],
+                u64::from(opts.width * opts.height * opts.spp),
+                "{label}: one eye ray a sample"
+            );
+            assert!(counted.rays.iter().all(|&r| r > 0), "{label}: {counted:?}");
+            let cpu = twin(&buffers, &globals);
+            if let Err(why) = agree(&counted, &cpu) {
+                failures.push(format!("{label}: {why}"));
+            }
+            for k in 0..3 {
+                let mut more = cpu;
+                more.nodes[k] += more.nodes[k] / 500 + 1;
+                assert!(agree(&counted, &more).is_err(), "{label}: {more:?} passes");
+            }
+            println!("{label}: {}", counted.report("gpu").join("; "));
+            twins.push((t, counted, cpu));
+        }
+        // The features scene is a handful of primitives, one wide node for both wide
+        // walks; balls-3's 820 spheres make every walk its own.
+        for (t, counted, _) in twins.iter().filter(|_| name == "balls-3") {
+            for (other, _, cpu) in &twins {
+                assert!(
+                    t == other || counted.nodes != cpu.nodes,
+                    "{name}: the {} walk's counts pass for the {} walk's",
+                    TRAVERSAL_NAMES[*t as usize],
+                    TRAVERSAL_NAMES[*other as usize]
+                );
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Counting compiles more into the shader but changes no pixel and no ray count; a frame
+/// that does not count has no counts, and one that does has them.
+#[test]
+fn counting_changes_no_pixel() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let scene = features_scene("");
+    let buffers = pack::pack(scene.clone()).expect("packs");
+    let opts = RenderOptions {
+        width: 48,
+        height: 48,
+        spp: 2,
+        ..RenderOptions::for_camera(&scene.camera)
+    };
+    let plain = g.renderer.frame(&buffers, &frame::globals(&buffers, &opts));
+    let counting = GpuGlobals {
+        counters: 1,
+        ..plain
+    };
+    let (film, rays, none) = on_gpu(g, &g.renderer, &buffers, &plain);
+    let (counted_film, counted_rays, some) = on_gpu(g, &g.renderer, &buffers, &counting);
+    assert!(none.is_none() && some.is_some());
+    assert_eq!(rays, counted_rays);
+    assert!(film == counted_film, "counting changed the image");
+}
+
+/// Glass at depth 16 has pixels too heavy for one invocation on lavapipe, which the
+/// `resume` entry point continues across dispatches: their counts are the pixels' whole
+/// counts too, so the kinds still add up to every ray traced and agree with the CPU twin.
+#[test]
+fn pixels_continued_across_dispatches_are_counted() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
+    let buffers = pack::pack(glass.clone()).expect("packs");
+    let opts = RenderOptions {
+        width: 64,
+        height: 64,
+        max_depth: 16,
+        ..RenderOptions::for_camera(&glass.camera)
+    };
+    let globals = GpuGlobals {
+        counters: 1,
+        ..g.renderer.frame(&buffers, &frame::globals(&buffers, &opts))
+    };
+    let (_, rays, counted) = on_gpu(g, &g.renderer, &buffers, &globals);
+    let counted = counted.expect("counts");
+    assert_eq!(counted.total_rays(), rays, "every ray is counted by kind");
+    agree(&counted, &twin(&buffers, &globals)).unwrap_or_else(|why| panic!("glass: {why}"));
+}
