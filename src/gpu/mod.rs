@@ -39,6 +39,7 @@ pub mod specialization;
 mod trace;
 mod upload;
 mod wavefront;
+#[cfg(feature = "native")]
 mod waves;
 
 pub use context::{Choice, GpuContext, choose, is_software, open, open_on, request};

@@ -22,7 +22,9 @@ const ENTRIES: [&str; 6] = [
     "wf_shade",
 ];
 
-/// The pipelines of the kernels, in `ENTRIES` order.
+/// The pipelines of the kernels, in `ENTRIES` order. Read by `waves`, which runs natively
+/// only (it waits on the device between rounds, which the browser cannot).
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
 pub(super) struct Kernels {
     pub(super) generate: wgpu::ComputePipeline,
     pub(super) advance_rays: wgpu::ComputePipeline,
@@ -106,7 +108,8 @@ impl WavePipelines {
 }
 
 /// A scene's wave on the device: room for `capacity` pixels, the kernels it runs, and
-/// the buffer its queue lengths are read back through.
+/// the buffer its queue lengths are read back through (read by `waves`, native only).
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
 pub(super) struct Wave {
     pub(super) kernels: Arc<Kernels>,
     pub(super) group: wgpu::BindGroup,

@@ -338,3 +338,32 @@ impl Packet {
         self.rows.tmax[k]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A packet's fetches are all counted, once, and shared within one a lane.
+    #[test]
+    fn a_packets_node_fetches_are_shared_and_add_up() {
+        for (nodes, lanes) in [(0, 0b1011), (7, 0), (7, 0b1), (10, 0b1011), (37, 0xffff)] {
+            let s = share(nodes, lanes);
+            let total: u32 = s.iter().sum();
+            assert_eq!(
+                total,
+                if lanes == 0 { 0 } else { nodes },
+                "{nodes} over {lanes:b}"
+            );
+            let mine: Vec<u32> = lanes_of(lanes).map(|k| s[k]).collect();
+            if let (Some(lo), Some(hi)) = (mine.iter().min(), mine.iter().max()) {
+                assert!(hi - lo <= 1, "{mine:?}");
+            }
+            for (k, &n) in s.iter().enumerate() {
+                assert!(
+                    lanes & 1 << k != 0 || n == 0,
+                    "lane {k} is not in the packet"
+                );
+            }
+        }
+    }
+}
