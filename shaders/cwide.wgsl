@@ -27,12 +27,12 @@ fn cwide_reached(n: CwideNode, half: u32, ray: Ray, inv_dir: vec3<f32>, tmin: f3
     let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
     let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
     let tag = (vec4<u32>(n.tags[half]) >> shifts) & byte;
-    let reached = near <= far * SLAB_WIDEN & tag != vec4<u32>(0u);
+    let reached = (near <= far * SLAB_WIDEN) & (tag != vec4<u32>(0u));
     let lane = vec4<u32>(0u, 1u, 2u, 3u) + vec4<u32>(4u * half);
-    let inner = select(vec4<u32>(0u), vec4<u32>(1u) << (lane ^ vec4<u32>(octant)), reached & tag == vec4<u32>(CWIDE_INNER));
+    let inner = select(vec4<u32>(0u), vec4<u32>(1u) << (lane ^ vec4<u32>(octant)), reached & (tag == vec4<u32>(CWIDE_INNER)));
     let count = tag >> vec4<u32>(CWIDE_COUNT_SHIFT);
     let prims = ((vec4<u32>(1u) << count) - vec4<u32>(1u)) << (tag & vec4<u32>(CWIDE_OFFSET_MASK));
-    let leaves = select(vec4<u32>(0u), prims, reached & count != vec4<u32>(0u));
+    let leaves = select(vec4<u32>(0u), prims, reached & (count != vec4<u32>(0u)));
     return vec2<u32>(inner.x | inner.y | inner.z | inner.w, leaves.x | leaves.y | leaves.z | leaves.w);
 }
 
@@ -85,7 +85,7 @@ fn next_leaf_cwide(
         }
         let a = cwide_reached(n, 0u, ray, inv_dir, tmin, tmax, (*walk).octant);
         let b = cwide_reached(n, 1u, ray, inv_dir, tmin, tmax, (*walk).octant);
-        (*walk).group = vec2<u32>(n.child_base, (n.exp_inner >> 24u) << 8u | a.x | b.x);
+        (*walk).group = vec2<u32>(n.child_base, ((n.exp_inner >> 24u) << 8u) | a.x | b.x);
         (*walk).leaves = vec2<u32>(n.prim_base, a.y | b.y);
     }
     // Reached only when the driver ends the loop.

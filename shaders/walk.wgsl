@@ -32,8 +32,8 @@ struct Walk {
 // inner child in lane 0.
 fn start_walk(ray: Ray) -> Walk {
     let neg = ray.dir < vec3<f32>(0.0);
-    let octant = u32(neg.x) << 2u | u32(neg.y) << 1u | u32(neg.z);
-    return Walk(0u, 0u, vec2<u32>(0u, 1u << 8u | 1u << octant), vec2<u32>(0u), octant);
+    let octant = (u32(neg.x) << 2u) | (u32(neg.y) << 1u) | u32(neg.z);
+    return Walk(0u, 0u, vec2<u32>(0u, (1u << 8u) | (1u << octant)), vec2<u32>(0u), octant);
 }
 
 // Writes entry `k` of this invocation's stack slice.
