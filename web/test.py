@@ -4,8 +4,10 @@ Chromium (WebGPU on SwiftShader, driven over the DevTools protocol) through
 `index.html?scene=URL&...`, reads each image back from the page's <img id="gpurt-result">
 (a canvas screenshot of WebGPU comes out blank), and holds it against the CPU renderer's
 under the GPU-vs-CPU limits (`gpurt diff`), with ray counts; the camera's moves and the
-`v` block it prints are checked against `gpurt --view`; a bad scene must show the command
-line's `FILE:LINE:COL: message`. A self-test proves the comparison fails on a perturbed
+`v` block it prints are checked against `gpurt --view`; the interactive page is driven
+with the browser's own input events (file input, a drag and a wheel notch on the canvas,
+the Camera and Download buttons, a dropped file) and its canvas held against the CPU's
+image; a bad scene must show the command line's `FILE:LINE:COL: message`. A self-test proves the comparison fails on a perturbed
 image. Needs web/dist (web/build.sh), the command line
 (target/debug/gpurt, or GPURT_CLI) and chromium; the SPD scenes in ../shared/scenes are
 used when there (required under CI=true). Prints `N passed, M failed`; exits 1 on a failure.
@@ -318,6 +320,127 @@ def main():
             assert d.returncode == 1, f"the moved camera's image is the scene camera's:\n{d.stdout}"
 
         check("the camera's orbit, pan and dolly, and its v block", camera)
+
+        def interactive():
+            """The page as a user drives it, through the browser's own input events: a
+            scene opened with the file input renders sample by sample into the canvas (held
+            against the CPU's image); a drag on the canvas orbits the camera, and the
+            Camera button prints the `v` block the CPU renders the same image from; a wheel
+            notch dollies; Download saves the image shown; a file dropped on the page
+            replaces the scene."""
+            w, h, spp, depth = 40, 30, 2, 5
+            opened = serve_scene("opened.nff", ROOT / "scenes" / "mirrors.nff")
+            dropped = serve_scene("dropped.nff", ROOT / "scenes" / "spheres.nff")
+            target = browser.send("Target.createTarget", url=base)["targetId"]
+            s = browser.send("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
+
+            def js(expression):
+                r = browser.send("Runtime.evaluate", s, expression=expression, returnByValue=True)
+                return r["result"].get("value")
+
+            def wait(predicate, what):
+                deadline = time.monotonic() + PAGE_TIMEOUT
+                while time.monotonic() < deadline:
+                    err = js("document.getElementById('gpurt-error')?.textContent")
+                    assert not err, f"the page showed an error {what}: {err}"
+                    if js(predicate):
+                        return
+                    time.sleep(0.25)
+                status = js("document.getElementById('status').textContent")
+                raise AssertionError(f"timed out {what}: status {status!r}")
+
+            # The run loop writes the status after each sample: overwritten before an input
+            # (with a line of text, so that nothing on the page moves), "N / N samples"
+            # then means the image of that input is complete.
+            complete = f"/^{spp} \\/ {spp} samples/.test(document.getElementById('status').textContent)"
+            forget = "document.getElementById('status').textContent = 'input sent'"
+
+            def centre(selector):
+                return js(f"(() => {{ const r = document.querySelector('{selector}')"
+                          ".getBoundingClientRect(); return [r.x + r.width / 2, r.y + r.height / 2]; })()")
+
+            def mouse(kind, x, y, **more):
+                browser.send("Input.dispatchMouseEvent", s, type=kind, x=x, y=y, **more)
+
+            def click(selector):
+                x, y = centre(selector)
+                mouse("mousePressed", x, y, button="left", buttons=1, clickCount=1)
+                mouse("mouseReleased", x, y, button="left", clickCount=1)
+
+            def canvas(name):
+                url = js("document.getElementById('canvas').toDataURL('image/png')")
+                out = OUT / name
+                out.write_bytes(base64.b64decode(url.split(",", 1)[1]))
+                return out
+
+            def matches_cpu(image, scene, name, *extra):
+                ref = OUT / name
+                cpu_render(scene, ref, w, h, spp, depth, *extra)
+                d = cli("diff", image, ref, check=False)
+                assert d.returncode == 0, f"{image.name} beyond the GPU-vs-CPU limits:\n{d.stdout}{d.stderr}"
+
+            def camera_block(name):
+                click("#camera")
+                view = OUT / name
+                view.write_text(js("document.getElementById('view').textContent"))
+                return view
+
+            try:
+                wait("document.getElementById('status').textContent.startsWith('ready on')", "starting")
+                js(f"[['width', {w}], ['height', {h}], ['spp', {spp}], ['depth', {depth}]]"
+                   ".forEach(([id, v]) => { document.getElementById(id).value = v; })")
+                doc = browser.send("DOM.getDocument", s)["root"]["nodeId"]
+                node = browser.send("DOM.querySelector", s, nodeId=doc, selector="#file")["nodeId"]
+                browser.send("DOM.setFileInputFiles", s, files=[str(opened)], nodeId=node)
+                wait(complete, "rendering the opened file")
+                first = canvas("opened.canvas.png")
+                matches_cpu(first, opened, "opened.cpu.png")
+
+                x, y = centre("#canvas")
+                js(forget)
+                mouse("mousePressed", x, y, button="left", buttons=1, clickCount=1)
+                mouse("mouseMoved", x + 12, y + 5, button="left", buttons=1)
+                mouse("mouseReleased", x + 12, y + 5, button="left", clickCount=1)
+                wait(complete, "rendering after a drag")
+                orbited = canvas("orbited.canvas.png")
+                d = cli("diff", orbited, first, check=False)
+                assert d.returncode == 1, f"a drag left the image as it was:\n{d.stdout}"
+                view = camera_block("orbited.view.nff")
+                matches_cpu(orbited, opened, "orbited.cpu.png", "--view", view)
+
+                js(forget)
+                mouse("mouseWheel", x, y, deltaX=0, deltaY=-120)
+                wait(complete, "rendering after a wheel notch")
+                dollied = canvas("dollied.canvas.png")
+                d = cli("diff", dollied, orbited, check=False)
+                assert d.returncode == 1, f"a wheel notch left the image as it was:\n{d.stdout}"
+                view = camera_block("dollied.view.nff")
+                matches_cpu(dollied, opened, "dollied.cpu.png", "--view", view)
+
+                downloads = Path(tmp) / "downloads"
+                downloads.mkdir()
+                browser.send("Browser.setDownloadBehavior", behavior="allow",
+                             downloadPath=str(downloads))
+                click("#download")
+                saved = downloads / "gpurt.png"
+                deadline = time.monotonic() + 30
+                while not saved.is_file() and time.monotonic() < deadline:
+                    time.sleep(0.1)
+                assert saved.is_file(), "Download saved no gpurt.png"
+                d = cli("diff", saved, dollied, "--max-bad", "0", check=False)
+                assert d.returncode == 0, f"the downloaded PNG is not the image shown:\n{d.stdout}"
+
+                js(forget)
+                x, y = centre("#drop")
+                data = {"items": [], "files": [str(dropped)], "dragOperationsMask": 1}
+                for kind in ("dragEnter", "dragOver", "drop"):
+                    browser.send("Input.dispatchDragEvent", s, type=kind, x=x, y=y, data=data)
+                wait(complete, "rendering the dropped file")
+                matches_cpu(canvas("dropped.canvas.png"), dropped, "dropped.cpu.png")
+            finally:
+                browser.send("Target.closeTarget", targetId=target)
+
+        check("the interactive page: open, drag, wheel, camera block, download, drop", interactive)
 
         def self_test():
             """A CPU render with another light or depth differs beyond the limits, and the
