@@ -261,18 +261,15 @@ fn median_split(
     chunk: usize,
     quality: Quality,
 ) -> FlatBvh {
-    let bound = |i: u32| {
-        let b = aabb(i);
-        Bounds {
-            min: b.min.into(),
-            max: b.max.into(),
-        }
-    };
-    let centre = |i: u32| bound(i).center();
     let mut out = FlatBvh {
         order: (0..count as u32).collect(),
         ..FlatBvh::default()
     };
+    // Each split's sort keys (twice the centre on the split axis, and the primitive),
+    // worked out once a level rather than at every comparison: `aabb` computes bounds from
+    // a primitive record, and the selection compares each several times. The buffer is
+    // reused down a path and freed before a group's build, whose own peak it would add to.
+    let mut keys: Vec<(f32, u32)> = Vec::new();
     // (range start, range end, output node to patch, depth)
     let mut stack = vec![(0usize, count, None::<usize>, 1usize)];
     while let Some((lo, hi, patch, depth)) = stack.pop() {
@@ -281,19 +278,22 @@ fn median_split(
             out.nodes[p].offset = here as u32;
         }
         if hi - lo > MAX_LEAF_PRIMS as usize && hi - lo <= chunk {
+            keys = Vec::new();
             append_subtree(&mut out, aabb, lo..hi, depth, quality);
             continue;
         }
         out.depth = out.depth.max(depth);
-        let mut b = Bounds::EMPTY;
-        let mut cb = Bounds::EMPTY;
+        let (mut min, mut max) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        let (mut cmin, mut cmax) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
         for &i in &out.order[lo..hi] {
-            b = b.union(bound(i));
-            cb.grow(centre(i));
+            let b = aabb(i);
+            (min, max) = (min.min(b.min), max.max(b.max));
+            let c = b.min + b.max;
+            (cmin, cmax) = (cmin.min(c), cmax.max(c));
         }
         let mut node = GpuNode {
-            min: b.min,
-            max: b.max,
+            min: min.into(),
+            max: max.into(),
             ..GpuNode::default()
         };
         if hi - lo <= MAX_LEAF_PRIMS as usize {
@@ -302,11 +302,17 @@ fn median_split(
             out.nodes.push(node);
             continue;
         }
-        let axis = cb.extent().max_position();
+        let axis = (cmax - cmin).max_position();
         let mid = (lo + hi) / 2;
-        out.order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
-            centre(a)[axis].total_cmp(&centre(b)[axis])
-        });
+        keys.clear();
+        keys.extend(out.order[lo..hi].iter().map(|&i| {
+            let b = aabb(i);
+            (b.min[axis] + b.max[axis], i)
+        }));
+        keys.select_nth_unstable_by(mid - lo, |a, b| a.0.total_cmp(&b.0));
+        for (slot, &(_, i)) in out.order[lo..hi].iter_mut().zip(&keys) {
+            *slot = i;
+        }
         node.count_axis = (axis as u32) << NODE_AXIS_SHIFT;
         out.nodes.push(node);
         stack.push((mid, hi, Some(here), depth + 1));
