@@ -64,10 +64,12 @@ for scene in "${scenes[@]}"; do
         elif [ "$rc" -ne 0 ]; then
             note="exit $rc: $(grep -v '^\s*$' "$log" | tail -n 1 | tr '|\t' '/ ' | cut -c1-300)"
         fi
-        # Which renderer ran: -v names it on the first line ("gpu  ADAPTER" or "cpu ...").
-        ran=$(awk 'NR == 1 { print $1 }' "$log")
+        # Which renderer ran: -v names it on its own line ("gpu  ADAPTER" or "cpu  CPU, ..."),
+        # after the thread count.
+        ran_line=$(awk '$1 == "cpu" || $1 == "gpu" { print; exit }' "$log")
+        ran=${ran_line%% *}
         if [ "$rc" -eq 0 ] && [ "$ran" != "$backend" ]; then
-            note="ran on: $(head -n 1 "$log")"
+            note="ran on: $ran_line"
         fi
         if [ "$rc" -eq 0 ] && [ "$ran" = gpu ]; then
             note="$(sed -n 's/^gpu *//p' "$log" | head -n 1); shader $(secs shader "$log") s"
