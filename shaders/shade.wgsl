@@ -89,7 +89,8 @@ fn highlight(m: Material, n: vec3<f32>, dir: vec3<f32>, r: vec3<f32>, l: vec3<f3
     } else {
         c = dot(r, l);
     }
-    if (c > 0.0) {
+    // No power where there is no highlight (SPD's `Ks 0` with a `Shine` of 1e5).
+    if (c > 0.0 && m.ks != 0.0) {
         return m.ks * pow(c, m.shine);
     }
     return 0.0;

@@ -121,7 +121,13 @@ pub fn highlight(shading: u32, m: &GpuMaterial, n: Vec3, dir: Vec3, r: Vec3, l: 
     } else {
         r.dot(l)
     };
-    if c > 0.0 { m.ks * c.powf(m.shine) } else { 0.0 }
+    // No power where there is no highlight: SPD files give `Ks 0` with a `Shine` of 1e5,
+    // whose power underflows on libm's slow path (a tenth of gears-4's whole render).
+    if c > 0.0 && m.ks != 0.0 {
+        m.ks * c.powf(m.shine)
+    } else {
+        0.0
+    }
 }
 
 /// A light sample's shadow ray and what the sample gives where nothing blocks it,
