@@ -236,16 +236,28 @@ impl SceneBuffers {
             .as_ref()
     }
 
+    /// Whether the four-wide and the compressed trees have been built (tests: each walk
+    /// asks for its own tree only).
+    #[cfg(test)]
+    pub(crate) fn trees_built(&self) -> (bool, bool) {
+        (
+            self.gpu_wide.get().is_some(),
+            self.gpu_cwide.get().is_some(),
+        )
+    }
+
     /// Traversal-stack entries (words) the GPU's walk `traversal` (as `traversal_for`
     /// gives it) can need on this scene, at most `TRAVERSAL_STACK`: for the binary walks,
     /// one per inner node on the longest path (the tree's depth bounds it); for the wide
     /// walks, what `wide::gpu_nodes` and `cwide::build` found.
     pub fn stack_entries(&self, traversal: u32) -> u32 {
-        match (traversal, self.gpu_wide(), self.gpu_cwide()) {
-            (TRAVERSAL_WIDE, Some(&(_, need)), _) => need,
-            (TRAVERSAL_CWIDE, _, Some(c)) => c.stack_words,
-            _ => self.bvh_depth.max(1) as u32,
+        // Only the walk's own tree is asked for: each is built on first use.
+        match traversal {
+            TRAVERSAL_WIDE => self.gpu_wide().map(|&(_, need)| need),
+            TRAVERSAL_CWIDE => self.gpu_cwide().map(|c| c.stack_words),
+            _ => None,
         }
+        .unwrap_or(self.bvh_depth.max(1) as u32)
     }
 
     /// Pending rays `trace` can hold at once on this scene with rays `max_depth` deep
@@ -433,6 +445,27 @@ mod tests {
             s 0 0 0 1  s 2 0 0 0.5  s -2 0 0 0.5  s 0 0 2 0.3  s 0 2 0 0.4  s 1 1 1 0.2
             p 3 -3 -3 -1  3 -3 -1  0 3 -1";
         nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap()
+    }
+
+    /// The stack a walk needs is read off that walk's own tree: the compressed tree, and
+    /// its reordered copy of every primitive, is never built for another walk.
+    #[test]
+    fn each_walk_builds_only_its_own_tree() {
+        for (traversal, built) in [
+            (TRAVERSAL_SINGLE, (false, false)),
+            (TRAVERSAL_PAIRS, (false, false)),
+            (TRAVERSAL_WIDE, (true, false)),
+            (TRAVERSAL_CWIDE, (false, true)),
+        ] {
+            let b = pack(balls()).unwrap();
+            b.stack_entries(traversal);
+            assert_eq!(
+                b.trees_built(),
+                built,
+                "{}",
+                TRAVERSAL_NAMES[traversal as usize]
+            );
+        }
     }
 
     #[test]
