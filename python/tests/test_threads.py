@@ -58,8 +58,12 @@ def test_a_call_holding_the_gil_fails_the_same_measure():
     assert counted < FREE_RATE * took, f"{counted} counts in {took:.2f} s"
 
 
+# Python's own Ctrl-C handler is installed first: a process started in the background of a
+# non-interactive shell (a CI step run with `&`) inherits SIGINT ignored, and Python then
+# leaves it ignored.
 CTRL_C = r"""
-import sys, time, gpurt
+import signal, sys, time, gpurt
+signal.signal(signal.SIGINT, signal.default_int_handler)
 r = gpurt.Renderer(sys.argv[1], width=640, height=480, backend=sys.argv[2])
 r.render(spp=1)
 print("rendering", flush=True)
