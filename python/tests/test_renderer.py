@@ -73,17 +73,23 @@ def test_a_gpu_sweep_uploads_the_scene_once(gpu_available):
     assert not all((frames[0] == f).all() for f in frames[1:])
 
 
-def test_a_sweep_costs_frames_not_loads():
-    """Timing: 20 small frames of a large scene take less than 5 loads of it, where a
-    renderer that read the scene again for each frame would take 20 (the margin is for a
-    machine other work shares: each small frame waits for the CPU's threads)."""
-    scene = shared_scenes() / "spd" / "balls-5.nff.gz"
+def test_a_sweep_costs_frames_not_loads(tmp_path):
+    """A renderer reads its scene once: its frames render with the file gone. And a small
+    frame of a large scene costs far less than a load of it, where a renderer that read
+    the scene again or rebuilt its tree for each frame would pay most of a load a frame.
+    The median of 20 frames is held to half a load: on a machine other work shares, some
+    frames wait tens of milliseconds for the CPU's threads, which a sum would count."""
+    scene = tmp_path / "balls-5.nff.gz"
+    scene.write_bytes((shared_scenes() / "spd" / "balls-5.nff.gz").read_bytes())
     start = time.perf_counter()
     r = gpurt.Renderer(scene, width=8, height=8, backend="cpu")
     load = time.perf_counter() - start
-    start = time.perf_counter()
+    scene.unlink()
+    frames = []
     for cam in turntable(20, radius=4, height=2):
+        start = time.perf_counter()
         r.render(camera=dict(cam, look_at=(0, 0, 0)))
-    sweep = time.perf_counter() - start
+        frames.append(time.perf_counter() - start)
     assert r.frames_rendered == 20
-    assert sweep < 5 * load, f"20 frames took {sweep:.2f} s, one load {load:.2f} s"
+    median = sorted(frames)[len(frames) // 2]
+    assert median < load / 2, f"a frame took {median:.3f} s (median of 20), a load {load:.3f} s"
