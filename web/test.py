@@ -396,26 +396,27 @@ def main():
                 first = canvas("opened.canvas.png")
                 matches_cpu(first, opened, "opened.cpu.png")
 
+                def moved(name, before, what):
+                    """The image after `what` moved the camera: changed, and the CPU's
+                    render from the `v` block the Camera button prints."""
+                    wait(complete, f"rendering after {what}")
+                    after = canvas(f"{name}.canvas.png")
+                    d = cli("diff", after, before, check=False)
+                    assert d.returncode == 1, f"{what} left the image as it was:\n{d.stdout}"
+                    view = camera_block(f"{name}.view.nff")
+                    matches_cpu(after, opened, f"{name}.cpu.png", "--view", view)
+                    return after
+
                 x, y = centre("#canvas")
                 js(forget)
                 mouse("mousePressed", x, y, button="left", buttons=1, clickCount=1)
                 mouse("mouseMoved", x + 12, y + 5, button="left", buttons=1)
                 mouse("mouseReleased", x + 12, y + 5, button="left", clickCount=1)
-                wait(complete, "rendering after a drag")
-                orbited = canvas("orbited.canvas.png")
-                d = cli("diff", orbited, first, check=False)
-                assert d.returncode == 1, f"a drag left the image as it was:\n{d.stdout}"
-                view = camera_block("orbited.view.nff")
-                matches_cpu(orbited, opened, "orbited.cpu.png", "--view", view)
+                orbited = moved("orbited", first, "a drag")
 
                 js(forget)
                 mouse("mouseWheel", x, y, deltaX=0, deltaY=-120)
-                wait(complete, "rendering after a wheel notch")
-                dollied = canvas("dollied.canvas.png")
-                d = cli("diff", dollied, orbited, check=False)
-                assert d.returncode == 1, f"a wheel notch left the image as it was:\n{d.stdout}"
-                view = camera_block("dollied.view.nff")
-                matches_cpu(dollied, opened, "dollied.cpu.png", "--view", view)
+                dollied = moved("dollied", orbited, "a wheel notch")
 
                 downloads = Path(tmp) / "downloads"
                 downloads.mkdir()
