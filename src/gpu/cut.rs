@@ -22,6 +22,22 @@ pub(super) const BAND_BYTES: u64 = 64 << 20;
 /// budget.
 pub const DISPATCH_BUDGET: Duration = Duration::from_millis(250);
 
+/// How much work one dispatch and one submission take on an adapter
+/// (`policy::shape_for`); with the frame's size and the device's limits it makes a `Cut`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Shape {
+    /// Samples of a pixel one dispatch traces at most.
+    pub(super) pass_samples: u32,
+    /// Pixel samples one dispatch traces at most (its tile's pixels times its pass's
+    /// samples): sets the tile's side.
+    pub(super) dispatch_samples: u64,
+    /// Pixel samples one submission traces at most.
+    pub(super) band_samples: u64,
+    /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
+    /// drivers that split a dispatch's workgroups into one contiguous run per thread.
+    pub(super) spread: bool,
+}
+
 /// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
 /// per pixel, one dispatch each, whose work is bounded by the tile's size and the pass's
 /// samples (so that no dispatch runs long enough to trip a driver watchdog, and no
@@ -39,31 +55,25 @@ pub(super) struct Cut {
     pub(super) band_rows: u32,
     /// Samples of a band's pixels one submission traces: a multiple of `pass_samples`.
     pub(super) submit_samples: u32,
-    /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
-    /// drivers that split a dispatch's workgroups into one contiguous run per thread.
+    /// Whether each dispatch scatters its workgroups over its tile (`Shape::spread`).
     pub(super) spread: bool,
 }
 
 impl Cut {
-    pub(super) fn new(
-        width: u32,
-        height: u32,
-        spp: u32,
-        pass_samples: u32,
-        band_samples: u64,
-        max_bytes: u64,
-        spread: bool,
-    ) -> Cut {
-        let pass_samples = pass_samples.clamp(1, spp);
-        let tile_side = tile_side(pass_samples);
+    pub(super) fn new(width: u32, height: u32, spp: u32, shape: &Shape, max_bytes: u64) -> Cut {
+        let pass_samples = shape.pass_samples.clamp(1, spp.max(1));
+        let band_bytes = max_bytes.min(BAND_BYTES);
+        let tile_side = tile_side(width, pass_samples, shape, band_bytes);
+        let band_samples = shape.band_samples;
         let row_bytes = u64::from(width) * PIXEL_BYTES;
         let row_samples = u64::from(width) * u64::from(spp);
-        let rows = (max_bytes.min(BAND_BYTES) / row_bytes).min(band_samples / row_samples);
-        // At least one row of tiles; whole rows of tiles, so only the last band is short.
+        let rows = (band_bytes / row_bytes).min(band_samples / row_samples);
+        // At least one row of tiles; whole rows of tiles, so only the last band is short;
+        // no more rows than the frame has.
         let band_rows = (rows as u32 / tile_side)
             .max(1)
             .saturating_mul(tile_side)
-            .min(height.next_multiple_of(tile_side));
+            .min(height.max(1));
         // Where even one row of tiles holds more samples than a submission should, the
         // band's samples are submitted a run of passes at a time (at least one pass).
         let pass_work = u64::from(width) * u64::from(band_rows) * u64::from(pass_samples);
@@ -76,7 +86,7 @@ impl Cut {
             tile_side,
             band_rows,
             submit_samples: passes.saturating_mul(pass_samples).min(spp.max(1)),
-            spread,
+            spread: shape.spread && tile_side <= MAX_SPREAD_SIDE,
         }
     }
 
@@ -184,18 +194,42 @@ pub(super) fn scatter(n: u32) -> u32 {
 /// The smallest tile `Cut::finer` makes: one workgroup.
 pub(super) const MIN_TILE_SIDE: u32 = crate::gpu_types::WORKGROUP_SIDE;
 
-/// Tiles shrink as samples per pixel grow, to bound the work of one dispatch.
-pub(super) fn tile_side(spp: u32) -> u32 {
-    match spp {
-        0..=4 => 256,
-        5..=16 => 128,
-        _ => 64,
+/// The largest tile a dispatch takes: 256x256 workgroups.
+pub(super) const MAX_TILE_SIDE: u32 = 2048;
+
+/// The largest tile whose dispatch scatters its workgroups (a larger one, where the
+/// environment asks for it, is traced unscattered): `scatter`'s products stay within the
+/// shader's u32 (`scatter_permutes_and_spreads_the_workgroups`).
+const MAX_SPREAD_SIDE: u32 = 256;
+
+/// A tile's side: the largest power of two, at most `MAX_TILE_SIDE`, whose pass of
+/// `pass_samples` traces at most `shape.dispatch_samples` pixel samples and whose row of
+/// tiles, `width` pixels wide, fits `band_bytes` (a band is at least one row of tiles);
+/// at least one workgroup.
+fn tile_side(width: u32, pass_samples: u32, shape: &Shape, band_bytes: u64) -> u32 {
+    let fits = |side: u32| {
+        u64::from(side).pow(2) * u64::from(pass_samples) <= shape.dispatch_samples
+            && u64::from(width) * u64::from(side) * PIXEL_BYTES <= band_bytes
+    };
+    let mut side = MAX_TILE_SIDE;
+    while side > MIN_TILE_SIDE && !fits(side) {
+        side /= 2;
     }
+    side
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn shape(pass_samples: u32, dispatch_samples: u64, band_samples: u64) -> Shape {
+        Shape {
+            pass_samples,
+            dispatch_samples,
+            band_samples,
+            spread: false,
+        }
+    }
 
     /// Every pixel of every band exactly once per sample, in pass order.
     fn coverage(cut: &Cut) -> Vec<u32> {
@@ -217,7 +251,7 @@ mod tests {
 
     #[test]
     fn a_finer_cut_divides_the_work_and_covers_the_same_samples() {
-        let cut = Cut::new(1000, 333, 40, 16, 1 << 26, 1 << 30, false);
+        let cut = Cut::new(1000, 333, 40, &shape(16, 1 << 18, 1 << 26), 1 << 30);
         assert_eq!((cut.tile_side, cut.pass_samples), (128, 16));
         let finer = cut.finer(100.0);
         // 16 -> 1 sample a pass (16x), then 128 -> 32 pixels a side (16x more).
@@ -237,13 +271,13 @@ mod tests {
     /// it was given, and the runs cover the samples once.
     #[test]
     fn a_band_too_heavy_for_one_submission_is_submitted_in_runs_of_passes() {
-        let cut = Cut::new(16384, 16384, 4096, 1, 1 << 18, 1 << 27, false);
+        let cut = Cut::new(16384, 16384, 4096, &shape(1, 1 << 16, 1 << 18), 1 << 27);
         assert_eq!((cut.tile_side, cut.band_rows), (256, 256));
         assert_eq!(
             cut.submit_samples, 1,
             "one pass of the band is 16x a submission's work"
         );
-        let cut = Cut::new(512, 512, 4096, 1, 1 << 26, 1 << 27, false);
+        let cut = Cut::new(512, 512, 4096, &shape(1, 1 << 16, 1 << 26), 1 << 27);
         assert_eq!((cut.tile_side, cut.band_rows), (256, 256));
         let work = 512 * 256 * u64::from(cut.submit_samples);
         assert!(
@@ -257,9 +291,40 @@ mod tests {
         assert!(runs.windows(2).all(|w| w[0].end == w[1].start));
         assert_eq!(runs.last().unwrap().end, 4096);
         // A light frame is one submission a band, as before.
-        let light = Cut::new(512, 512, 1, 1, 1 << 18, 1 << 27, false);
+        let light = Cut::new(512, 512, 1, &shape(1, 1 << 16, 1 << 18), 1 << 27);
         assert_eq!(light.submissions(&(0..1)).count(), 1);
         assert_eq!(light.band_rows, 512);
+    }
+
+    /// A GPU's tiles grow to the work a dispatch may take, as far as a row of them fits a
+    /// band's bytes, and still cover every sample once; a scattered tile is at most
+    /// `MAX_SPREAD_SIDE` a side.
+    #[test]
+    fn tiles_grow_to_the_dispatch_work_within_a_band() {
+        let gpu = shape(4, 1 << 22, 1 << 26);
+        let hd = Cut::new(1920, 1080, 1, &gpu, 1 << 32);
+        assert_eq!(
+            (hd.tile_side, hd.band_rows, hd.pass_samples),
+            (2048, 1080, 1)
+        );
+        assert_eq!(hd.dispatches_per_submission(), 1);
+        // At 4K a row of 2048-pixel tiles is 126 MB, over BAND_BYTES.
+        let uhd = Cut::new(3840, 2160, 16, &gpu, 1 << 32);
+        assert_eq!((uhd.tile_side, uhd.pass_samples), (1024, 4));
+        assert!(uhd.band_bytes() <= BAND_BYTES);
+        assert!(coverage(&uhd).iter().all(|&n| n == 16));
+        // A small device limit shrinks the tiles with the band.
+        let small = Cut::new(3840, 2160, 16, &gpu, 1 << 24);
+        assert_eq!(small.tile_side, 256);
+        assert!(small.band_bytes() <= 1 << 24);
+        let mut spread = gpu;
+        spread.spread = true;
+        assert!(!Cut::new(3840, 2160, 1, &spread, 1 << 32).spread);
+        let lavapipe = Cut::new(3840, 2160, 1, &shape(1, 1 << 16, 1 << 18), 1 << 32);
+        assert_eq!(lavapipe.tile_side, 256);
+        let mut lavapipe = shape(1, 1 << 16, 1 << 18);
+        lavapipe.spread = true;
+        assert!(Cut::new(3840, 2160, 1, &lavapipe, 1 << 32).spread);
     }
 
     /// Every scatter is a permutation of the dispatch's workgroups, and the first half of
@@ -283,8 +348,8 @@ mod tests {
                 );
             }
         }
-        // Within u32: the largest tile's dispatch, by its stride.
-        let n = (256 / crate::gpu_types::WORKGROUP_SIDE).pow(2);
+        // Within u32: the largest scattered tile's dispatch, by its stride.
+        let n = (MAX_SPREAD_SIDE / crate::gpu_types::WORKGROUP_SIDE).pow(2);
         assert!(u64::from(n) * u64::from(scatter(n)) < u64::from(u32::MAX));
     }
 }

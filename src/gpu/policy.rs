@@ -3,7 +3,7 @@
 //! was measured, and overridable from the environment for measuring them side by side;
 //! and how the frame is cut into work.
 
-use super::cut::Cut;
+use super::cut::{Cut, Shape};
 use crate::error::{Error, Result};
 use crate::gpu_types::{
     AOV_COLOR, GpuGlobals, GpuWaveState, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WORKGROUP_SIDE,
@@ -67,30 +67,76 @@ pub(super) fn wavefront_for(
 /// storage bindings are smaller (`cut_for`).
 const WAVE_TILE_SIDE: u32 = 128;
 
-/// How a frame of `globals`' size and samples is cut on this device. Software adapters
-/// get small bands so that Ctrl-C and the progress bar respond within a second, and one
-/// sample per pass: lavapipe ends every loop once an invocation has run 65535 loop
-/// iterations in all, and one sample of an ordinary scene needs far fewer. GPUs take up
-/// to 16 samples per pass, and a band is the most one submission should hold. The
-/// wavefront path's tiles are its waves, at most `WAVE_TILE_SIDE` a side.
-pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, software: bool) -> Cut {
-    let (pass_samples, band_samples) = if software {
-        (1, 1 << 18)
+/// How much work a dispatch and a submission take on this adapter. Software adapters
+/// get small bands so that Ctrl-C and the progress bar respond within a second, one
+/// sample per pass (lavapipe ends every loop once an invocation has run 65535 loop
+/// iterations in all, and one sample of an ordinary scene needs far fewer) and tiles of
+/// 256x256 pixels, scattered over their threads. GPUs take up to `GPU_PASS_SAMPLES`
+/// samples a pass on tiles of up to `GPU_DISPATCH_SAMPLES` pixel samples, and a band is
+/// the most one submission should hold. `GPURT_PASS_SAMPLES` and
+/// `GPURT_DISPATCH_SAMPLES` override the first two, for measuring them on one adapter.
+pub(super) fn shape_for(software: bool) -> Result<Shape> {
+    let mut shape = if software {
+        Shape {
+            pass_samples: 1,
+            dispatch_samples: 1 << 16,
+            band_samples: 1 << 18,
+            spread: true,
+        }
     } else {
-        (16, 1 << 26)
+        Shape {
+            pass_samples: GPU_PASS_SAMPLES,
+            dispatch_samples: GPU_DISPATCH_SAMPLES,
+            band_samples: 1 << 26,
+            spread: false,
+        }
     };
+    if let Some(n) = count_from_env("GPURT_PASS_SAMPLES")? {
+        shape.pass_samples = u32::try_from(n).unwrap_or(u32::MAX);
+    }
+    if let Some(n) = count_from_env("GPURT_DISPATCH_SAMPLES")? {
+        shape.dispatch_samples = n;
+    }
+    Ok(shape)
+}
+
+/// Samples of a pixel one dispatch traces at most on a GPU: at 16 spp, four passes of 4
+/// were up to 10% faster on an H200 than sixteen of 1 (docs/gpu.md).
+const GPU_PASS_SAMPLES: u32 = 4;
+
+/// Pixel samples one dispatch traces at most on a GPU: a 1024x1024 tile at 4 samples,
+/// over a million invocations, enough to fill a large GPU several times over. Tiles of
+/// 256 (up to 16 samples a pass, 128 a side with more) made 4K frames on an H200 2 to 8
+/// times slower; 2^24 was at most 3% faster than this, for four times the longest
+/// dispatch (docs/gpu.md has the figures).
+const GPU_DISPATCH_SAMPLES: u64 = 1 << 22;
+
+/// A positive whole number from the environment variable `name`; `None` where it is
+/// unset or empty.
+fn count_from_env(name: &str) -> Result<Option<u64>> {
+    match std::env::var(name).as_deref() {
+        Err(_) | Ok("") => Ok(None),
+        Ok(v) => match v.parse::<u64>() {
+            Ok(n) if n > 0 => Ok(Some(n)),
+            _ => Err(Error::Render(format!(
+                "{name}={v}: expected a whole number above 0"
+            ))),
+        },
+    }
+}
+
+/// How a frame of `globals`' size and samples is cut on this device, with `shape`'s
+/// work a dispatch and a submission. The wavefront path's tiles are its waves, at most
+/// `WAVE_TILE_SIDE` a side.
+pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape) -> Cut {
     let mut cut = Cut::new(
         globals.width,
         globals.height,
         globals.spp,
-        pass_samples,
-        band_samples,
+        shape,
         limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size),
-        // Software adapters split a dispatch among their threads in fixed runs; a GPU's
-        // own scheduler balances, and neighbouring blocks share its caches.
-        software,
     );
     if globals.wavefront != 0 {
         // A wave's states are one storage binding: halve the side (bands stay whole rows

@@ -10,13 +10,13 @@ use std::time::Duration;
 
 use web_time::Instant;
 
-use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES};
+use super::cut::{Cut, DISPATCH_BUDGET, PIXEL_BYTES, Shape};
 use super::device::{Device, Gpu};
 use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
 };
-use super::policy::{cut_for, kernels_from_env, traversal_from_env, wavefront_for};
+use super::policy::{cut_for, kernels_from_env, shape_for, traversal_from_env, wavefront_for};
 use super::scene::{GpuScene, bind};
 use super::specialization::Specialization;
 use super::trace::encode_band;
@@ -38,8 +38,10 @@ pub struct GpuRenderer {
     cache: Option<DiskCache>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
     compile_time: Mutex<Duration>,
-    /// The device is a CPU (lavapipe): bands are kept small.
+    /// The device is a CPU (lavapipe).
     software: bool,
+    /// The work of a dispatch and of a submission on this device (`policy::shape_for`).
+    shape: Shape,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
     /// The wavefront kernels' pipelines, shared with the uploaded scenes, and whether
@@ -94,6 +96,7 @@ impl GpuRenderer {
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
             software,
+            shape: shape_for(software)?,
             traversal: traversal_from_env()?,
             wave: Arc::new(wave),
             wavefront: kernels_from_env()?,
@@ -272,7 +275,7 @@ impl GpuRenderer {
 
     /// How a frame of `globals` is cut on this device (`policy::cut_for`).
     fn cut(&self, limits: &wgpu::Limits, globals: &GpuGlobals) -> Cut {
-        cut_for(limits, globals, self.software)
+        cut_for(limits, globals, &self.shape)
     }
 
     /// Uploads a scene for the frame described by `globals` and gets its pipeline ready.
