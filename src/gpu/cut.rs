@@ -33,6 +33,8 @@ pub(super) struct Shape {
     pub(super) dispatch_samples: u64,
     /// Pixel samples one submission traces at most.
     pub(super) band_samples: u64,
+    /// Pixels a side of a wavefront frame's waves at most (`policy::cut_for`).
+    pub(super) wave_side: u32,
     /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
     /// drivers that split a dispatch's workgroups into one contiguous run per thread.
     pub(super) spread: bool,
@@ -227,6 +229,7 @@ mod tests {
             pass_samples,
             dispatch_samples,
             band_samples,
+            wave_side: 128,
             spread: false,
         }
     }

@@ -73,14 +73,16 @@ const WAVE_TILE_SIDE: u32 = 128;
 /// iterations in all, and one sample of an ordinary scene needs far fewer) and tiles of
 /// 256x256 pixels, scattered over their threads. GPUs take up to `GPU_PASS_SAMPLES`
 /// samples a pass on tiles of up to `GPU_DISPATCH_SAMPLES` pixel samples, and a band is
-/// the most one submission should hold. `GPURT_PASS_SAMPLES` and
-/// `GPURT_DISPATCH_SAMPLES` override the first two, for measuring them on one adapter.
+/// the most one submission should hold. `GPURT_PASS_SAMPLES`, `GPURT_DISPATCH_SAMPLES`
+/// and `GPURT_WAVE_SIDE` (a wavefront frame's wave, `WAVE_TILE_SIDE` by default) override
+/// the shape, for measuring it on one adapter.
 pub(super) fn shape_for(software: bool) -> Result<Shape> {
     let mut shape = if software {
         Shape {
             pass_samples: 1,
             dispatch_samples: 1 << 16,
             band_samples: 1 << 18,
+            wave_side: WAVE_TILE_SIDE,
             spread: true,
         }
     } else {
@@ -88,6 +90,7 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             pass_samples: GPU_PASS_SAMPLES,
             dispatch_samples: GPU_DISPATCH_SAMPLES,
             band_samples: 1 << 26,
+            wave_side: WAVE_TILE_SIDE,
             spread: false,
         }
     };
@@ -96,6 +99,10 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
     }
     if let Some(n) = count_from_env("GPURT_DISPATCH_SAMPLES")? {
         shape.dispatch_samples = n;
+    }
+    if let Some(n) = count_from_env("GPURT_WAVE_SIDE")? {
+        // A power of two, as tile sides are.
+        shape.wave_side = (n.min(1 << 15) as u32).next_power_of_two();
     }
     Ok(shape)
 }
@@ -127,7 +134,7 @@ fn count_from_env(name: &str) -> Result<Option<u64>> {
 
 /// How a frame of `globals`' size and samples is cut on this device, with `shape`'s
 /// work a dispatch and a submission. The wavefront path's tiles are its waves, at most
-/// `WAVE_TILE_SIDE` a side.
+/// `shape.wave_side` a side.
 pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape) -> Cut {
     let mut cut = Cut::new(
         globals.width,
@@ -146,7 +153,7 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let state = size_of::<GpuWaveState>() as u64;
-        let mut side = cut.tile_side.min(WAVE_TILE_SIDE);
+        let mut side = cut.tile_side.min(shape.wave_side);
         while side > WORKGROUP_SIDE && u64::from(side * side) * state > limit {
             side /= 2;
         }
