@@ -124,8 +124,10 @@ pub fn render_rows_with(
     // Packets need the eight-wide tree (the `cost` AOV walks the GPU's instead).
     let kernels = kernels.filter(|_| b.wide.is_some());
     let span = rows.start as usize * w as usize..rows.end as usize * w as usize;
+    // A pass from zero sums writes them without reading them first (`Film::new`).
+    let fresh = accum.holds_nothing();
     let held = &accum.sums.pixels[span.clone()];
-    let before = held.iter().any(|p| *p != [0.0; 3]).then(|| held.to_vec());
+    let before = (!fresh && held.iter().any(|p| *p != [0.0; 3])).then(|| held.to_vec());
     let band = (TILE * w) as usize;
     let columns = w.div_ceil(TILE) as usize;
     // Which tiles were traced, by band and column: the tiles to zero when cancelled.
@@ -168,10 +170,13 @@ pub fn render_rows_with(
                     let x0 = tx as u32 * TILE;
                     let x1 = x0 + tile[0].1.len() as u32;
                     let ys = tile[0].0..tile[0].0 + tile.len() as u32;
-                    let mut px: Vec<Vec3> = tile
-                        .iter()
-                        .flat_map(|(_, p)| p.iter().map(|&s| Vec3::from(s)))
-                        .collect();
+                    let mut px: Vec<Vec3> = if fresh {
+                        vec![Vec3::ZERO; tile.iter().map(|(_, p)| p.len()).sum()]
+                    } else {
+                        tile.iter()
+                            .flat_map(|(_, p)| p.iter().map(|&s| Vec3::from(s)))
+                            .collect()
+                    };
                     coherent::render_tile(
                         &b,
                         k,
@@ -199,7 +204,7 @@ pub fn render_rows_with(
                                 x,
                                 y,
                                 samples.clone(),
-                                Vec3::from(*px),
+                                if fresh { Vec3::ZERO } else { Vec3::from(*px) },
                                 &mut counts,
                             );
                             *px = sum.to_array();

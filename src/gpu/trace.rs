@@ -152,8 +152,16 @@ async fn trace_band_rows(
                 Ok(dispatches)
             })??;
             if last {
-                let (band_rays, band_cut) =
-                    read_band(gpu, &scene.bound.readback, bytes, y0, &mut accum.sums).await?;
+                let fresh = accum.holds_nothing();
+                let (band_rays, band_cut) = read_band(
+                    gpu,
+                    &scene.bound.readback,
+                    bytes,
+                    y0,
+                    &mut accum.sums,
+                    fresh,
+                )
+                .await?;
                 if let Some(counted) = &mut counted {
                     let first = u64::from(y0) * u64::from(cut.width);
                     read_counts(gpu, scene, pixels, first, &band_cut, counted).await?;
@@ -302,7 +310,8 @@ pub(super) fn encode_band(
 /// A band's chunk of sums to add to, and its readback pixels, at its index.
 type Chunk<'a> = (usize, (&'a mut [[f32; 3]], &'a [[u32; 4]]));
 
-/// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`;
+/// Maps the readback buffer and adds the band's sums (full rows from `y0`) to `sums`
+/// (writes them, where `fresh`: `sums` holds nothing yet, `Accumulator::holds_nothing`);
 /// returns its ray count and the pixels (x | y << RESUME_Y_SHIFT) whose work was cut short, which are
 /// left to `resume` (neither their sums nor their rays are counted).
 async fn read_band(
@@ -311,6 +320,7 @@ async fn read_band(
     bytes: u64,
     y0: u32,
     sums: &mut Film,
+    fresh: bool,
 ) -> Result<(u64, Vec<u32>)> {
     let width = sums.width as usize;
     // In parallel: a 4K band is 133 MB, and one core takes longer to add it up than the
@@ -325,9 +335,8 @@ async fn read_band(
                 let j = start + k * CHUNK + i;
                 cut.push((j % width) as u32 | ((j / width) as u32) << RESUME_Y_SHIFT);
             } else {
-                for c in 0..3 {
-                    out[c] += f32::from_bits(p[c]);
-                }
+                let sum = if fresh { [0.0; 3] } else { *out };
+                *out = [0, 1, 2].map(|c| sum[c] + f32::from_bits(p[c]));
                 rays += u64::from(p[3]);
             }
         }
