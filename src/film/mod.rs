@@ -211,11 +211,11 @@ impl Accumulator {
     }
 
     /// Whether the sums are all zero: no sample accumulated yet. A pass's sums are then
-    /// written, not added to,
-    /// as `0.0 + sum` (the value an addition to zero gives, to the bit): a new film's
-    /// pages are never read before they are written (`Film::new`). A first pass that
-    /// added to them ran 5 times slower on 2 cores (235 against 39 ms for the sums of a
-    /// 4K frame), and the GPU's readback of a 4K frame on an H200 took 63 ms instead of 19.
+    /// written as `0.0 + sum` (the value an addition to zero gives, to the bit), not
+    /// added to what the film holds, so a new film's pages are never read before they are
+    /// written (`Film::new`). Adding them to the film's pages ran 5 times slower on 2
+    /// cores (235 against 39 ms for a 4K frame's sums), and the GPU's readback of a 4K
+    /// frame on an H200 took 63 ms instead of 18.
     pub fn holds_nothing(&self) -> bool {
         self.samples == 0
     }
