@@ -3,7 +3,7 @@
 //! was measured, and overridable from the environment for measuring them side by side;
 //! and how the frame is cut into work.
 
-use super::cut::{Cut, Shape};
+use super::cut::{BAND_BYTES, Cut, Shape};
 use crate::error::{Error, Result};
 use crate::gpu_types::{
     AOV_COLOR, GpuGlobals, GpuWaveState, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WORKGROUP_SIDE,
@@ -72,10 +72,11 @@ const WAVE_TILE_SIDE: u32 = 128;
 /// sample per pass (lavapipe ends every loop once an invocation has run 65535 loop
 /// iterations in all, and one sample of an ordinary scene needs far fewer) and tiles of
 /// 256x256 pixels, scattered over their threads. GPUs take up to `GPU_PASS_SAMPLES`
-/// samples a pass on tiles of up to `GPU_DISPATCH_SAMPLES` pixel samples, and a band is
-/// the most one submission should hold. `GPURT_PASS_SAMPLES`, `GPURT_DISPATCH_SAMPLES`
-/// and `GPURT_WAVE_SIDE` (a wavefront frame's wave, `WAVE_TILE_SIDE` by default) override
-/// the shape, for measuring it on one adapter.
+/// samples a pass on strips as wide as the frame of up to `GPU_DISPATCH_SAMPLES` pixel
+/// samples, in bands of up to `GPU_BAND_BYTES`; a band is the most one submission should
+/// hold. `GPURT_PASS_SAMPLES`, `GPURT_DISPATCH_SAMPLES`, `GPURT_BAND_BYTES` and
+/// `GPURT_WAVE_SIDE` (a wavefront frame's wave, `WAVE_TILE_SIDE` by default) override the
+/// shape, for measuring it on one adapter.
 pub(super) fn shape_for(software: bool) -> Result<Shape> {
     let mut shape = if software {
         Shape {
@@ -84,6 +85,8 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             band_samples: 1 << 18,
             wave_side: WAVE_TILE_SIDE,
             spread: true,
+            strips: false,
+            band_bytes: BAND_BYTES,
         }
     } else {
         Shape {
@@ -92,6 +95,8 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             band_samples: 1 << 26,
             wave_side: WAVE_TILE_SIDE,
             spread: false,
+            strips: true,
+            band_bytes: GPU_BAND_BYTES,
         }
     };
     if let Some(n) = count_from_env("GPURT_PASS_SAMPLES")? {
@@ -99,6 +104,9 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
     }
     if let Some(n) = count_from_env("GPURT_DISPATCH_SAMPLES")? {
         shape.dispatch_samples = n;
+    }
+    if let Some(n) = count_from_env("GPURT_BAND_BYTES")? {
+        shape.band_bytes = n;
     }
     if let Some(n) = count_from_env("GPURT_WAVE_SIDE")? {
         // A power of two, as tile sides are.
@@ -111,12 +119,17 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
 /// were up to 10% faster on an H200 than sixteen of 1 (docs/gpu.md).
 const GPU_PASS_SAMPLES: u32 = 4;
 
-/// Pixel samples one dispatch traces at most on a GPU: a 1024x1024 tile at 4 samples,
-/// over a million invocations, enough to fill a large GPU several times over. Tiles of
-/// 256 (up to 16 samples a pass, 128 a side with more) made 4K frames on an H200 2 to 8
-/// times slower; 2^24 was at most 3% faster than this, for four times the longest
-/// dispatch (docs/gpu.md has the figures).
-const GPU_DISPATCH_SAMPLES: u64 = 1 << 22;
+/// Output bytes a band holds at most on a GPU: a 4K frame's 133 MB in one band.
+const GPU_BAND_BYTES: u64 = 256 << 20;
+
+/// Pixel samples one dispatch traces at most on a GPU: a 4K frame at one sample is one
+/// dispatch, at 4 samples a pass two strips of 1088 rows, over four million invocations
+/// each, many times what a large GPU holds at once, so that few dispatches end with the
+/// GPU half idle. On an H200 (docs/gpu.md), strips of 2^24 made 4K frames 3 to 17%
+/// faster than the 1024x1024 squares of 2^22 before them (12 dispatches a frame at 1
+/// spp, four of them 112 rows high); strips of 2^22 were slower at 16 spp. A slow GPU's
+/// dispatches over `DISPATCH_BUDGET` are cut finer (`Cut::finer`).
+const GPU_DISPATCH_SAMPLES: u64 = 1 << 24;
 
 /// A positive whole number from the environment variable `name`; `None` where it is
 /// unset or empty.
@@ -133,9 +146,13 @@ fn count_from_env(name: &str) -> Result<Option<u64>> {
 }
 
 /// How a frame of `globals`' size and samples is cut on this device, with `shape`'s
-/// work a dispatch and a submission. The wavefront path's tiles are its waves, at most
-/// `shape.wave_side` a side.
+/// work a dispatch and a submission. The wavefront path's tiles are its waves: squares,
+/// at most `shape.wave_side` a side.
 pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape) -> Cut {
+    let shape = &Shape {
+        strips: shape.strips && globals.wavefront == 0,
+        ..*shape
+    };
     let mut cut = Cut::new(
         globals.width,
         globals.height,
@@ -153,11 +170,11 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let state = size_of::<GpuWaveState>() as u64;
-        let mut side = cut.tile_side.min(shape.wave_side);
+        let mut side = cut.tile_rows.min(shape.wave_side);
         while side > WORKGROUP_SIDE && u64::from(side * side) * state > limit {
             side /= 2;
         }
-        cut.tile_side = side;
+        (cut.tile_width, cut.tile_rows) = (side, side);
     }
     cut
 }

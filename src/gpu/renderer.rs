@@ -378,7 +378,7 @@ impl GpuRenderer {
             uploaded.cut = cut;
             *uploaded.finer.lock().expect("cut lock") = None;
         }
-        let wave_fits = |w: &Wave| w.capacity >= cut.tile_side * cut.tile_side;
+        let wave_fits = |w: &Wave| w.capacity >= cut.tile_width * cut.tile_rows;
         if (globals.wavefront != 0) != uploaded.wave.is_some()
             || uploaded
                 .wave
@@ -400,7 +400,7 @@ impl GpuRenderer {
         globals: &GpuGlobals,
     ) -> Result<Option<Wave>> {
         (globals.wavefront != 0)
-            .then(|| Wave::new(gpu, &self.wave, spec, cut.tile_side * cut.tile_side))
+            .then(|| Wave::new(gpu, &self.wave, spec, cut.tile_width * cut.tile_rows))
             .transpose()
     }
 

@@ -42,11 +42,11 @@ pub struct GpuScene {
 }
 
 impl GpuScene {
-    /// Pixels a side of a tile and samples a pass of the dispatches traced now: the cut
-    /// made for the frame, or a finer one (`DISPATCH_BUDGET`).
+    /// Rows of a tile and samples a pass of the dispatches traced now: the cut made for
+    /// the frame, or a finer one (`DISPATCH_BUDGET`).
     pub fn dispatch_shape(&self) -> (u32, u32) {
         let cut = self.tracing_cut();
-        (cut.tile_side, cut.pass_samples)
+        (cut.tile_rows, cut.pass_samples)
     }
 
     pub(super) fn tracing_cut(&self) -> Cut {
