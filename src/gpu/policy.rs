@@ -89,15 +89,7 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             band_bytes: BAND_BYTES,
         }
     } else {
-        Shape {
-            pass_samples: GPU_PASS_SAMPLES,
-            dispatch_samples: GPU_DISPATCH_SAMPLES,
-            band_samples: 1 << 26,
-            wave_side: WAVE_TILE_SIDE,
-            spread: false,
-            strips: true,
-            band_bytes: GPU_BAND_BYTES,
-        }
+        gpu_shape()
     };
     if let Some(n) = count_from_env("GPURT_PASS_SAMPLES")? {
         shape.pass_samples = u32::try_from(n).unwrap_or(u32::MAX);
@@ -113,6 +105,19 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
         shape.wave_side = (n.min(1 << 15) as u32).next_power_of_two();
     }
     Ok(shape)
+}
+
+/// The shape of a GPU's work (`shape_for`), before the environment's overrides.
+pub(super) fn gpu_shape() -> Shape {
+    Shape {
+        pass_samples: GPU_PASS_SAMPLES,
+        dispatch_samples: GPU_DISPATCH_SAMPLES,
+        band_samples: 1 << 26,
+        wave_side: WAVE_TILE_SIDE,
+        spread: false,
+        strips: true,
+        band_bytes: GPU_BAND_BYTES,
+    }
 }
 
 /// Samples of a pixel one dispatch traces at most on a GPU: at 16 spp, four passes of 4

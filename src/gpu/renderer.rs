@@ -16,7 +16,9 @@ use super::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, compile, pipeline_layouts,
     resume_group_layout,
 };
-use super::policy::{cut_for, kernels_from_env, shape_for, traversal_from_env, wavefront_for};
+use super::policy::{
+    cut_for, gpu_shape, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
+};
 use super::scene::{GpuScene, bind};
 use super::specialization::Specialization;
 use super::trace::encode_band;
@@ -134,6 +136,20 @@ impl GpuRenderer {
     pub fn with_dispatch_budget(self, budget: Duration) -> Self {
         GpuRenderer {
             dispatch_budget: Some(budget),
+            ..self
+        }
+    }
+
+    /// This renderer cutting frames as on a GPU (`policy::gpu_shape`: strips of the
+    /// frame's width, several samples a pass), with dispatches of at most
+    /// `dispatch_samples` pixel samples, whatever its adapter: lets the tests trace
+    /// frames in several strips on lavapipe.
+    pub fn with_gpu_shape(self, dispatch_samples: u64) -> Self {
+        GpuRenderer {
+            shape: Shape {
+                dispatch_samples,
+                ..gpu_shape()
+            },
             ..self
         }
     }

@@ -1,7 +1,8 @@
 //! Dispatch: work too long for one invocation (many samples per pixel, deep glass, a
 //! thousand lights) is cut into passes and continued across dispatches, agreeing with the
-//! CPU ray for ray; what cannot be finished is an error; and dispatches over the time
-//! budget cut the rest of the frame finer without changing a bit.
+//! CPU ray for ray; what cannot be finished is an error; dispatches over the time budget
+//! cut the rest of the frame finer, and a GPU's cut (strips, several samples a pass)
+//! traces the same frames, without changing a bit.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -237,4 +238,64 @@ fn dispatches_over_the_budget_are_cut_finer_and_change_nothing() {
         "a finer cut changed the image or the rays"
     );
     assert!(second == reference, "the refined cut's next frame changed");
+}
+
+/// A GPU's cut of a frame (strips as wide as the frame, four samples a pass, in
+/// `with_gpu_shape`) gives the image, the rays and the counts of a software adapter's
+/// (scattered squares, one sample a pass) to the bit: here with strips of 16 to 40 rows
+/// and a short last one, on an odd-sized frame of every feature whose samples do not divide
+/// into passes, an AOV frame, and glass at depth 16, whose heavy pixels lavapipe's loop
+/// limit cuts short and `resume` finishes.
+#[test]
+fn a_gpus_strips_trace_the_frame_of_a_software_adapters_squares() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let features = features_scene("");
+    let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
+    let cases = [
+        ("features", &features, 97, 61, 5, 5, AOV_COLOR),
+        ("features depth", &features, 97, 61, 2, 5, AOV_DEPTH),
+        ("glass", &glass, 64, 44, 1, 16, AOV_COLOR),
+    ];
+    for (label, scene, width, height, spp, max_depth, aov) in cases {
+        let buffers = pack::pack(scene.clone()).expect("packs");
+        let frame = RenderOptions {
+            width,
+            height,
+            spp,
+            max_depth,
+            ..opts(scene)
+        };
+        let globals = GpuGlobals {
+            counters: 1,
+            aov,
+            ..frame::globals(&buffers, &frame)
+        };
+        let render = |r: GpuRenderer| {
+            let up = r
+                .upload(device, queue, &buffers, &r.frame(&buffers, &globals))
+                .expect("uploads");
+            let shape = up.dispatch_shape();
+            let never = AtomicBool::new(false);
+            let (film, rays) =
+                gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+            (film, rays, up.counters().expect("counts"), shape)
+        };
+        let new = || GpuRenderer::new(device, None).expect("shader module");
+        let (film, rays, counts, _) = render(new());
+        let strip = u64::from(width) * 16 * 4;
+        let (f, r, c, shape) = render(new().with_gpu_shape(strip));
+        // Rows for the dispatch's samples at this pass's samples, whole workgroups, each
+        // frame in several strips.
+        let pass = spp.min(4);
+        let rows = (16 * 4 / pass).min(height) / WORKGROUP_SIDE * WORKGROUP_SIDE;
+        assert_eq!(shape, (rows, pass), "{label}: the strips");
+        assert!(rows < height);
+        assert!(rays > u64::from(width * height), "{label}: traced nothing");
+        assert_eq!(r, rays, "{label}: the rays");
+        assert!(c == counts, "{label}: the counts");
+        assert!(f == film, "{label}: the image");
+    }
 }
