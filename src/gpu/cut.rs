@@ -126,15 +126,13 @@ impl Cut {
         while work(&cut) > goal {
             if cut.pass_samples > 1 {
                 cut.pass_samples = cut.pass_samples.div_ceil(2);
-            } else if cut.tile_rows > MIN_TILE_SIDE && cut.tile_rows >= cut.tile_width {
+            } else if cut.tile_rows > MIN_TILE_SIDE {
                 // A square's sides halve together.
                 let square = cut.tile_rows == cut.tile_width;
                 cut.tile_rows = half(cut.tile_rows);
                 if square {
                     cut.tile_width = cut.tile_rows;
                 }
-            } else if cut.tile_rows > MIN_TILE_SIDE {
-                cut.tile_rows = half(cut.tile_rows);
             } else if cut.tile_width > MIN_TILE_SIDE {
                 cut.tile_width = half(cut.tile_width);
             } else {
