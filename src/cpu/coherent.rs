@@ -17,8 +17,10 @@ use glam::Vec3;
 
 use super::main::{aov, camera_ray, sample_offset};
 use super::packet::{Kernels, MAX_LANES, Packet};
-use super::shade::{Surface, light_ray, offset_origin, reflect_dir, surface, trace};
-use super::tracer::{Alone, Tracer};
+use super::shade::{
+    LightRay, Surface, Tracer, light_ray, offset_origin, reflect_dir, surface, trace,
+};
+use super::tracer::Alone;
 use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
 use crate::gpu_types::*;
 
@@ -47,17 +49,56 @@ impl<T: Copy> Answer<T> {
 
 /// One pixel's rays traced beforehand: its camera ray, its shadow rays from the camera
 /// ray's hit, one a light (in the lights' order; `None` where none was traced), and its
-/// mirror ray. Any other ray is walked alone.
+/// mirror ray. Any other ray is walked alone. The camera ray's surface and its shadow
+/// rays, made to trace the packets, are handed to the shading as they are, not made again.
 struct Known<'a> {
     eye: Option<Answer<Hit>>,
     /// Light arriving along each shadow ray, and the node fetches of its walk.
     shadows: &'a [Option<Answer<(Vec3, u32)>>],
     mirror: Option<Answer<Hit>>,
+    /// The camera ray's surface, for the first surface asked for (the camera ray's hit:
+    /// the shading asks for that ray first).
+    eye_surface: Option<Surface>,
+    /// Its shadow rays, one a point or directional light in the lights' order, handed out
+    /// while the shading lights that surface (until it asks for the next surface).
+    eye_lights: &'a [Option<LightRay>],
     /// Rays answered from packets, by kind.
     counts: RayCounts,
 }
 
 impl Tracer for Known<'_> {
+    fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
+        match self.eye_surface.take() {
+            Some(s) => s,
+            None => {
+                self.eye_lights = &[];
+                surface(b, ray, hit)
+            }
+        }
+    }
+
+    fn light_ray(
+        &mut self,
+        b: &Bindings,
+        s: &Surface,
+        m: &GpuMaterial,
+        dir: Vec3,
+        r: Vec3,
+        light: &GpuLight,
+        k: u32,
+        rng: &mut u32,
+    ) -> Option<LightRay> {
+        if light.kind != LIGHT_AREA
+            && let Some((&first, rest)) = self.eye_lights.split_first()
+        {
+            // The same call on the same surface made it (the images are the per-pixel
+            // renderer's to the bit: tests/gpurt/packet.rs).
+            self.eye_lights = rest;
+            return first;
+        }
+        light_ray(b, s, m, dir, r, light, k, rng)
+    }
+
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         if let Some((hit, packed)) = self.eye.and_then(|a| a.of(ray, tmin, tmax)) {
             self.eye = None;
@@ -122,6 +163,7 @@ pub fn render_tile(
         .filter(|&i| b.lights[i].kind != LIGHT_AREA)
         .collect();
     let mut known_shadows = vec![None; MAX_LANES * b.lights.len()];
+    let mut eye_lights = vec![None; MAX_LANES * shadowed.len()];
     let mut packet = Packet::default();
     let mut hits = [Hit {
         t: 0.0,
@@ -173,6 +215,8 @@ pub fn render_tile(
                             eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
                             shadows: &[],
                             mirror: None,
+                            eye_surface: None,
+                            eye_lights: &[],
                             counts: RayCounts::default(),
                         };
                         sums[i] += aov(b, &mut known, &ray, counts);
@@ -185,16 +229,18 @@ pub fn render_tile(
                 });
                 // Shadow rays to each point and directional light, one packet a light.
                 known_shadows.fill(None);
-                for &li in &shadowed {
+                for (j, &li) in shadowed.iter().enumerate() {
                     packet.clear();
                     for (k, s) in surfaces.iter().enumerate() {
                         let Some(s) = s else { continue };
                         let m = &b.materials[s.material as usize];
                         let dir = lanes[k].1.dir;
                         let r = reflect_dir(dir, s.ns);
-                        if let Some(lr) = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0) {
+                        let lr = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0);
+                        if let Some(lr) = lr {
                             packet.set(k, &lr.ray, 0.0, lr.dist);
                         }
+                        eye_lights[k * shadowed.len() + j] = lr;
                     }
                     if packet.lanes() == 0 {
                         continue;
@@ -237,6 +283,8 @@ pub fn render_tile(
                         shadows: &known_shadows[k * b.lights.len()..(k + 1) * b.lights.len()],
                         mirror: (packet.lanes() & 1 << k != 0)
                             .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
+                        eye_surface: surfaces[k],
+                        eye_lights: &eye_lights[k * shadowed.len()..(k + 1) * shadowed.len()],
                         counts: RayCounts::default(),
                     };
                     sums[i] += trace(b, &mut known, ray, &mut rng, counts);

@@ -3,8 +3,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::shade::{count_nodes, surface, trace};
-use super::tracer::{Alone, Tracer};
+use super::shade::{Tracer, count_nodes, surface, trace};
+use super::tracer::Alone;
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 

@@ -194,6 +194,20 @@ impl Walk {
     }
 }
 
+/// The lanes of the first `len` whose `t` lies in `(tmin, tmax)`, in order.
+#[inline]
+fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> impl Iterator<Item = usize> {
+    let inside = t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
+    let mut mask = inside.bitmask() & ((1 << len) - 1);
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            k
+        })
+    })
+}
+
 /// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
 #[inline]
 fn closest_in_leaf(
@@ -207,9 +221,10 @@ fn closest_in_leaf(
 ) {
     let leaf = &b.prims[first as usize..(first + count) as usize];
     if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
-        // Four lanes at once, then taken in order, as the loop below would.
-        for k in 0..leaf.len() {
-            if t[k] > tmin && t[k] < hit.t {
+        // Four lanes at once, then those in the interval taken in order, as the loop below
+        // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
+        for k in crossings(t, tmin, hit.t, leaf.len()) {
+            if t[k] < hit.t {
                 hit.t = t[k];
                 hit.prim = first + k as u32;
                 hit.u = u[k];
@@ -307,14 +322,12 @@ fn transmit_leaf(
     let leaf = &b.prims[first as usize..(first + count) as usize];
     if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
-        for (k, p) in leaf.iter().enumerate() {
-            if t[k] > 0.0 && t[k] < tmax {
-                let m = &b.materials[p.material() as usize];
-                if m.t <= 0.0 {
-                    return false;
-                }
-                *light *= m.t * m.color;
+        for k in crossings(t, 0.0, tmax, leaf.len()) {
+            let m = &b.materials[leaf[k].material() as usize];
+            if m.t <= 0.0 {
+                return false;
             }
+            *light *= m.t * m.color;
         }
         return true;
     }

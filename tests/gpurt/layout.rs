@@ -443,6 +443,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "the tests' probe of the stack bound; the shader's slice is sized from it",
     ),
     (
+        "crossings",
+        "the lanes of a leaf's four-triangle test that cross the interval; a GPU lane tests one",
+    ),
+    (
         "intersect_triangles4",
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
@@ -452,10 +456,18 @@ const CPU_ONLY: &[(&str, &str)] = &[
     ),
 ];
 
-/// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module.
+/// Names of the functions defined in `src` (Rust or WGSL), in order, up to a test module;
+/// not a trait's methods (the CPU's seams, such as `shade::Tracer`, which WGSL has no need
+/// of).
 fn function_names(src: &str) -> Vec<String> {
+    let mut in_trait = false;
     src.lines()
         .take_while(|l| !l.starts_with("#[cfg(test)]"))
+        .filter(|l| {
+            in_trait = (in_trait || l.starts_with("pub trait ") || l.starts_with("trait "))
+                && !l.starts_with('}');
+            !in_trait
+        })
         .filter_map(|l| {
             let l = l.trim_start();
             let l = l
