@@ -8,8 +8,11 @@
 //! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
 //! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
 //! the single-ray walk's to the bit (`packet`), and walks the others alone: the image is the
-//! per-pixel renderer's to the bit, and so are the rays counted. A ray is answered from a
-//! packet only when it is that very ray (origin, direction and interval, bit for bit).
+//! per-pixel renderer's to the bit, and so are the rays counted. A camera or mirror ray is
+//! answered from a packet only when it is that very ray (origin, direction and interval,
+//! bit for bit); the camera ray's surface and light samples, which the shadow packets
+//! needed, are handed over as `shade::surface` and `shade::light_sample` made them there
+//! (the shading asks for them first, in the lights' order), not made a second time.
 
 use std::ops::Range;
 
@@ -18,7 +21,7 @@ use glam::Vec3;
 use super::main::{aov, camera_ray, sample_offset};
 use super::packet::{Kernels, MAX_LANES, Packet};
 use super::shade::{
-    LightRay, Surface, Tracer, light_ray, offset_origin, reflect_dir, surface, trace,
+    Surface, Tracer, light_ray, light_sample, offset_origin, reflect_dir, surface, trace,
 };
 use super::tracer::Alone;
 use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
@@ -47,58 +50,33 @@ impl<T: Copy> Answer<T> {
     }
 }
 
-/// One pixel's rays traced beforehand: its camera ray, its shadow rays from the camera
-/// ray's hit, one a light (in the lights' order; `None` where none was traced), and its
-/// mirror ray. Any other ray is walked alone. The camera ray's surface and its shadow
-/// rays, made to trace the packets, are handed to the shading as they are, not made again.
+/// What a point or directional light gives a camera ray's surface, worked out from its
+/// shadow packet: `light_sample`'s answer, with the node fetches of its shadow ray and
+/// whether the packet traced it (rather than a walk of its own).
+#[derive(Clone, Copy)]
+struct Lit {
+    sample: Option<Vec3>,
+    nodes: u32,
+    packed: bool,
+}
+
+/// One pixel's rays traced beforehand: its camera ray and its mirror ray, and the camera
+/// ray's surface and what each point or directional light gives it. Any other ray is
+/// walked alone.
 struct Known<'a> {
     eye: Option<Answer<Hit>>,
-    /// Light arriving along each shadow ray, and the node fetches of its walk.
-    shadows: &'a [Option<Answer<(Vec3, u32)>>],
     mirror: Option<Answer<Hit>>,
     /// The camera ray's surface, for the first surface asked for (the camera ray's hit:
     /// the shading asks for that ray first).
     eye_surface: Option<Surface>,
-    /// Its shadow rays, one a point or directional light in the lights' order, handed out
-    /// while the shading lights that surface (until it asks for the next surface).
-    eye_lights: &'a [Option<LightRay>],
+    /// Its light samples, one a point or directional light in the lights' order, handed
+    /// out while the shading lights that surface (until it asks for the next surface).
+    eye_lights: &'a [Lit],
     /// Rays answered from packets, by kind.
     counts: RayCounts,
 }
 
 impl Tracer for Known<'_> {
-    fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
-        match self.eye_surface.take() {
-            Some(s) => s,
-            None => {
-                self.eye_lights = &[];
-                surface(b, ray, hit)
-            }
-        }
-    }
-
-    fn light_ray(
-        &mut self,
-        b: &Bindings,
-        s: &Surface,
-        m: &GpuMaterial,
-        dir: Vec3,
-        r: Vec3,
-        light: &GpuLight,
-        k: u32,
-        rng: &mut u32,
-    ) -> Option<LightRay> {
-        if light.kind != LIGHT_AREA
-            && let Some((&first, rest)) = self.eye_lights.split_first()
-        {
-            // The same call on the same surface made it (the images are the per-pixel
-            // renderer's to the bit: tests/gpurt/packet.rs).
-            self.eye_lights = rest;
-            return first;
-        }
-        light_ray(b, s, m, dir, r, light, k, rng)
-    }
-
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         if let Some((hit, packed)) = self.eye.and_then(|a| a.of(ray, tmin, tmax)) {
             self.eye = None;
@@ -114,17 +92,44 @@ impl Tracer for Known<'_> {
     }
 
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
-        // Asked in the lights' order: the next shadow ray known, if any, is this one.
-        if let Some(i) = self.shadows.iter().position(Option::is_some) {
-            let a = self.shadows[i].expect("found");
-            if let Some(((light, fetched), packed)) = a.of(ray, 0.0, tmax) {
-                self.shadows = &self.shadows[i + 1..];
-                self.counts.shadow_packed += u64::from(packed);
-                *nodes += fetched;
-                return light;
+        Alone.transmission(b, ray, tmax, nodes)
+    }
+
+    fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
+        match self.eye_surface.take() {
+            Some(s) => s,
+            None => {
+                self.eye_lights = &[];
+                surface(b, ray, hit)
             }
         }
-        Alone.transmission(b, ray, tmax, nodes)
+    }
+
+    fn light_sample(
+        &mut self,
+        b: &Bindings,
+        s: &Surface,
+        m: &GpuMaterial,
+        dir: Vec3,
+        r: Vec3,
+        light: &GpuLight,
+        k: u32,
+        rng: &mut u32,
+        counts: &mut RayCounts,
+    ) -> Option<Vec3> {
+        if light.kind != LIGHT_AREA
+            && let Some((lit, rest)) = self.eye_lights.split_first()
+        {
+            // `light_sample` on the same surface, its shadow ray answered by the packet
+            // (the images are the per-pixel renderer's to the bit: tests/gpurt/packet.rs).
+            self.eye_lights = rest;
+            if lit.sample.is_some() {
+                counts.shadow_nodes += u64::from(lit.nodes);
+                self.counts.shadow_packed += u64::from(lit.packed);
+            }
+            return lit.sample;
+        }
+        light_sample(b, self, s, m, dir, r, light, k, rng, counts)
     }
 }
 
@@ -162,8 +167,13 @@ pub fn render_tile(
     let shadowed: Vec<usize> = (0..b.lights.len())
         .filter(|&i| b.lights[i].kind != LIGHT_AREA)
         .collect();
-    let mut known_shadows = vec![None; MAX_LANES * b.lights.len()];
-    let mut eye_lights = vec![None; MAX_LANES * shadowed.len()];
+    let unlit = Lit {
+        sample: None,
+        nodes: 0,
+        packed: false,
+    };
+    let mut eye_lights = vec![unlit; MAX_LANES * shadowed.len()];
+    let mut light_rays = [None; MAX_LANES];
     let mut packet = Packet::default();
     let mut hits = [Hit {
         t: 0.0,
@@ -213,7 +223,6 @@ pub fn render_tile(
                     for (k, &(i, ray, _)) in lanes[..n].iter().enumerate() {
                         let mut known = Known {
                             eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
-                            shadows: &[],
                             mirror: None,
                             eye_surface: None,
                             eye_lights: &[],
@@ -227,8 +236,8 @@ pub fn render_tile(
                 let surfaces: [Option<Surface>; MAX_LANES] = std::array::from_fn(|k| {
                     (k < n && hits[k].prim != NO_PRIM).then(|| surface(b, &lanes[k].1, &hits[k]))
                 });
-                // Shadow rays to each point and directional light, one packet a light.
-                known_shadows.fill(None);
+                // Shadow rays to each point and directional light, one packet a light, and
+                // what the light gives each surface, as `light_sample` works it out.
                 for (j, &li) in shadowed.iter().enumerate() {
                     packet.clear();
                     for (k, s) in surfaces.iter().enumerate() {
@@ -236,24 +245,26 @@ pub fn render_tile(
                         let m = &b.materials[s.material as usize];
                         let dir = lanes[k].1.dir;
                         let r = reflect_dir(dir, s.ns);
-                        let lr = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0);
-                        if let Some(lr) = lr {
+                        light_rays[k] = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0);
+                        if let Some(lr) = &light_rays[k] {
                             packet.set(k, &lr.ray, 0.0, lr.dist);
                         }
-                        eye_lights[k * shadowed.len() + j] = lr;
                     }
-                    if packet.lanes() == 0 {
-                        continue;
-                    }
-                    let packed = kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes);
-                    for k in (0..n).filter(|k| packet.lanes() & 1 << k != 0) {
-                        known_shadows[k * b.lights.len() + li] = Some(Answer {
-                            ray: packet.ray(k),
-                            tmin: 0.0,
-                            tmax: packet.tmax(k),
-                            value: (light[k], shadow_nodes[k]),
-                            packed: packed & 1 << k != 0,
-                        });
+                    let packed = if packet.lanes() == 0 {
+                        0
+                    } else {
+                        kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes)
+                    };
+                    for k in (0..n).filter(|&k| surfaces[k].is_some()) {
+                        eye_lights[k * shadowed.len() + j] = match &light_rays[k] {
+                            // `light_sample`'s product, in its order.
+                            Some(lr) => Lit {
+                                sample: Some(light[k] * lr.intensity * lr.term),
+                                nodes: shadow_nodes[k],
+                                packed: packed & 1 << k != 0,
+                            },
+                            None => unlit,
+                        };
                     }
                 }
                 // Reflections off flat mirrors, where the depth lets the shading trace them.
@@ -280,7 +291,6 @@ pub fn render_tile(
                 for (k, &(i, ray, mut rng)) in lanes[..n].iter().enumerate() {
                     let mut known = Known {
                         eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
-                        shadows: &known_shadows[k * b.lights.len()..(k + 1) * b.lights.len()],
                         mirror: (packet.lanes() & 1 << k != 0)
                             .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
                         eye_surface: surfaces[k],

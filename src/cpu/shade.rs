@@ -22,7 +22,7 @@ pub(super) struct Pending {
 /// Where the shading gets the answers of the rays it traces (`closest_hit`,
 /// `transmission`): each walked alone (`tracer::Alone`), or those traced beforehand in
 /// packets (`coherent::Known`), whose answers are the same. Also where it gets the surface
-/// at a hit and the shadow rays from it, which a tracer that made them to trace its
+/// at a hit and what each light gives it, which a tracer that worked them out with its
 /// packets hands back rather than have them made twice. Defined here, by the code that
 /// asks, so that the tracers depend on the shading and not the other way round.
 pub trait Tracer {
@@ -36,10 +36,10 @@ pub trait Tracer {
         surface(b, ray, hit)
     }
 
-    /// `shade::light_ray`.
+    /// `shade::light_sample`.
     #[allow(clippy::too_many_arguments)]
     #[inline]
-    fn light_ray(
+    fn light_sample(
         &mut self,
         b: &Bindings,
         s: &Surface,
@@ -49,8 +49,12 @@ pub trait Tracer {
         light: &GpuLight,
         k: u32,
         rng: &mut u32,
-    ) -> Option<LightRay> {
-        light_ray(b, s, m, dir, r, light, k, rng)
+        counts: &mut RayCounts,
+    ) -> Option<Vec3>
+    where
+        Self: Sized,
+    {
+        light_sample(b, self, s, m, dir, r, light, k, rng, counts)
     }
 }
 
@@ -223,7 +227,7 @@ pub fn light_ray(
 /// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
 /// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission, or
 /// `None` when the light is below the surface (no shadow ray is traced). The shadow ray is
-/// made and answered by `tracer`; adds its node fetches to `counts`.
+/// answered by `tracer`; adds its node fetches to `counts`.
 #[allow(clippy::too_many_arguments)]
 pub fn light_sample(
     b: &Bindings,
@@ -237,7 +241,7 @@ pub fn light_sample(
     rng: &mut u32,
     counts: &mut RayCounts,
 ) -> Option<Vec3> {
-    let lr = tracer.light_ray(b, s, m, dir, r, light, k, rng)?;
+    let lr = light_ray(b, s, m, dir, r, light, k, rng)?;
     let mut nodes = 0;
     let shadow = tracer.transmission(b, &lr.ray, lr.dist, &mut nodes);
     counts.shadow_nodes += u64::from(nodes);
@@ -260,7 +264,7 @@ fn direct(
     let r = reflect_dir(dir, s.ns);
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = light_sample(b, tracer, s, m, dir, r, light, k, rng, counts) {
+            if let Some(c) = tracer.light_sample(b, s, m, dir, r, light, k, rng, counts) {
                 counts.shadow += 1;
                 colour += c;
             }
