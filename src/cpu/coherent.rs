@@ -18,11 +18,10 @@ use std::ops::Range;
 
 use glam::Vec3;
 
+use super::lights::{Surfaces, light_rays};
 use super::main::{aov, camera_ray, sample_offset};
 use super::packet::{Kernels, MAX_LANES, Packet};
-use super::shade::{
-    Surface, Tracer, light_ray, light_sample, offset_origin, reflect_dir, surface, trace,
-};
+use super::shade::{Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace};
 use super::tracer::Alone;
 use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
 use crate::gpu_types::*;
@@ -173,7 +172,6 @@ pub fn render_tile(
         packed: false,
     };
     let mut eye_lights = vec![unlit; MAX_LANES * shadowed.len()];
-    let mut light_rays = [None; MAX_LANES];
     let mut packet = Packet::default();
     let mut hits = [Hit {
         t: 0.0,
@@ -238,32 +236,26 @@ pub fn render_tile(
                 });
                 // Shadow rays to each point and directional light, one packet a light, and
                 // what the light gives each surface, as `light_sample` works it out.
+                let dirs = lanes.map(|(_, ray, _)| ray.dir);
+                let lit = Surfaces::new(b, &surfaces, &dirs);
                 for (j, &li) in shadowed.iter().enumerate() {
                     packet.clear();
-                    for (k, s) in surfaces.iter().enumerate() {
-                        let Some(s) = s else { continue };
-                        let m = &b.materials[s.material as usize];
-                        let dir = lanes[k].1.dir;
-                        let r = reflect_dir(dir, s.ns);
-                        light_rays[k] = light_ray(b, s, m, dir, r, &b.lights[li], 0, &mut 0);
-                        if let Some(lr) = &light_rays[k] {
-                            packet.set(k, &lr.ray, 0.0, lr.dist);
-                        }
-                    }
+                    let rays = light_rays(b, &lit, &b.lights[li], &mut packet);
                     let packed = if packet.lanes() == 0 {
                         0
                     } else {
                         kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes)
                     };
                     for k in (0..n).filter(|&k| surfaces[k].is_some()) {
-                        eye_lights[k * shadowed.len() + j] = match &light_rays[k] {
+                        eye_lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
                             // `light_sample`'s product, in its order.
-                            Some(lr) => Lit {
-                                sample: Some(light[k] * lr.intensity * lr.term),
+                            Lit {
+                                sample: Some(light[k] * rays.intensity * rays.term(k)),
                                 nodes: shadow_nodes[k],
                                 packed: packed & 1 << k != 0,
-                            },
-                            None => unlit,
+                            }
+                        } else {
+                            unlit
                         };
                     }
                 }

@@ -13,6 +13,7 @@
 mod coherent;
 pub mod cwide;
 pub mod intersect;
+mod lights;
 pub mod main;
 pub mod packet;
 pub mod shade;
