@@ -80,6 +80,9 @@ impl Slabs {
 /// Depth-first walk of the wide tree, nearest child first: calls `leaf(first, count)`
 /// for each leaf the ray reaches, which returns the interval end to cull with from then
 /// on (the nearest hit so far), or `None` to stop. Adds the nodes it fetched to `nodes`.
+/// Without `NEAREST_FIRST` (a shadow ray's walk, in any order) `leaf` must return `tmax`
+/// itself: the interval never shrinks, so no child waiting is culled again and where the
+/// ray enters each is not kept.
 #[inline]
 pub fn walk<const NEAREST_FIRST: bool>(
     wide: &[WideNode],
@@ -121,7 +124,13 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             // test does: it leads nowhere.
             if next.count != EMPTY {
                 match leaf(next.child, next.count) {
-                    Some(t) => tmax = t,
+                    Some(t) => {
+                        debug_assert!(
+                            NEAREST_FIRST || t == tmax,
+                            "an any-order walk's interval shrank"
+                        );
+                        tmax = t
+                    }
                     None => return,
                 }
             }
@@ -132,7 +141,11 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             let entry = |lane: usize| Entry {
                 child: n.child[lane],
                 count: n.count[lane],
-                near: near[lane / 4][lane % 4],
+                near: if NEAREST_FIRST {
+                    near[lane / 4][lane % 4]
+                } else {
+                    tmin
+                },
             };
             if mask != 0 && mask & (mask - 1) == 0 {
                 // One child reached (the common case): straight on, nothing pushed.
@@ -166,7 +179,7 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             sp -= 1;
             // SAFETY: entries below the old `sp` have been written.
             next = unsafe { stack[sp].assume_init() };
-            if next.near <= tmax * SLAB_WIDEN {
+            if !NEAREST_FIRST || next.near <= tmax * SLAB_WIDEN {
                 break;
             }
         }
