@@ -233,6 +233,18 @@ fn closest_in_leaf(
         }
         return;
     }
+    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
+        // Four spheres at once, then taken in order, as the loop below would.
+        for k in 0..leaf.len() {
+            let t_first = first_in(Vec4::new(t0[k], t1[k], 0.0, 0.0), tmin, hit.t);
+            if t_first != NO_HIT {
+                hit.t = t_first;
+                hit.prim = first + k as u32;
+                (hit.u, hit.v) = (0.0, 0.0);
+            }
+        }
+        return;
+    }
     for i in first..first + count {
         let p = &b.prims[i as usize];
         let t = intersect::intersect_prim(p, ray, inv_dir);
@@ -328,6 +340,24 @@ fn transmit_leaf(
                 return false;
             }
             *light *= m.t * m.color;
+        }
+        return true;
+    }
+    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
+        // Four spheres at once, then in order, as the loop below would.
+        let inside = |t: Vec4| t.cmpgt(Vec4::ZERO) & t.cmplt(Vec4::splat(tmax));
+        let (in0, in1) = (inside(t0).bitmask(), inside(t1).bitmask());
+        let mut crossed = (in0 | in1) & ((1 << leaf.len()) - 1);
+        while crossed != 0 {
+            let k = crossed.trailing_zeros() as usize;
+            crossed &= crossed - 1;
+            let m = &b.materials[leaf[k].material() as usize];
+            if m.t <= 0.0 {
+                return false;
+            }
+            for _ in 0..(in0 >> k & 1) + (in1 >> k & 1) {
+                *light *= m.t * m.color;
+            }
         }
         return true;
     }

@@ -447,6 +447,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "the lanes of a leaf's four-triangle test that cross the interval; a GPU lane tests one",
     ),
     (
+        "intersect_spheres4",
+        "four spheres in SIMD lanes for the CPU's leaves; a GPU lane tests one",
+    ),
+    (
         "intersect_triangles4",
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
