@@ -140,7 +140,9 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
     let mut live = 0;
     for (k, n) in ndotl.iter_mut().enumerate() {
         *n = dot(&all.ns, &l, k);
-        live |= u32::from(*n > 0.0) << k;
+        // `light_ray` gives up where `ndotl <= 0` (not where it is NaN, as at a surface
+        // point on the light itself).
+        live |= u32::from(*n > 0.0 || n.is_nan()) << k;
     }
     live &= all.live;
     // `highlight`: the power only where there is a highlight, as there.
