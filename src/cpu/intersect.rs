@@ -51,6 +51,38 @@ pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
     Vec3::new(e2.dot(qvec) * inv, u, v)
 }
 
+/// The lanes whose bits are set, lowest first.
+#[inline(always)]
+pub fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (bits != 0).then(|| {
+            let k = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            k
+        })
+    })
+}
+
+/// The words of a leaf of two to four primitives of `kind`, a lane each (lanes past the
+/// leaf repeat its first primitive), for the four-lane tests; `None` for any other leaf.
+#[inline(always)]
+fn leaf_words(leaf: &[GpuPrim], kind: u32) -> Option<[&[f32; 12]; 4]> {
+    if !(2..=4).contains(&leaf.len()) || leaf.iter().any(|p| p.kind() != kind) {
+        return None;
+    }
+    Some(std::array::from_fn(|k| {
+        bytemuck::cast_ref(leaf.get(k).unwrap_or(&leaf[0]))
+    }))
+}
+
+/// Words `4 * row..4 * row + 4` of the four lanes' primitives, transposed: a coordinate
+/// (or the fourth word) a column.
+#[inline(always)]
+fn transposed(words: &[&[f32; 12]; 4], row: usize) -> Mat4 {
+    let lane = |k: usize| Vec4::from_slice(&words[k][4 * row..4 * row + 4]);
+    Mat4::from_cols(lane(0), lane(1), lane(2), lane(3)).transpose()
+}
+
 /// `intersect_triangle` for a leaf of two to four triangles at once, lane by lane the same
 /// arithmetic in the same order (so the same bits; x86 and Arm round each SIMD lane as a
 /// scalar): `(t, u, v)` per lane, `t = NO_HIT` where the ray misses (lanes past the leaf
@@ -59,19 +91,13 @@ pub fn intersect_triangle(p: &GpuPrim, ray: &Ray) -> Vec3 {
 /// tests in the time of about one and a half (`closest_in_leaf`, `transmit_leaf`).
 #[inline]
 pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, Vec4)> {
-    if !(2..=4).contains(&leaf.len()) || leaf.iter().any(|p| p.kind() != PRIM_TRIANGLE) {
-        return None;
-    }
-    let p: [&GpuPrim; 4] = std::array::from_fn(|k| leaf.get(k).unwrap_or(&leaf[0]));
-    // Rows of the four primitives' words, transposed: v0, e1, e2 by coordinate.
-    let rows = |k: usize| {
-        let words = p.map(|q| {
-            let w: &[f32; 12] = bytemuck::cast_ref(q);
-            Vec4::from_slice(&w[4 * k..4 * k + 4])
-        });
-        Mat4::from_cols(words[0], words[1], words[2], words[3]).transpose()
-    };
-    let (v0, e1, e2) = (rows(0), rows(1), rows(2));
+    let words = leaf_words(leaf, PRIM_TRIANGLE)?;
+    // v0, e1, e2 by coordinate.
+    let (v0, e1, e2) = (
+        transposed(&words, 0),
+        transposed(&words, 1),
+        transposed(&words, 2),
+    );
     let (o, d) = (ray.origin, ray.dir);
     let [dx, dy, dz] = [d.x, d.y, d.z].map(Vec4::splat);
     // pvec = dir x e2
@@ -104,15 +130,8 @@ pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, 
 /// any other leaf.
 #[inline]
 pub fn intersect_spheres4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4)> {
-    if !(2..=4).contains(&leaf.len()) || leaf.iter().any(|p| p.kind() != PRIM_SPHERE) {
-        return None;
-    }
-    // Each sphere's first four words, (centre, radius), transposed to rows by coordinate.
-    let words: [Vec4; 4] = std::array::from_fn(|k| {
-        let w: &[f32; 12] = bytemuck::cast_ref(leaf.get(k).unwrap_or(&leaf[0]));
-        Vec4::from_slice(&w[..4])
-    });
-    let c = Mat4::from_cols(words[0], words[1], words[2], words[3]).transpose();
+    // Centre and radius by coordinate.
+    let c = transposed(&leaf_words(leaf, PRIM_SPHERE)?, 0);
     let (o, d) = (ray.origin, ray.dir);
     let [dx, dy, dz] = [d.x, d.y, d.z].map(Vec4::splat);
     let ocx = Vec4::splat(o.x) - c.x_axis;
@@ -308,17 +327,21 @@ pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
 mod tests {
     use super::*;
 
-    /// The four-lane triangle test gives the scalar one's bits, hit or miss, on random
-    /// triangles (some degenerate, some edge-on) and rays aimed near them.
-    #[test]
-    fn four_triangles_at_once_match_one_at_a_time_to_the_bit() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rand = move || {
+    /// Numbers in [-1, 1) from a xorshift stream seeded with `state`.
+    fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
+        move || {
             state ^= state << 13;
             state ^= state >> 7;
             state ^= state << 17;
             (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        }
+    }
+
+    /// The four-lane triangle test gives the scalar one's bits, hit or miss, on random
+    /// triangles (some degenerate, some edge-on) and rays aimed near them.
+    #[test]
+    fn four_triangles_at_once_match_one_at_a_time_to_the_bit() {
+        let mut rand = xorshift(0x2545_f491_4f6c_dd1d);
         let mut hits = 0;
         for n in 0..20_000 {
             let tri = |rand: &mut dyn FnMut() -> f32| {
@@ -368,13 +391,7 @@ mod tests {
     /// spheres (tiny to large, some grazed) and rays aimed near them.
     #[test]
     fn four_spheres_at_once_match_one_at_a_time_to_the_bit() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut rand = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rand = xorshift(0x9e37_79b9_7f4a_7c15);
         let mut hits = 0;
         for n in 0..20_000 {
             let spheres: Vec<GpuPrim> = (0..2 + n % 3)

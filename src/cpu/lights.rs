@@ -17,6 +17,7 @@
 
 use glam::Vec3;
 
+use super::intersect::lanes_of;
 use super::packet::{MAX_LANES, Packet};
 use super::shade::{Surface, light_samples};
 use super::types::{Bindings, Ray};
@@ -159,10 +160,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
         };
     }
     let mut spec = [0.0; MAX_LANES];
-    let mut lanes = live;
-    while lanes != 0 {
-        let k = lanes.trailing_zeros() as usize;
-        lanes &= lanes - 1;
+    for k in lanes_of(live) {
         if cosine[k] > 0.0 && all.ks[k] != 0.0 {
             spec[k] = all.ks[k] * cosine[k].powf(all.shine[k]);
         }
@@ -179,10 +177,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
             term[a][k] = all.kd[k] * all.color[a][k] * ndotl[k] + spec[k];
         }
     }
-    let mut lanes = live;
-    while lanes != 0 {
-        let k = lanes.trailing_zeros() as usize;
-        lanes &= lanes - 1;
+    for k in lanes_of(live) {
         let ray = Ray {
             origin: Vec3::new(origin[0][k], origin[1][k], origin[2][k]),
             dir: Vec3::new(l[0][k], l[1][k], l[2][k]),

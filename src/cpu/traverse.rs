@@ -4,9 +4,10 @@
 use glam::{Vec3, Vec4};
 
 use super::cwide::next_leaf_cwide;
+use super::intersect::{self, lanes_of};
 use super::types::{Bindings, Hit, Ray};
 use super::walk::{Walk, start_walk};
-use super::{intersect, wide};
+use super::wide;
 use crate::gpu_types::{
     GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
     WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
@@ -194,18 +195,11 @@ impl Walk {
     }
 }
 
-/// The lanes of the first `len` whose `t` lies in `(tmin, tmax)`, in order.
+/// The lanes of the first `len` whose `t` lies in `(tmin, tmax)`, a bit each.
 #[inline]
-fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> impl Iterator<Item = usize> {
+fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> u32 {
     let inside = t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
-    let mut mask = inside.bitmask() & ((1 << len) - 1);
-    std::iter::from_fn(move || {
-        (mask != 0).then(|| {
-            let k = mask.trailing_zeros() as usize;
-            mask &= mask - 1;
-            k
-        })
-    })
+    inside.bitmask() & ((1 << len) - 1)
 }
 
 /// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
@@ -223,7 +217,7 @@ fn closest_in_leaf(
     if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
         // Four lanes at once, then those in the interval taken in order, as the loop below
         // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
-        for k in crossings(t, tmin, hit.t, leaf.len()) {
+        for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
             if t[k] < hit.t {
                 hit.t = t[k];
                 hit.prim = first + k as u32;
@@ -334,7 +328,7 @@ fn transmit_leaf(
     let leaf = &b.prims[first as usize..(first + count) as usize];
     if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
-        for k in crossings(t, 0.0, tmax, leaf.len()) {
+        for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
             let m = &b.materials[leaf[k].material() as usize];
             if m.t <= 0.0 {
                 return false;
@@ -345,12 +339,9 @@ fn transmit_leaf(
     }
     if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
         // Four spheres at once, then in order, as the loop below would.
-        let inside = |t: Vec4| t.cmpgt(Vec4::ZERO) & t.cmplt(Vec4::splat(tmax));
-        let (in0, in1) = (inside(t0).bitmask(), inside(t1).bitmask());
-        let mut crossed = (in0 | in1) & ((1 << leaf.len()) - 1);
-        while crossed != 0 {
-            let k = crossed.trailing_zeros() as usize;
-            crossed &= crossed - 1;
+        let in0 = crossings(t0, 0.0, tmax, leaf.len());
+        let in1 = crossings(t1, 0.0, tmax, leaf.len());
+        for k in lanes_of(in0 | in1) {
             let m = &b.materials[leaf[k].material() as usize];
             if m.t <= 0.0 {
                 return false;

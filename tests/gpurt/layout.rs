@@ -443,6 +443,18 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "the tests' probe of the stack bound; the shader's slice is sized from it",
     ),
     (
+        "lanes_of",
+        "the set bits of a lane mask, for the CPU's SIMD leaf tests and packets",
+    ),
+    (
+        "leaf_words",
+        "a leaf's primitives as SIMD lanes for the CPU's four-at-once tests",
+    ),
+    (
+        "transposed",
+        "a leaf's primitives as SIMD lanes for the CPU's four-at-once tests",
+    ),
+    (
         "crossings",
         "the lanes of a leaf's four-triangle test that cross the interval; a GPU lane tests one",
     ),

@@ -88,10 +88,11 @@ impl Frustum {
 
 #[cfg(test)]
 mod tests {
-    use super::super::lanes::{Portable, lanes_of};
+    use super::super::lanes::Portable;
     use super::super::rays::Rows;
     use super::*;
     use crate::bvh::wide::EMPTY;
+    use crate::cpu::intersect::lanes_of;
     use crate::cpu::wide::Slabs;
     use glam::Vec3;
 

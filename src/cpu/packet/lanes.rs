@@ -80,18 +80,6 @@ pub trait Lanes: Copy {
     }
 }
 
-/// The lanes whose bits are set, lowest first.
-#[inline(always)]
-pub fn lanes_of(mut bits: u32) -> impl Iterator<Item = usize> {
-    std::iter::from_fn(move || {
-        (bits != 0).then(|| {
-            let k = bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            k
-        })
-    })
-}
-
 /// Four lanes in plain arrays: the kernel of machines without one of `x86.rs`'s (LLVM
 /// vectorises it: NEON on AArch64), and a reference the others are tested against.
 #[derive(Clone, Copy, Debug)]

@@ -3,9 +3,9 @@
 //! gets the bits its ray gets alone); cones and boxes lane by lane with `intersect_prim`
 //! itself. The nearest hit so far is kept per lane (`Best`), as `closest_in_leaf` keeps it.
 
-use super::lanes::{Lanes, MAX_LANES, Row, lanes_of};
+use super::lanes::{Lanes, MAX_LANES, Row};
 use super::rays::{Found, Occluded, Rays, Rows};
-use crate::cpu::intersect;
+use crate::cpu::intersect::{self, lanes_of};
 use crate::cpu::types::Bindings;
 use crate::gpu_types::{
     GpuPlane, GpuPrim, NO_HIT, NO_PRIM, PLANE_FLAG, PRIM_SPHERE, PRIM_TRIANGLE,

@@ -32,12 +32,12 @@ mod x86_walks;
 
 use glam::Vec3;
 
+use super::intersect::lanes_of;
 use super::traverse::{closest_hit, transmission, transmit_planes};
 use super::types::{Bindings, Hit, Ray};
 use crate::bvh::wide::WideNode;
 use crate::error::{Error, Result};
 pub use lanes::MAX_LANES;
-use lanes::lanes_of;
 use rays::{Found, Occluded, Rows};
 
 /// The instruction sets the packet kernels are compiled for, widest first.

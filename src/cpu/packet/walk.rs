@@ -20,11 +20,12 @@
 use std::mem::MaybeUninit;
 
 use super::frustum::Frustum;
-use super::lanes::{Lanes, lanes_of};
+use super::lanes::Lanes;
 use super::leaf::{self, Best};
 use super::rays::{Found, Occluded, Rays, Rows};
 use super::single::{self, LaneHit};
 use crate::bvh::wide::{EMPTY, WIDTH, WideNode};
+use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::Bindings;
 use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
 
