@@ -89,7 +89,7 @@ fn transposed(words: &[&[f32; 12]; 4], row: usize) -> Mat4 {
 /// repeat its first triangle). `None` for any other leaf, which is tested one primitive
 /// at a time. A leaf holds up to four primitives, and on meshes they are triangles: four
 /// tests in the time of about one and a half (`closest_in_leaf`, `transmit_leaf`).
-#[inline]
+#[inline(always)]
 pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, Vec4)> {
     let words = leaf_words(leaf, PRIM_TRIANGLE)?;
     // v0, e1, e2 by coordinate.
@@ -128,7 +128,7 @@ pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, 
 /// arithmetic in the same order (as `intersect_triangles4`): both crossings per lane,
 /// `NO_HIT` where the ray misses (lanes past the leaf repeat its first sphere). `None` for
 /// any other leaf.
-#[inline]
+#[inline(always)]
 pub fn intersect_spheres4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4)> {
     // Centre and radius by coordinate.
     let c = transposed(&leaf_words(leaf, PRIM_SPHERE)?, 0);

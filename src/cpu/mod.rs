@@ -13,6 +13,8 @@
 mod coherent;
 pub mod cwide;
 pub mod intersect;
+#[cfg(target_arch = "x86_64")]
+mod isa;
 mod lights;
 pub mod main;
 pub mod packet;

@@ -50,7 +50,7 @@ impl Slabs {
     /// clamped to `tmin`, and a bit mask of those it overlaps within `[tmin, tmax]`.
     /// Choosing the near face by the sign of the inverse direction gives the same value
     /// as the scalar `min(t0, t1)`, since that sign orders `t0` and `t1`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
         let mut near = [Vec4::ZERO; WIDTH / 4];
         let mut mask = 0;
@@ -83,7 +83,7 @@ impl Slabs {
 /// Without `NEAREST_FIRST` (a shadow ray's walk, in any order) `leaf` must return `tmax`
 /// itself: the interval never shrinks, so no child waiting is culled again and where the
 /// ray enters each is not kept.
-#[inline]
+#[inline(always)]
 pub fn walk<const NEAREST_FIRST: bool>(
     wide: &[WideNode],
     slabs: &Slabs,
@@ -97,7 +97,7 @@ pub fn walk<const NEAREST_FIRST: bool>(
 
 /// `walk` of the subtree under the wide node `node` (its children, not its own box): where
 /// a packet's walk hands a lane over to a walk of its own (`packet::walk`).
-#[inline]
+#[inline(always)]
 pub fn walk_from<const NEAREST_FIRST: bool>(
     wide: &[WideNode],
     slabs: &Slabs,

@@ -439,6 +439,22 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),
     (
+        "closest_wide",
+        "closest_hit through the CPU's eight-wide tree (wide.rs)",
+    ),
+    (
+        "closest_wide_v3",
+        "closest_wide compiled for x86-64-v3, chosen at run time",
+    ),
+    (
+        "transmission_wide",
+        "transmission through the CPU's eight-wide tree (wide.rs)",
+    ),
+    (
+        "transmission_wide_v3",
+        "transmission_wide compiled for x86-64-v3, chosen at run time",
+    ),
+    (
         "stack_high_water",
         "the tests' probe of the stack bound; the shader's slice is sized from it",
     ),

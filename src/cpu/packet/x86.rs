@@ -7,6 +7,7 @@
 use std::arch::x86_64::*;
 
 use super::lanes::{Lanes, Row};
+use crate::cpu::isa;
 
 /// SSE2, the x86-64 baseline: four lanes.
 #[derive(Clone, Copy, Debug)]
@@ -24,13 +25,7 @@ pub struct Avx2(());
 
 impl Avx2 {
     pub fn detect() -> Option<Self> {
-        let v3 = is_x86_feature_detected!("avx2")
-            && is_x86_feature_detected!("fma")
-            && is_x86_feature_detected!("bmi1")
-            && is_x86_feature_detected!("bmi2")
-            && is_x86_feature_detected!("lzcnt")
-            && is_x86_feature_detected!("popcnt");
-        v3.then_some(Avx2(()))
+        isa::x86_64_v3().then_some(Avx2(()))
     }
 }
 
@@ -40,7 +35,7 @@ pub struct Avx512(());
 
 impl Avx512 {
     pub fn detect() -> Option<Self> {
-        (Avx2::detect().is_some() && is_x86_feature_detected!("avx512f")).then_some(Avx512(()))
+        isa::x86_64_v4().then_some(Avx512(()))
     }
 }
 
