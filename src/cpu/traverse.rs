@@ -9,7 +9,7 @@ use super::intersect::{self, lanes_of};
 use super::isa;
 use super::types::{Bindings, Hit, Ray};
 use super::walk::{Walk, start_walk};
-use super::wide;
+use super::wide::{self, Slabs};
 use crate::bvh::wide::WideNode;
 use crate::gpu_types::{
     GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
@@ -281,7 +281,9 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
             // SAFETY: the processor has the features the function is compiled for.
             return unsafe { closest_wide_v3(b, wide, ray, tmin, hit) };
         }
-        return closest_wide(b, wide, ray, tmin, hit);
+        let inv_dir = intersect::safe_inverse(ray.dir);
+        let slabs = Slabs::new(ray.origin, inv_dir);
+        return closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, hit);
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut walk = start_walk(ray);
@@ -299,18 +301,24 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     hit
 }
 
-/// `closest_hit` through the CPU's eight-wide tree (`wide.rs`), the planes done: inlined
-/// whole into its callers, so that `closest_wide_v3` is the same walk in AVX's encoding.
+/// `closest_hit` through the CPU's eight-wide tree (`wide.rs`), the planes done, with the
+/// slab test `slabs`: inlined whole into its callers, so that `closest_wide_v3` is the
+/// same walk in AVX's encoding.
 #[inline(always)]
-fn closest_wide(b: &Bindings, wide: &[WideNode], ray: &Ray, tmin: f32, mut hit: Hit) -> Hit {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    let slabs = wide::Slabs::new(ray.origin, inv_dir);
+fn closest_wide(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
+    tmin: f32,
+    mut hit: Hit,
+) -> Hit {
     let mut nodes = 0;
     let tmax = hit.t;
     // The closure inlined too: called once a leaf, it would otherwise stay a call.
     wide::walk::<true>(
         wide,
-        &slabs,
+        slabs,
         tmin,
         tmax,
         &mut nodes,
@@ -324,13 +332,17 @@ fn closest_wide(b: &Bindings, wide: &[WideNode], ray: &Ray, tmin: f32, mut hit: 
     hit
 }
 
-/// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`): the same operations in
-/// three-operand VEX form, 7 to 10% fewer instructions a walk. Rust never fuses a multiply
-/// and an add, so FMA changes no result: the bits are the baseline's.
+/// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
+/// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
+/// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
+/// result: the bits are the baseline's.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
 fn closest_wide_v3(b: &Bindings, wide: &[WideNode], ray: &Ray, tmin: f32, hit: Hit) -> Hit {
-    closest_wide(b, wide, ray, tmin, hit)
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    // SAFETY: the function's features include AVX.
+    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, hit)
 }
 
 /// `transmission` through the eight-wide tree, the planes' factor `light` done; inlined
@@ -340,16 +352,14 @@ fn transmission_wide(
     b: &Bindings,
     wide: &[WideNode],
     ray: &Ray,
-    tmax: f32,
-    nodes: &mut u32,
+    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
+    (tmax, nodes): (f32, &mut u32),
     mut light: Vec3,
 ) -> Vec3 {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    let slabs = wide::Slabs::new(ray.origin, inv_dir);
     let mut blocked = false;
     wide::walk::<false>(
         wide,
-        &slabs,
+        slabs,
         0.0,
         tmax,
         nodes,
@@ -373,7 +383,10 @@ fn transmission_wide_v3(
     nodes: &mut u32,
     light: Vec3,
 ) -> Vec3 {
-    transmission_wide(b, wide, ray, tmax, nodes, light)
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    // SAFETY: as in `closest_wide_v3`.
+    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
 }
 
 /// Stack entries the GPU's walk (`b.globals.traversal`) writes for a ray that visits every
@@ -480,7 +493,9 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3
             // SAFETY: as in `closest_hit`.
             return unsafe { transmission_wide_v3(b, wide, ray, tmax, nodes, light) };
         }
-        return transmission_wide(b, wide, ray, tmax, nodes, light);
+        let inv_dir = intersect::safe_inverse(ray.dir);
+        let slabs = Slabs::new(ray.origin, inv_dir);
+        return transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light);
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut walk = start_walk(ray);

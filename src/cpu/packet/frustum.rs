@@ -93,7 +93,7 @@ mod tests {
     use super::*;
     use crate::bvh::wide::EMPTY;
     use crate::cpu::intersect::lanes_of;
-    use crate::cpu::wide::Slabs;
+    use crate::cpu::wide::{Boxes, Slabs};
     use glam::Vec3;
 
     /// A node of eight random boxes (some empty) around the origin.

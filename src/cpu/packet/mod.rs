@@ -16,8 +16,9 @@
 //! The dispatch is `is_x86_feature_detected!` and `#[target_feature]` functions, not a
 //! crate: `pulp` (already built, through `exr`) has no lane bit mask in its generic
 //! vectors, which the walk reads at every node, and `multiversion` or `wide` would still
-//! leave the register types to write per instruction set. `x86.rs` is the one file of
-//! intrinsics, `x86_walks.rs` compiles the walks for each set.
+//! leave the register types to write per instruction set. `x86.rs` holds the packets'
+//! intrinsics (the single-ray walk's one AVX box test is `wide::SlabsAvx`), `x86_walks.rs`
+//! compiles the walks for each set.
 
 mod frustum;
 pub mod lanes;
