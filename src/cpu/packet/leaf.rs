@@ -1,6 +1,6 @@
 //! A leaf's primitives against a packet's lanes: triangles, spheres and planes in SIMD
 //! across the rays, with `intersect.rs`'s operations in `intersect.rs`'s order (so each lane
-//! gets the bits its ray gets alone); cones and boxes lane by lane with `intersect_prim`
+//! gets the bits its ray gets alone), cones too; boxes lane by lane with `intersect_prim`
 //! itself. The nearest hit so far is kept per lane (`Best`), as `closest_in_leaf` keeps it.
 
 use super::lanes::{Lanes, MAX_LANES, Row};
@@ -8,7 +8,7 @@ use super::rays::{Found, Occluded, Rays, Rows};
 use crate::cpu::intersect::{self, lanes_of};
 use crate::cpu::types::Bindings;
 use crate::gpu_types::{
-    GpuPlane, GpuPrim, NO_HIT, NO_PRIM, PLANE_FLAG, PRIM_SPHERE, PRIM_TRIANGLE,
+    GpuPlane, GpuPrim, NO_HIT, NO_PRIM, PLANE_FLAG, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE,
 };
 
 /// `intersect_triangle` (as `intersect_triangles4` has it) of one triangle with every lane:
@@ -82,6 +82,104 @@ pub fn sphere<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
         l.select(miss, no, l.sub(nb, h)),
         l.select(miss, no, l.add(nb, h)),
     )
+}
+
+/// `intersect_cone` of one cone with every lane: both crossings, `NO_HIT` where there is
+/// none. The scalar test's operations in its order; its branches become selects (a lane
+/// parallel to a generating line takes the linear root, the others the quadratic's), and
+/// `f32::min`/`max` of the two roots is written as x86-64 lowers them (the first operand
+/// NaN gives the second, else `minps(r1, r0)`), which a unit test holds against `f32::min`
+/// itself on zeros and NaN.
+#[inline(always)]
+pub fn cone<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
+    let s = |x: f32| l.splat(x);
+    // The cone's own constants, once for all lanes.
+    let axis = p.p1 - p.p0;
+    let height = axis.length();
+    let a = axis / height;
+    let k = (p.f1 - p.f0) / height;
+    let mid = 0.5 * (p.p0 + p.p1);
+    let a = [s(a.x), s(a.y), s(a.z)];
+    let dot = |u: &[L::F; 3], v: &[L::F; 3]| dot(l, u, v);
+    let [o, d] = [&r.o, &r.d];
+    let to_mid = [
+        l.sub(s(mid.x), o[0]),
+        l.sub(s(mid.y), o[1]),
+        l.sub(s(mid.z), o[2]),
+    ];
+    let tc = dot(&to_mid, d);
+    let co = [
+        l.sub(l.add(o[0], l.mul(tc, d[0])), s(p.p0.x)),
+        l.sub(l.add(o[1], l.mul(tc, d[1])), s(p.p0.y)),
+        l.sub(l.add(o[2], l.mul(tc, d[2])), s(p.p0.z)),
+    ];
+    let dv = dot(d, &a);
+    let cv = dot(&co, &a);
+    let dp = [
+        l.sub(d[0], l.mul(dv, a[0])),
+        l.sub(d[1], l.mul(dv, a[1])),
+        l.sub(d[2], l.mul(dv, a[2])),
+    ];
+    let cp = [
+        l.sub(co[0], l.mul(cv, a[0])),
+        l.sub(co[1], l.mul(cv, a[1])),
+        l.sub(co[2], l.mul(cv, a[2])),
+    ];
+    let rr = l.add(s(p.f0), l.mul(s(k), cv));
+    let qa = l.sub(dot(&dp, &dp), l.mul(l.mul(s(k * k), dv), dv));
+    let qb = l.sub(dot(&cp, &dp), l.mul(l.mul(s(k), rr), dv));
+    let qc = l.sub(dot(&cp, &cp), l.mul(rr, rr));
+    let (zero, no) = (s(0.0), s(NO_HIT));
+    // |qa| < 1e-12 (a NaN `qa` fails it, as the scalar's `abs` does).
+    let parallel = l.lt(l.max(qa, l.neg(qa)), s(1e-12));
+    let linear = l.select(l.ne(qb, zero), l.div(l.neg(qc), l.mul(s(2.0), qb)), no);
+    let disc = l.sub(l.mul(qb, qb), l.mul(qa, qc));
+    let sq = l.sqrt(disc);
+    let r0 = l.div(l.sub(l.neg(qb), sq), qa);
+    let r1 = l.div(l.add(l.neg(qb), sq), qa);
+    let r0_nan = l.ne(r0, r0);
+    let t0 = l.select(parallel, linear, l.select(r0_nan, r1, l.min(r1, r0)));
+    let t1 = l.select(parallel, no, l.select(r0_nan, r1, l.max(r1, r0)));
+    // Between the caps, where the radius is not negative; none where the quadratic has
+    // no root (the scalar returns before this test there).
+    let no_roots = l.and_not(l.lt(disc, zero), parallel);
+    let (ok0, ok1) = (
+        l.and_not(cone_valid(l, t0, (cv, dv), height, (p.f0, k)), no_roots),
+        l.and_not(cone_valid(l, t1, (cv, dv), height, (p.f0, k)), no_roots),
+    );
+    let (t0, t1) = (l.add(t0, tc), l.add(t1, tc));
+    (
+        l.select(ok0, t0, l.select(ok1, t1, no)),
+        l.select(l.and(ok0, ok1), t1, no),
+    )
+}
+
+/// `a . b` in lanes, in `Vec3::dot`'s order. A function, not a closure: a closure that
+/// is not inlined is compiled without the kernel's instruction set, and every `Lanes`
+/// operation in it becomes a call.
+#[inline(always)]
+fn dot<L: Lanes>(l: L, a: &[L::F; 3], b: &[L::F; 3]) -> L::F {
+    l.add(
+        l.add(l.mul(a[0], b[0]), l.mul(a[1], b[1])),
+        l.mul(a[2], b[2]),
+    )
+}
+
+/// `intersect_cone`'s test of a crossing `t`: between the caps (the axis coordinate `cv +
+/// t dv` in `[0, height]`) where the radius `f0 + k s` is not negative.
+#[inline(always)]
+fn cone_valid<L: Lanes>(
+    l: L,
+    t: L::F,
+    (cv, dv): (L::F, L::F),
+    height: f32,
+    (f0, k): (f32, f32),
+) -> L::M {
+    let zero = l.splat(0.0);
+    let sv = l.add(cv, l.mul(t, dv));
+    let ok = l.and(l.ne(t, l.splat(NO_HIT)), l.le(zero, sv));
+    let ok = l.and(ok, l.le(sv, l.splat(height)));
+    l.and(ok, l.le(zero, l.add(l.splat(f0), l.mul(l.splat(k), sv))))
 }
 
 /// `intersect_plane` with every lane.
@@ -213,8 +311,15 @@ pub fn closest<L: Lanes>(
                 let zero = l.splat(0.0);
                 best.offer(l, r, active, t, (zero, zero), i);
             }
+            PRIM_CONE => {
+                let (t0, t1) = cone(l, p, r);
+                // As for spheres: the first crossing past tmin.
+                let t = l.select(l.gt(t0, r.tmin), t0, t1);
+                let zero = l.splat(0.0);
+                best.offer(l, r, active, t, (zero, zero), i);
+            }
             _ => {
-                // Cones and boxes, one lane at a time with the scalar test.
+                // Boxes, one lane at a time with the scalar test.
                 let (mut t, mut u, mut v): (Row, Row, Row) =
                     ([NO_HIT; MAX_LANES], [0.0; MAX_LANES], [0.0; MAX_LANES]);
                 for k in lanes_of(lanes) {
@@ -253,6 +358,10 @@ pub fn occlusion<L: Lanes>(
                 let (t0, t1) = sphere(l, p, r);
                 l.bits(l.or(inside(t0), inside(t1)))
             }
+            PRIM_CONE => {
+                let (t0, t1) = cone(l, p, r);
+                l.bits(l.or(inside(t0), inside(t1)))
+            }
             _ => lanes_of(lanes).fold(0, |m, k| {
                 let t = intersect::intersect_prim(p, &rows.ray(k), r.inv_of(k));
                 let (lo, hi) = (0.0, rows.tmax[k]);
@@ -273,4 +382,146 @@ pub fn occlusion<L: Lanes>(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::intersect::intersect_cone;
+    use crate::cpu::packet::lanes::Portable;
+    use crate::gpu_types::PRIM_KIND_SHIFT;
+    use glam::Vec3;
+
+    /// Numbers in [-1, 1) from a xorshift stream seeded with `state`.
+    fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        }
+    }
+
+    /// `cone` gives each lane `intersect_cone`'s bits on random cones (cylinders, cones
+    /// narrowing to a point and past it) and rays aimed near them, some along the axis,
+    /// some along a generating line (the linear root), some from infinity (NaN).
+    fn cones_match_the_scalar_test<L: Lanes>(l: L) {
+        let mut rand = xorshift(0x5851_f42d_4c95_7f2d);
+        let mut hits = 0;
+        for case in 0..4_000 {
+            let p0 = Vec3::new(rand(), rand(), rand()) * 10.0;
+            let p1 = p0 + Vec3::new(rand(), rand(), rand()) * 4.0;
+            let f0 = rand().abs() * 2.0;
+            let f1 = match case % 4 {
+                0 => f0,
+                1 => 0.0,
+                2 => -rand().abs(),
+                _ => rand().abs() * 2.0,
+            };
+            // Every 10th: an upright cone whose generating lines have exact directions, so
+            // that rays along them take the linear root (qa = 0 exactly).
+            let exact = case % 10 == 7;
+            let (p0, p1, f0, f1) = if exact {
+                let base = Vec3::new(rand(), rand(), rand()).round() * 4.0;
+                (base, base + Vec3::Z * 2.0, 1.0, 0.0)
+            } else {
+                (p0, p1, f0, f1)
+            };
+            let prim = GpuPrim {
+                p0,
+                p1,
+                f0,
+                f1,
+                tag: PRIM_CONE << PRIM_KIND_SHIFT,
+                ..Default::default()
+            };
+            let mut rows = Rows::default();
+            for k in 0..L::N {
+                let origin = Vec3::new(rand(), rand(), rand()) * 30.0;
+                let aim = p0 + (p1 - p0) * (rand() + 0.5) + Vec3::new(rand(), rand(), rand());
+                let mut dir = (aim - origin).normalize();
+                let mut origin = origin;
+                match (case + k) % 23 {
+                    // Along the axis, and along a generating line (qa = 0).
+                    0 => dir = (p1 - p0).normalize(),
+                    1 => {
+                        let w = (p1 - p0).normalize().any_orthonormal_vector();
+                        let (base, top) = (p0 + w * f0, p1 + w * f1);
+                        dir = (top - base).normalize();
+                        origin = base - (top - base) * 3.0;
+                    }
+                    2 => origin.x = f32::INFINITY,
+                    _ => {}
+                }
+                if exact && k % 4 != 3 {
+                    // Parallel to the generating line from a point on the base rim to the
+                    // apex, a quarter of the radius inside or outside it.
+                    let rim = [Vec3::X, Vec3::Y, -Vec3::X, -Vec3::Y][(case / 10 + k) % 4];
+                    dir = (Vec3::Z - 0.5 * rim) * [1.0, -1.0][k % 2];
+                    let inside = rim * [0.75, 1.25][k % 3 / 2];
+                    origin = p0 + inside - dir * (k % 3 + 1) as f32;
+                }
+                for a in 0..3 {
+                    (rows.origin[a][k], rows.dir[a][k]) = (origin[a], dir[a]);
+                }
+            }
+            let r = Rays::new(l, &rows);
+            let (t0, t1) = cone(l, &prim, &r);
+            let (mut t0s, mut t1s) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
+            l.store(t0, &mut t0s);
+            l.store(t1, &mut t1s);
+            for k in 0..L::N {
+                let want = intersect_cone(&prim, &rows.ray(k));
+                assert_eq!(
+                    t0s[k].to_bits(),
+                    want.x.to_bits(),
+                    "t0, case {case} lane {k}"
+                );
+                assert_eq!(
+                    t1s[k].to_bits(),
+                    want.y.to_bits(),
+                    "t1, case {case} lane {k}"
+                );
+                hits += usize::from(want.x != NO_HIT);
+            }
+        }
+        assert!(hits > 1_000, "only {hits} hits");
+    }
+
+    #[test]
+    fn cones_in_every_instruction_set_match_the_scalar_test() {
+        cones_match_the_scalar_test(Portable);
+        #[cfg(target_arch = "x86_64")]
+        {
+            use crate::cpu::packet::x86::{Avx2, Avx512, Sse};
+            cones_match_the_scalar_test(Sse::new());
+            match Avx2::detect() {
+                Some(l) => cones_match_the_scalar_test(l),
+                None => eprintln!("SKIPPED the AVX2 lanes: this processor lacks AVX2"),
+            }
+            match Avx512::detect() {
+                Some(l) => cones_match_the_scalar_test(l),
+                None => eprintln!("SKIPPED the AVX-512 lanes: this processor lacks AVX-512F"),
+            }
+        }
+    }
+
+    /// The way `cone` orders its two roots is `f32::min` and `max` on this machine, on
+    /// zeros of both signs, infinities and NaN.
+    #[test]
+    fn the_roots_order_as_f32_min_and_max() {
+        let l = Portable;
+        let values = [0.0, -0.0, 1.0, -1.0, f32::INFINITY, f32::NAN];
+        for r0 in values {
+            for r1 in values {
+                let (a, b) = (l.splat(r0), l.splat(r1));
+                let nan = l.ne(a, a);
+                let lo = l.select(nan, b, l.min(b, a))[0];
+                let hi = l.select(nan, b, l.max(b, a))[0];
+                let (min, max) = (std::hint::black_box(r0).min(r1), r0.max(r1));
+                assert_eq!(lo.to_bits(), min.to_bits(), "min({r0}, {r1})");
+                assert_eq!(hi.to_bits(), max.to_bits(), "max({r0}, {r1})");
+            }
+        }
+    }
 }
