@@ -5,6 +5,7 @@ use std::sync::OnceLock;
 
 use glam::Vec3;
 
+use crate::bvh::blocks::Blocks;
 use crate::bvh::cwide;
 use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
@@ -45,6 +46,9 @@ pub struct SceneBuffers {
     /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
+    /// The CPU renderer's triangle leaves in blocks of four (`bvh::blocks`), built with
+    /// `wide`.
+    blocks: OnceLock<Blocks>,
     /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`),
     /// and the stack entries that walk needs, built on its first upload for that walk.
     gpu_wide: OnceLock<Option<(Vec<GpuWideNode>, u32)>>,
@@ -159,6 +163,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         background,
         ambient,
         wide: OnceLock::new(),
+        blocks: OnceLock::new(),
         gpu_wide: OnceLock::new(),
         gpu_cwide: OnceLock::new(),
     })
@@ -204,6 +209,14 @@ impl SceneBuffers {
     /// time it is asked for: `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
         self.wide.get_or_init(|| wide::build(&self.nodes))
+    }
+
+    /// The leaves of two to four triangles as blocks for the CPU renderer's single-ray
+    /// walk (`bvh::blocks`), built the first time they are asked for: `nodes` and `prims`
+    /// must not change after that.
+    pub fn triangle_blocks(&self) -> &Blocks {
+        self.blocks
+            .get_or_init(|| Blocks::build(&self.nodes, &self.prims))
     }
 
     /// `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them, built

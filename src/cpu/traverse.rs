@@ -217,7 +217,12 @@ fn closest_in_leaf(
     hit: &mut Hit,
 ) {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
+    let block = b.blocks.and_then(|blocks| blocks.get(first));
+    let four = match block {
+        Some(block) => Some(intersect::triangles4(block, ray)),
+        None => intersect::intersect_triangles4(leaf, ray),
+    };
+    if let Some((t, u, v)) = four {
         // Four lanes at once, then those in the interval taken in order, as the loop below
         // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
         for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
@@ -417,7 +422,12 @@ fn transmit_leaf(
     light: &mut Vec3,
 ) -> bool {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
+    let block = b.blocks.and_then(|blocks| blocks.get(first));
+    let four = match block {
+        Some(block) => Some(intersect::triangles4(block, ray)),
+        None => intersect::intersect_triangles4(leaf, ray),
+    };
+    if let Some((t, _, _)) = four {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
         for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
             let m = &b.materials[leaf[k].material() as usize];

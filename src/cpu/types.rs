@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use crate::bvh::blocks::Blocks;
 use crate::bvh::wide::WideNode;
 use crate::counters::Counters;
 use crate::gpu_types::*;
@@ -21,6 +22,9 @@ pub struct Bindings<'a> {
     /// The eight-wide tree (`bvh::wide`) the CPU walks (`wide.rs`) instead of `nodes` when
     /// given; `None` walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
+    /// The triangle leaves in blocks of four (`bvh::blocks`) for the single-ray walk of
+    /// `wide`, when given.
+    pub blocks: Option<&'a Blocks>,
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
     /// is `TRAVERSAL_WIDE` and `wide` is `None`.
     pub gpu_wide: Option<&'a [GpuWideNode]>,
@@ -46,6 +50,7 @@ impl<'a> Bindings<'a> {
             materials: &buffers.materials,
             lights: &buffers.lights,
             wide: Some(buffers.wide_nodes()),
+            blocks: Some(buffers.triangle_blocks()),
             gpu_wide: None,
             gpu_cwide: None,
         }
@@ -66,6 +71,9 @@ impl<'a> Bindings<'a> {
             materials: &buffers.materials,
             lights: &buffers.lights,
             wide: None,
+            // Blocks are found by a leaf's first primitive in `buffers.prims`' order,
+            // which the compressed tree's `prims` do not keep.
+            blocks: None,
             gpu_wide: (globals.traversal == TRAVERSAL_WIDE)
                 .then(|| buffers.gpu_wide_nodes())
                 .flatten(),

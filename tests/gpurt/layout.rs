@@ -479,6 +479,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "four spheres in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
     (
+        "triangles4",
+        "four triangles of a CPU leaf block (bvh::blocks) in SIMD lanes; a GPU lane tests one",
+    ),
+    (
         "intersect_triangles4",
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
