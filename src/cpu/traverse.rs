@@ -12,7 +12,7 @@ use super::walk::{Walk, start_walk};
 use super::wide::{self, Slabs};
 use crate::bvh::wide::WideNode;
 use crate::gpu_types::{
-    GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
+    GpuNode, GpuPrim, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
     WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
@@ -205,6 +205,22 @@ fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> u32 {
     inside.bitmask() & ((1 << len) - 1)
 }
 
+/// `intersect_triangles4` of the leaf `leaf` starting at primitive `first`: from its
+/// block where the scene has one (`bvh::blocks`, made once), else gathered from `leaf`.
+/// Every single-ray walk of the CPU's leaves tests them here.
+#[inline(always)]
+pub(crate) fn leaf_triangles4(
+    b: &Bindings,
+    first: u32,
+    leaf: &[GpuPrim],
+    ray: &Ray,
+) -> Option<(Vec4, Vec4, Vec4)> {
+    match b.blocks.and_then(|blocks| blocks.get(first)) {
+        Some(block) => Some(intersect::triangles4(block, ray)),
+        None => intersect::intersect_triangles4(leaf, ray),
+    }
+}
+
 /// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
 #[inline(always)]
 fn closest_in_leaf(
@@ -217,12 +233,7 @@ fn closest_in_leaf(
     hit: &mut Hit,
 ) {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    let block = b.blocks.and_then(|blocks| blocks.get(first));
-    let four = match block {
-        Some(block) => Some(intersect::triangles4(block, ray)),
-        None => intersect::intersect_triangles4(leaf, ray),
-    };
-    if let Some((t, u, v)) = four {
+    if let Some((t, u, v)) = leaf_triangles4(b, first, leaf, ray) {
         // Four lanes at once, then those in the interval taken in order, as the loop below
         // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
         for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
@@ -422,12 +433,7 @@ fn transmit_leaf(
     light: &mut Vec3,
 ) -> bool {
     let leaf = &b.prims[first as usize..(first + count) as usize];
-    let block = b.blocks.and_then(|blocks| blocks.get(first));
-    let four = match block {
-        Some(block) => Some(intersect::triangles4(block, ray)),
-        None => intersect::intersect_triangles4(leaf, ray),
-    };
-    if let Some((t, _, _)) = four {
+    if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
         for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
             let m = &b.materials[leaf[k].material() as usize];

@@ -431,6 +431,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "Bindings for the binary walk: the CPU renders through the wide tree (wide.rs)",
     ),
     (
+        "leaf_triangles4",
+        "a CPU leaf's four triangles from its block (bvh::blocks) or gathered; a GPU lane tests one",
+    ),
+    (
         "closest_in_leaf",
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),

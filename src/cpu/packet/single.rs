@@ -9,6 +9,7 @@ use glam::Vec3;
 
 use crate::bvh::wide::WideNode;
 use crate::cpu::intersect;
+use crate::cpu::traverse::leaf_triangles4;
 use crate::cpu::types::{Bindings, Ray};
 use crate::cpu::wide::{self, Slabs};
 
@@ -51,7 +52,7 @@ pub fn closest_from(
     let slabs = Slabs::new(ray.origin, inv_dir);
     wide::walk_from::<true>(wide, &slabs, node, tmin, h.t, nodes, |first, count| {
         let leaf = &b.prims[first as usize..(first + count) as usize];
-        if let Some((t, u, v)) = intersect::intersect_triangles4(leaf, ray) {
+        if let Some((t, u, v)) = leaf_triangles4(b, first, leaf, ray) {
             for k in 0..leaf.len() {
                 h.offer(t[k], (u[k], v[k]), first + k as u32, tmin, t0);
             }
@@ -82,7 +83,7 @@ pub fn occluded_from(
     wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, nodes, |first, count| {
         let leaf = &b.prims[first as usize..(first + count) as usize];
         let inside = |t: f32| t > 0.0 && t < tmax;
-        let crossed = if let Some((t, _, _)) = intersect::intersect_triangles4(leaf, ray) {
+        let crossed = if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
             (0..leaf.len()).find(|&k| inside(t[k]))
         } else {
             (0..leaf.len()).find(|&k| {
