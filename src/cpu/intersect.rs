@@ -343,16 +343,7 @@ pub fn prim_normal(p: &GpuPrim, x: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Numbers in [-1, 1) from a xorshift stream seeded with `state`.
-    fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        }
-    }
+    use crate::cpu::xorshift;
 
     /// The four-lane triangle test gives the scalar one's bits, hit or miss, on random
     /// triangles (some degenerate, some edge-on) and rays aimed near them.

@@ -251,6 +251,18 @@ pub fn render_rows_with(
     Ok(total)
 }
 
+/// Numbers in [-1, 1) from a xorshift stream seeded with `state`: the CPU tests' random
+/// cases (rays, triangles, cones, boxes), the same stream on every machine.
+#[cfg(test)]
+pub(crate) fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
+    move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -301,13 +301,7 @@ mod tests {
             eprintln!("skipped: this processor has no AVX2");
             return;
         }
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut rand = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rand = crate::cpu::xorshift(0x9e37_79b9_7f4a_7c15);
         let wide = build(&bvh::build(&boxes(40), Quality::High).nodes);
         let mut reached = 0;
         for case in 0..20_000 {

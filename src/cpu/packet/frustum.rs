@@ -121,13 +121,7 @@ mod tests {
     /// directions differ in sign on an axis.
     #[test]
     fn a_culled_child_is_missed_by_every_lane() {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut rand = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        };
+        let mut rand = crate::cpu::xorshift(0x9e37_79b9_7f4a_7c15);
         let (mut culled, mut kept) = (0, 0);
         for case in 0..3000 {
             let n = node(&mut rand);

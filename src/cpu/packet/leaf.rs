@@ -389,18 +389,9 @@ mod tests {
     use super::*;
     use crate::cpu::intersect::intersect_cone;
     use crate::cpu::packet::lanes::Portable;
+    use crate::cpu::xorshift;
     use crate::gpu_types::PRIM_KIND_SHIFT;
     use glam::Vec3;
-
-    /// Numbers in [-1, 1) from a xorshift stream seeded with `state`.
-    fn xorshift(mut state: u64) -> impl FnMut() -> f32 {
-        move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
-        }
-    }
 
     /// `cone` gives each lane `intersect_cone`'s bits on random cones (cylinders, cones
     /// narrowing to a point and past it) and rays aimed near them, some along the axis,
