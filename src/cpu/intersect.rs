@@ -98,17 +98,7 @@ fn transposed(words: &[&[f32; 12]; 4], row: usize) -> Mat4 {
 /// take the leaf's `TriangleBlock` ready made where the scene has them).
 #[inline(always)]
 pub fn intersect_triangles4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4, Vec4)> {
-    let words = leaf_words(leaf, PRIM_TRIANGLE)?;
-    let rows = |row: usize| {
-        let m = transposed(&words, row);
-        [m.x_axis, m.y_axis, m.z_axis]
-    };
-    let block = TriangleBlock {
-        v0: rows(0),
-        e1: rows(1),
-        e2: rows(2),
-    };
-    Some(triangles4(&block, ray))
+    TriangleBlock::of_leaf(leaf).map(|block| triangles4(&block, ray))
 }
 
 /// `intersect_triangles4` of a leaf's `TriangleBlock`.
