@@ -381,7 +381,7 @@ fn transmission_wide(
         nodes,
         #[inline(always)]
         |first, count| {
-            blocked = !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light);
+            blocked = !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light);
             (!blocked).then_some(tmax)
         },
     );
@@ -420,6 +420,38 @@ pub fn stack_high_water(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> usize 
     walk.high
 }
 
+/// Each primitive of the leaf that the segment `(0, tmax)` crosses, in the order
+/// `transmission` multiplies their factors, and how many times (a sphere or a cone can be
+/// passed through): `cross(material, times)`, until it returns false; false when it did.
+/// The packets' lone shadow lanes (`packet/single.rs`) cross leaves here too.
+#[inline(always)]
+pub(crate) fn leaf_crossings(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    (first, count): (u32, u32),
+    tmax: f32,
+    mut cross: impl FnMut(u32, u32) -> bool,
+) -> bool {
+    let leaf = &b.prims[first as usize..(first + count) as usize];
+    if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
+        // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
+        return lanes_of(crossings(t, 0.0, tmax, leaf.len())).all(|k| cross(leaf[k].material(), 1));
+    }
+    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
+        // Four spheres at once, then in order, as the loop below would.
+        let in0 = crossings(t0, 0.0, tmax, leaf.len());
+        let in1 = crossings(t1, 0.0, tmax, leaf.len());
+        return lanes_of(in0 | in1)
+            .all(|k| cross(leaf[k].material(), (in0 >> k & 1) + (in1 >> k & 1)));
+    }
+    leaf.iter().all(|p| {
+        let t = intersect::intersect_prim(p, ray, inv_dir);
+        let times = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
+        times == 0 || cross(p.material(), times)
+    })
+}
+
 /// Multiplies `light` by the transmission of each crossing of the leaf's primitives within
 /// `(0, tmax)`; false when one of them is opaque.
 #[inline(always)]
@@ -427,53 +459,28 @@ fn transmit_leaf(
     b: &Bindings,
     ray: &Ray,
     inv_dir: Vec3,
-    first: u32,
-    count: u32,
+    leaf: (u32, u32),
     tmax: f32,
     light: &mut Vec3,
 ) -> bool {
-    let leaf = &b.prims[first as usize..(first + count) as usize];
-    if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
-        // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
-        for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
-            let m = &b.materials[leaf[k].material() as usize];
+    leaf_crossings(
+        b,
+        ray,
+        inv_dir,
+        leaf,
+        tmax,
+        #[inline(always)]
+        |material, times| {
+            let m = &b.materials[material as usize];
             if m.t <= 0.0 {
                 return false;
             }
-            *light *= m.t * m.color;
-        }
-        return true;
-    }
-    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
-        // Four spheres at once, then in order, as the loop below would.
-        let in0 = crossings(t0, 0.0, tmax, leaf.len());
-        let in1 = crossings(t1, 0.0, tmax, leaf.len());
-        for k in lanes_of(in0 | in1) {
-            let m = &b.materials[leaf[k].material() as usize];
-            if m.t <= 0.0 {
-                return false;
-            }
-            for _ in 0..(in0 >> k & 1) + (in1 >> k & 1) {
+            for _ in 0..times {
                 *light *= m.t * m.color;
             }
-        }
-        return true;
-    }
-    for i in first..first + count {
-        let p = &b.prims[i as usize];
-        let t = intersect::intersect_prim(p, ray, inv_dir);
-        let crossings = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
-        if crossings > 0 {
-            let m = &b.materials[p.material() as usize];
-            if m.t <= 0.0 {
-                return false;
-            }
-            for _ in 0..crossings {
-                *light *= m.t * m.color;
-            }
-        }
-    }
-    true
+            true
+        },
+    )
 }
 
 /// The planes' share of `transmission`, which tests them first: the product of their
@@ -521,7 +528,7 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3
         if count == 0 {
             break;
         }
-        if !transmit_leaf(b, ray, inv_dir, first, count, tmax, &mut light) {
+        if !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light) {
             *nodes += walk.fetched;
             return Vec3::ZERO;
         }

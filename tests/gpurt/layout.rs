@@ -439,6 +439,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),
     (
+        "leaf_crossings",
+        "a leaf's crossings in transmission's order, shared by transmit_leaf and the CPU packets' lone lanes",
+    ),
+    (
         "transmit_leaf",
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),

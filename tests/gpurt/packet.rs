@@ -302,6 +302,77 @@ fn packets_find_the_single_ray_walks_hits_and_shadows_on_every_scene() {
     );
 }
 
+/// A glass panel of one material between a light and the floor, a glass sphere of that
+/// material under it, and with `two`, a glass sphere of another.
+fn glass(two: bool) -> String {
+    let other = if two {
+        "f 0.4 0.9 0.5 0 0 1 0.6 1.3\ns 1.2 0 3 0.8\n"
+    } else {
+        ""
+    };
+    format!(
+        "v\nfrom 0 -8 4\nat 0 0 2\nup 0 0 1\nangle 40\nhither 0.01\nresolution 8 8\n\
+         b 0 0 0\nl 0 0 10\n\
+         f 0.9 0.8 0.7 0 0 1 0.8 1.5\np 4\n-2 -2 5\n2 -2 5\n2 2 5\n-2 2 5\ns -1 0 3 0.8\n{other}"
+    )
+}
+
+/// Shadow rays through glass: where every surface a ray crosses is of one material, the
+/// packet answers it itself (the same factor each time, so the order of the product, which
+/// the single-ray walk alone knows, cannot change a bit of it); where a ray crosses two
+/// materials, the single-ray walk does. Either way the light is `transmission`'s to the
+/// bit, and some rays pass through the sphere as well as the panel.
+#[test]
+fn shadow_packets_answer_rays_through_glass_of_one_material() {
+    let dir = crate::common::temp_dir("packet-glass");
+    let light = Vec3::new(0.0, 0.0, 10.0);
+    let n = 32;
+    let rays: Vec<(Ray, f32, f32)> = (0..n * n)
+        .map(|i| {
+            let at = |i: u32| -3.0 + 6.0 * (i as f32 + 0.5) / n as f32;
+            let origin = Vec3::new(at(i % n), at(i / n), 0.0);
+            let to = light - origin;
+            let ray = Ray {
+                origin,
+                dir: to.normalize(),
+            };
+            (ray, 0.0, to.length())
+        })
+        .collect();
+    for two in [false, true] {
+        let path = dir.join(format!("glass-{two}.nff"));
+        std::fs::write(&path, glass(two)).expect("writes");
+        let buffers = load(&path);
+        let globals = frame::globals(&buffers, &RenderOptions::for_camera(&buffers.camera));
+        let b = Bindings::new(&buffers, &globals);
+        let mut lights: Vec<[u32; 3]> = rays
+            .iter()
+            .map(|(ray, _, tmax)| {
+                transmission(&b, ray, *tmax, &mut 0)
+                    .to_array()
+                    .map(f32::to_bits)
+            })
+            .collect();
+        lights.sort_unstable();
+        lights.dedup();
+        assert!(lights.len() >= 2 + usize::from(two), "{two}: {lights:?}");
+        assert!(
+            !lights.contains(&[1.0f32.to_bits(); 3]),
+            "every ray crosses the panel"
+        );
+        for k in &all_kernels() {
+            let groups: Vec<Group> = rays.chunks(k.lanes()).map(<[_]>::to_vec).collect();
+            let packed = check_shadows(&b, k, &groups, &path.display().to_string());
+            let what = format!("{two}, {}: {packed} of {}", k.isa().name(), rays.len());
+            if two {
+                assert!(packed < rays.len(), "{what}");
+            } else {
+                assert_eq!(packed, rays.len(), "{what}");
+            }
+        }
+    }
+}
+
 /// A render's image and its ray counts.
 fn render(
     b: &SceneBuffers,

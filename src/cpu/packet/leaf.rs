@@ -335,8 +335,8 @@ pub fn closest<L: Lanes>(
 }
 
 /// The primitives `first..first + count` against the shadow rays in `lanes`, whose
-/// intervals are `(0, tmax)`: the lanes each primitive crosses end there, blocked by an
-/// opaque one, or handed to `transmission` by one that transmits.
+/// intervals are `(0, tmax)`: each crossing goes into `out` (`Occluded::cross`), and the
+/// lanes it closes test no further primitive.
 #[inline(always)]
 pub fn occlusion<L: Lanes>(
     l: L,
@@ -345,43 +345,40 @@ pub fn occlusion<L: Lanes>(
     rows: &Rows,
     (first, count): (u32, u32),
     mut lanes: u32,
-    tmax: L::F,
-) -> Occluded {
-    let zero = l.splat(0.0);
+    out: &mut Occluded,
+) {
+    let (zero, tmax) = (l.splat(0.0), l.load(&rows.tmax));
     let inside = |t: L::F| l.and(l.gt(t, zero), l.lt(t, tmax));
-    let mut out = Occluded::default();
+    // The lanes crossing a surface of two roots once, and those crossing it twice.
+    let roots = |(t0, t1): (L::F, L::F)| {
+        let (in0, in1) = (inside(t0), inside(t1));
+        (l.bits(l.or(in0, in1)), l.bits(l.and(in0, in1)))
+    };
     for i in first..first + count {
         let p = &b.prims[i as usize];
-        let crossed = match p.kind() {
-            PRIM_TRIANGLE => l.bits(inside(triangle(l, p, r).0)),
-            PRIM_SPHERE => {
-                let (t0, t1) = sphere(l, p, r);
-                l.bits(l.or(inside(t0), inside(t1)))
-            }
-            PRIM_CONE => {
-                let (t0, t1) = cone(l, p, r);
-                l.bits(l.or(inside(t0), inside(t1)))
-            }
-            _ => lanes_of(lanes).fold(0, |m, k| {
+        let (once, twice) = match p.kind() {
+            PRIM_TRIANGLE => (l.bits(inside(triangle(l, p, r).0)), 0),
+            PRIM_SPHERE => roots(sphere(l, p, r)),
+            PRIM_CONE => roots(cone(l, p, r)),
+            _ => lanes_of(lanes).fold((0, 0), |(once, twice), k| {
                 let t = intersect::intersect_prim(p, &rows.ray(k), r.inv_of(k));
                 let (lo, hi) = (0.0, rows.tmax[k]);
-                let crosses = (t.x > lo && t.x < hi) || (t.y > lo && t.y < hi);
-                m | u32::from(crosses) << k
+                let (in0, in1) = (t.x > lo && t.x < hi, t.y > lo && t.y < hi);
+                (
+                    once | u32::from(in0 || in1) << k,
+                    twice | u32::from(in0 && in1) << k,
+                )
             }),
-        } & lanes;
-        if crossed != 0 {
-            if b.materials[p.material() as usize].t <= 0.0 {
-                out.blocked |= crossed;
-            } else {
-                out.transmits |= crossed;
-            }
-            lanes &= !crossed;
+        };
+        let once = once & lanes;
+        if once != 0 {
+            out.cross(b, p.material(), once, twice);
+            lanes = out.open(lanes);
             if lanes == 0 {
                 break;
             }
         }
     }
-    out
 }
 
 #[cfg(test)]

@@ -10,8 +10,8 @@
 //! - here: the instruction set chosen at run time (`Isa`, `Kernels`, `GPURT_SIMD`), and the
 //!   packet API the renderer calls, which answers exactly what `closest_hit` and
 //!   `transmission` answer for each ray: the lanes whose answer depends on the order of
-//!   the walk (two surfaces at one distance; a shadow ray through transmitting surfaces,
-//!   whose factors multiply in visiting order) are traced again alone.
+//!   the walk (two surfaces at one distance; a shadow ray through transmitting surfaces
+//!   of two materials, whose factors multiply in visiting order) are traced again alone.
 //!
 //! The dispatch is `is_x86_feature_detected!` and `#[target_feature]` functions, not a
 //! crate: `pulp` (already built, through `exr`) has no lane bit mask in its generic
@@ -244,9 +244,10 @@ impl Kernels {
 
     /// `transmission(b, ray, tmax)` of every ray of `p` (whose `tmin` must be 0), into
     /// `light`, and the node fetches of each lane into `nodes` (as `closest_hits` counts
-    /// them). Returns the lanes the occlusion packet answered: blocked, or crossing
-    /// nothing; the planes are each lane's own, and lanes crossing a surface that transmits
-    /// light go alone, as do all where the packet cannot (see `closest_hits`).
+    /// them). Returns the lanes the occlusion packet answered: blocked, crossing nothing,
+    /// or crossing surfaces of one material that transmits light; the planes are each
+    /// lane's own, and lanes crossing two such materials go alone, as do all where the
+    /// packet cannot (see `closest_hits`).
     pub fn transmissions(
         &self,
         b: &Bindings,
@@ -275,13 +276,19 @@ impl Kernels {
         *nodes = share(found.nodes, found.traced);
         for k in lanes_of(open) {
             let bit = 1 << k;
-            if packed & bit == 0 || found.transmits & bit != 0 {
+            if packed & bit == 0 || found.mixed & bit != 0 {
                 light[k] = transmission(b, &p.rows.ray(k), p.rows.tmax[k], &mut nodes[k]);
             } else if found.blocked & bit != 0 {
                 light[k] = Vec3::ZERO;
+            } else if found.transmits & bit != 0 {
+                // `transmission`'s product: the same factor each time, so in any order.
+                let m = &b.materials[found.material[k] as usize];
+                for _ in 0..found.crossings[k] {
+                    light[k] *= m.t * m.color;
+                }
             }
         }
-        packed & !found.transmits
+        packed & !found.mixed
     }
 }
 

@@ -4,7 +4,8 @@
 use glam::Vec3;
 
 use super::lanes::{Lanes, MAX_LANES, Row};
-use crate::cpu::types::Ray;
+use crate::cpu::intersect::lanes_of;
+use crate::cpu::types::{Bindings, Ray};
 
 /// A packet as the kernels read it: one row a coordinate, lane `k` of each the `k`-th ray.
 #[derive(Clone, Debug)]
@@ -141,15 +142,58 @@ impl Default for Found {
     }
 }
 
-/// An occlusion kernel's answer: the lanes whose first crossing found is opaque (no light
-/// arrives), and those whose first crossing transmits light, whose product of factors the
-/// single-ray `transmission` works out in its own order. The other lanes cross nothing.
+/// An occlusion kernel's answer: the lanes that cross an opaque surface (no light arrives),
+/// and those that cross only surfaces that transmit light, whose factors multiply the
+/// light in the order the single-ray `transmission` visits them. Where every crossing is
+/// of one material the order cannot change a bit of the product (the same factor each
+/// time), so the packet answers it (`transmits`, `material`, `crossings`); where a lane
+/// crosses two materials it is left to `transmission` (`mixed`). The other lanes cross
+/// nothing.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Occluded {
     pub blocked: u32,
     pub transmits: u32,
+    pub mixed: u32,
+    /// The material of a lane in `transmits`, and how many times it crosses its surfaces.
+    pub material: [u32; MAX_LANES],
+    pub crossings: [u32; MAX_LANES],
     /// The lanes the kernel traced (`Rays::finite`).
     pub traced: u32,
     /// Wide nodes the walk fetched, as `Found::nodes`.
     pub nodes: u32,
+}
+
+impl Occluded {
+    /// The lanes still walking: those that have met neither an opaque surface nor a
+    /// second material.
+    #[inline(always)]
+    pub fn open(&self, lanes: u32) -> u32 {
+        lanes & !(self.blocked | self.mixed)
+    }
+
+    /// The lanes `once` cross a surface of material `material` (a primitive's), those of
+    /// them in `twice` a second time (a sphere or cone passed through).
+    #[inline(always)]
+    pub fn cross(&mut self, b: &Bindings, material: u32, once: u32, twice: u32) {
+        let once = self.open(once);
+        if once == 0 {
+            return;
+        }
+        if b.materials[material as usize].t <= 0.0 {
+            self.blocked |= once;
+            return;
+        }
+        for k in lanes_of(once) {
+            let bit = 1 << k;
+            if self.transmits & bit == 0 {
+                self.transmits |= bit;
+                self.material[k] = material;
+                self.crossings[k] = 0;
+            } else if self.material[k] != material {
+                self.mixed |= bit;
+                continue;
+            }
+            self.crossings[k] += 1 + (twice >> k & 1);
+        }
+    }
 }

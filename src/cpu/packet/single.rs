@@ -7,9 +7,10 @@
 
 use glam::Vec3;
 
+use super::rays::Occluded;
 use crate::bvh::wide::WideNode;
 use crate::cpu::intersect;
-use crate::cpu::traverse::leaf_triangles4;
+use crate::cpu::traverse::{leaf_crossings, leaf_triangles4};
 use crate::cpu::types::{Bindings, Ray};
 use crate::cpu::wide::{self, Slabs};
 
@@ -67,8 +68,9 @@ pub fn closest_from(
     });
 }
 
-/// The shadow ray's walk of the subtree under wide node `node` over `(0, tmax)`: `None`
-/// when it crosses nothing there, else whether the first crossing it finds is opaque.
+/// The walk of lane `lane`'s shadow ray over `(0, tmax)` through the subtree under wide
+/// node `node`: its crossings go into `out` (`Occluded::cross`), until one closes the lane.
+#[allow(clippy::too_many_arguments)]
 pub fn occluded_from(
     b: &Bindings,
     wide: &[WideNode],
@@ -76,28 +78,18 @@ pub fn occluded_from(
     inv_dir: Vec3,
     tmax: f32,
     node: u32,
-    nodes: &mut u32,
-) -> Option<bool> {
+    lane: usize,
+    out: &mut Occluded,
+) {
     let slabs = Slabs::new(ray.origin, inv_dir);
-    let mut found = None;
-    wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, nodes, |first, count| {
-        let leaf = &b.prims[first as usize..(first + count) as usize];
-        let inside = |t: f32| t > 0.0 && t < tmax;
-        let crossed = if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
-            (0..leaf.len()).find(|&k| inside(t[k]))
-        } else {
-            (0..leaf.len()).find(|&k| {
-                let t = intersect::intersect_prim(&leaf[k], ray, inv_dir);
-                inside(t.x) || inside(t.y)
-            })
-        };
-        match crossed {
-            Some(k) => {
-                found = Some(b.materials[leaf[k].material() as usize].t <= 0.0);
-                None
-            }
-            None => Some(tmax),
-        }
+    let bit = 1 << lane;
+    let mut nodes = 0;
+    wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, &mut nodes, |first, count| {
+        let open = leaf_crossings(b, ray, inv_dir, (first, count), tmax, |material, times| {
+            out.cross(b, material, bit, if times == 2 { bit } else { 0 });
+            out.open(bit) != 0
+        });
+        open.then_some(tmax)
     });
-    found
+    out.nodes += nodes;
 }

@@ -14,8 +14,8 @@
 //! A lane therefore enters a leaf exactly when its own slab test lets it in, against its
 //! own nearest hit, and tests the leaf's primitives with the same arithmetic: it finds the
 //! nearest hit the single-ray walk finds, and the primitive, but where two surfaces lie at
-//! exactly the same distance (`Found::tied`); a shadow lane finds the same first-crossing
-//! verdict, the set of leaves it enters not depending on the order.
+//! exactly the same distance (`Found::tied`); a shadow lane finds the same crossings, the
+//! set of leaves it enters not depending on the order.
 
 use std::mem::MaybeUninit;
 
@@ -215,8 +215,8 @@ fn closest_tree<L: Lanes>(
     }
 }
 
-/// Which shadow rays of `rows` (intervals `(0, tmax)`) the tree blocks or transmits
-/// through, by the first crossing each finds (`leaf::occlusion`).
+/// Which shadow rays of `rows` (intervals `(0, tmax)`) the tree blocks, and the surfaces
+/// that transmit light each of the others crosses (`Occluded`).
 #[inline(always)]
 pub fn occluded<L: Lanes>(
     l: L,
@@ -252,29 +252,15 @@ pub fn occluded<L: Lanes>(
         if lanes == 0 {
         } else if e.count > 0 {
             if e.count != EMPTY {
-                let o = leaf::occlusion(l, b, &r, rows, (e.child, e.count), lanes, tmax);
-                out.blocked |= o.blocked;
-                out.transmits |= o.transmits;
-                alive &= !(o.blocked | o.transmits);
+                leaf::occlusion(l, b, &r, rows, (e.child, e.count), lanes, &mut out);
+                alive = out.open(alive);
             }
         } else if lanes.count_ones() <= alone::<L>() {
             for k in lanes_of(lanes) {
                 let (ray, inv) = (rows.ray(k), r.inv_of(k));
-                match single::occluded_from(
-                    b,
-                    wide,
-                    &ray,
-                    inv,
-                    rows.tmax[k],
-                    e.child,
-                    &mut out.nodes,
-                ) {
-                    Some(true) => out.blocked |= 1 << k,
-                    Some(false) => out.transmits |= 1 << k,
-                    None => continue,
-                }
-                alive &= !(1 << k);
+                single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.child, k, &mut out);
             }
+            alive = out.open(alive);
         } else {
             let n = &wide[e.child as usize];
             out.nodes += 1;
