@@ -434,22 +434,36 @@ pub(crate) fn leaf_crossings(
     mut cross: impl FnMut(u32, u32) -> bool,
 ) -> bool {
     let leaf = &b.prims[first as usize..(first + count) as usize];
+    // Loops, not `Iterator::all`, which the compiler leaves out of line, where it loses
+    // the single-ray walk's instruction set (`closest_wide_v3`).
     if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
-        return lanes_of(crossings(t, 0.0, tmax, leaf.len())).all(|k| cross(leaf[k].material(), 1));
+        for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
+            if !cross(leaf[k].material(), 1) {
+                return false;
+            }
+        }
+        return true;
     }
     if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
         // Four spheres at once, then in order, as the loop below would.
         let in0 = crossings(t0, 0.0, tmax, leaf.len());
         let in1 = crossings(t1, 0.0, tmax, leaf.len());
-        return lanes_of(in0 | in1)
-            .all(|k| cross(leaf[k].material(), (in0 >> k & 1) + (in1 >> k & 1)));
+        for k in lanes_of(in0 | in1) {
+            if !cross(leaf[k].material(), (in0 >> k & 1) + (in1 >> k & 1)) {
+                return false;
+            }
+        }
+        return true;
     }
-    leaf.iter().all(|p| {
+    for p in leaf {
         let t = intersect::intersect_prim(p, ray, inv_dir);
         let times = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
-        times == 0 || cross(p.material(), times)
-    })
+        if times > 0 && !cross(p.material(), times) {
+            return false;
+        }
+    }
+    true
 }
 
 /// Multiplies `light` by the transmission of each crossing of the leaf's primitives within

@@ -349,17 +349,21 @@ pub fn occlusion<L: Lanes>(
 ) {
     let (zero, tmax) = (l.splat(0.0), l.load(&rows.tmax));
     let inside = |t: L::F| l.and(l.gt(t, zero), l.lt(t, tmax));
-    // The lanes crossing a surface of two roots once, and those crossing it twice.
-    let roots = |(t0, t1): (L::F, L::F)| {
+    // The lanes crossing a surface of two roots once, and those crossing it twice (a
+    // function, not a closure: one the compiler leaves out of line loses the kernel's
+    // instruction set, and every operation becomes a call).
+    #[inline(always)]
+    fn roots<L: Lanes>(l: L, (t0, t1): (L::F, L::F), zero: L::F, tmax: L::F) -> (u32, u32) {
+        let inside = |t: L::F| l.and(l.gt(t, zero), l.lt(t, tmax));
         let (in0, in1) = (inside(t0), inside(t1));
         (l.bits(l.or(in0, in1)), l.bits(l.and(in0, in1)))
-    };
+    }
     for i in first..first + count {
         let p = &b.prims[i as usize];
         let (once, twice) = match p.kind() {
             PRIM_TRIANGLE => (l.bits(inside(triangle(l, p, r).0)), 0),
-            PRIM_SPHERE => roots(sphere(l, p, r)),
-            PRIM_CONE => roots(cone(l, p, r)),
+            PRIM_SPHERE => roots(l, sphere(l, p, r), zero, tmax),
+            PRIM_CONE => roots(l, cone(l, p, r), zero, tmax),
             _ => lanes_of(lanes).fold((0, 0), |(once, twice), k| {
                 let t = intersect::intersect_prim(p, &rows.ray(k), r.inv_of(k));
                 let (lo, hi) = (0.0, rows.tmax[k]);

@@ -266,13 +266,13 @@ impl Kernels {
                 None => light[k] = Vec3::ZERO,
             }
         }
-        let (packed, found) = match b.wide {
+        let found = match b.wide {
             Some(wide) if open.count_ones() >= MIN_LANES => {
-                let found = self.occluded_kernel(b, wide, &p.rows, open);
-                (found.traced, found)
+                self.occluded_kernel(b, wide, &p.rows, open)
             }
-            _ => (0, Occluded::default()),
+            _ => Occluded::default(),
         };
+        let packed = found.traced;
         *nodes = share(found.nodes, found.traced);
         for k in lanes_of(open) {
             let bit = 1 << k;
