@@ -17,45 +17,65 @@ use super::rays::Rays;
 use crate::bvh::wide::{WIDTH, WideNode};
 use crate::gpu_types::SLAB_WIDEN;
 
-/// One axis of the packet, where all its directions have one sign on it.
+/// One axis of the packet, where all its directions have one sign on it, its values
+/// spread over four lanes (a node's boxes are four to a `Vec4`).
 #[derive(Clone, Copy, Debug)]
 struct Axis {
+    /// Which axis (0, 1, 2).
+    a: usize,
     /// The directions are negative: the boxes' `hi` faces are the near ones.
     neg: bool,
     /// The origin coordinate that makes `face - origin` smallest for the near face and
     /// largest for the far face (`max` then `min` of the lanes' for a positive direction).
-    o_near: f32,
-    o_far: f32,
+    o_near: Vec4,
+    o_far: Vec4,
     /// The lanes' inverse directions on this axis, least and greatest.
-    i_lo: f32,
-    i_hi: f32,
+    i_lo: Vec4,
+    i_hi: Vec4,
 }
 
 /// A packet's rays as intervals, per axis; an axis on which the directions differ in sign
-/// bounds nothing (its interval of inverses spans both infinities' neighbourhoods).
+/// bounds nothing (its interval of inverses spans both infinities' neighbourhoods), and is
+/// left out: `axes[..bounded]` are the others.
 #[derive(Clone, Copy, Debug)]
 pub struct Frustum {
-    axes: [Option<Axis>; 3],
+    axes: [Axis; 3],
+    bounded: usize,
 }
 
 impl Frustum {
     /// The intervals of the lanes `lanes` of the rays `r`.
     #[inline(always)]
     pub fn new<L: Lanes>(l: L, r: &Rays<L>, lanes: u32) -> Self {
-        let mut axes = [None; 3];
-        for (a, axis) in axes.iter_mut().enumerate() {
+        let none = Axis {
+            a: 0,
+            neg: false,
+            o_near: Vec4::ZERO,
+            o_far: Vec4::ZERO,
+            i_lo: Vec4::ZERO,
+            i_hi: Vec4::ZERO,
+        };
+        let mut f = Frustum {
+            axes: [none; 3],
+            bounded: 0,
+        };
+        for a in 0..3 {
             let (i_lo, i_hi) = (l.min_of(r.inv[a], lanes), l.max_of(r.inv[a], lanes));
             let (o_lo, o_hi) = (l.min_of(r.o[a], lanes), l.max_of(r.o[a], lanes));
             let neg = i_hi < 0.0;
-            *axis = (neg || i_lo > 0.0).then_some(Axis {
-                neg,
-                o_near: if neg { o_lo } else { o_hi },
-                o_far: if neg { o_hi } else { o_lo },
-                i_lo,
-                i_hi,
-            });
+            if neg || i_lo > 0.0 {
+                f.axes[f.bounded] = Axis {
+                    a,
+                    neg,
+                    o_near: Vec4::splat(if neg { o_lo } else { o_hi }),
+                    o_far: Vec4::splat(if neg { o_hi } else { o_lo }),
+                    i_lo: Vec4::splat(i_lo),
+                    i_hi: Vec4::splat(i_hi),
+                };
+                f.bounded += 1;
+            }
         }
-        Frustum { axes }
+        f
     }
 
     /// The children of `n` that a ray of the packet may reach within `[tmin, tmax]` (the
@@ -64,23 +84,23 @@ impl Frustum {
     #[inline(always)]
     pub fn cull(&self, n: &WideNode, tmin: f32, tmax: f32) -> (u32, [Vec4; WIDTH / 4]) {
         let mut near = [Vec4::splat(tmin); WIDTH / 4];
-        let mut mask = 0;
-        for (half, near) in near.iter_mut().enumerate() {
-            let mut far = Vec4::splat(tmax);
-            for (a, axis) in self.axes.iter().enumerate() {
-                let Some(x) = axis else { continue };
-                let (near_face, far_face) = if x.neg {
-                    (n.hi[a][half], n.lo[a][half])
-                } else {
-                    (n.lo[a][half], n.hi[a][half])
-                };
-                let dn = near_face - Vec4::splat(x.o_near);
-                let df = far_face - Vec4::splat(x.o_far);
-                let (lo, hi) = (Vec4::splat(x.i_lo), Vec4::splat(x.i_hi));
-                *near = near.max((dn * lo).min(dn * hi));
-                far = far.min((df * lo).max(df * hi));
+        let mut far = [Vec4::splat(tmax); WIDTH / 4];
+        for x in &self.axes[..self.bounded] {
+            let (near_face, far_face) = if x.neg {
+                (&n.hi[x.a], &n.lo[x.a])
+            } else {
+                (&n.lo[x.a], &n.hi[x.a])
+            };
+            for half in 0..WIDTH / 4 {
+                let dn = near_face[half] - x.o_near;
+                let df = far_face[half] - x.o_far;
+                near[half] = near[half].max((dn * x.i_lo).min(dn * x.i_hi));
+                far[half] = far[half].min((df * x.i_lo).max(df * x.i_hi));
             }
-            mask |= near.cmple(far * SLAB_WIDEN).bitmask() << (4 * half);
+        }
+        let mut mask = 0;
+        for half in 0..WIDTH / 4 {
+            mask |= near[half].cmple(far[half] * SLAB_WIDEN).bitmask() << (4 * half);
         }
         (mask, near)
     }
