@@ -255,9 +255,14 @@ impl Kernels {
         light: &mut [Vec3; MAX_LANES],
         nodes: &mut [u32; MAX_LANES],
     ) -> u32 {
-        let mut open = 0u32;
-        for k in lanes_of(p.rows.lanes) {
-            debug_assert_eq!(p.rows.tmin[k], 0.0, "a shadow ray starts at its origin");
+        debug_assert!(
+            lanes_of(p.rows.lanes).all(|k| p.rows.tmin[k] == 0.0),
+            "a shadow ray starts at its origin"
+        );
+        // The planes first, lane by lane (most scenes have none: all lanes open).
+        let mut open = if b.planes.is_empty() { p.rows.lanes } else { 0 };
+        light.fill(Vec3::ONE);
+        for k in lanes_of(p.rows.lanes & !open) {
             match transmit_planes(b, &p.rows.ray(k), p.rows.tmax[k]) {
                 Some(l) => {
                     light[k] = l;
