@@ -30,17 +30,9 @@ use crate::cpu::types::Bindings;
 use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
 
 /// Lanes of a node at or below which each walks the node's subtree alone: a quarter of the
-/// packet for closest hits (two of eight, four of sixteen, one of four).
+/// packet (two of eight, four of sixteen, one of four).
 fn alone<L: Lanes>() -> u32 {
     (L::N / 4) as u32
-}
-
-/// The same for shadow rays: an eighth (two of sixteen, one of eight or four), measured
-/// (`examples/rays.rs`, three runs each way): shadow packets 3 to 5% faster than with a
-/// quarter with sixteen lanes, 2% with eight; closest hits showed no difference beyond the
-/// runs' spread, and keep a quarter.
-fn alone_shadow<L: Lanes>() -> u32 {
-    (L::N / 8).max(1) as u32
 }
 
 /// A child waiting on the stack, and where each lane enters its box.
@@ -263,7 +255,7 @@ pub fn occluded<L: Lanes>(
                 leaf::occlusion(l, b, &r, rows, (e.child, e.count), lanes, &mut out);
                 alive = out.open(alive);
             }
-        } else if lanes.count_ones() <= alone_shadow::<L>() {
+        } else if lanes.count_ones() <= alone::<L>() {
             for k in lanes_of(lanes) {
                 let (ray, inv) = (rows.ray(k), r.inv_of(k));
                 single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.child, k, &mut out);
