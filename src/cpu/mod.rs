@@ -15,6 +15,7 @@ pub mod cwide;
 pub mod intersect;
 #[cfg(target_arch = "x86_64")]
 mod isa;
+mod leaf;
 mod lights;
 pub mod main;
 pub mod packet;

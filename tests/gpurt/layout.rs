@@ -431,19 +431,7 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "Bindings for the binary walk: the CPU renders through the wide tree (wide.rs)",
     ),
     (
-        "leaf_triangles4",
-        "a CPU leaf's four triangles from its block (bvh::blocks) or gathered; a GPU lane tests one",
-    ),
-    (
         "closest_in_leaf",
-        "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
-    ),
-    (
-        "leaf_crossings",
-        "a leaf's crossings in transmission's order, shared by transmit_leaf and the CPU packets' lone lanes",
-    ),
-    (
-        "transmit_leaf",
         "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
     ),
     (
@@ -477,10 +465,6 @@ const CPU_ONLY: &[(&str, &str)] = &[
     (
         "transposed",
         "a leaf's primitives as SIMD lanes for the CPU's four-at-once tests",
-    ),
-    (
-        "crossings",
-        "the lanes of a leaf's four-triangle test that cross the interval; a GPU lane tests one",
     ),
     (
         "intersect_spheres4",

@@ -1,16 +1,16 @@
 //! A lane that walks on alone: where few of a packet's lanes reach a node, each walks the
 //! node's subtree with the single-ray walk (`wide::walk_from`) from the hit it holds, and
 //! hands its answer back to the packet (the hybrid traversal of Benthin's thesis and
-//! Embree). Its leaves are tested as `traverse.rs`'s `closest_in_leaf` and `transmit_leaf`
-//! test them, but for noticing ties and transmitting surfaces, which the packet's caller
-//! leaves to the single-ray walk itself.
+//! Embree). A closest-hit lane tests its leaves as `traverse.rs`'s `closest_in_leaf` does,
+//! but for noticing ties, which the packet's caller leaves to the single-ray walk itself;
+//! a shadow lane crosses them through the single-ray walk's own `leaf::leaf_crossings`.
 
 use glam::Vec3;
 
 use super::rays::Occluded;
 use crate::bvh::wide::WideNode;
 use crate::cpu::intersect;
-use crate::cpu::traverse::{leaf_crossings, leaf_triangles4};
+use crate::cpu::leaf::{leaf_crossings, leaf_triangles4};
 use crate::cpu::types::{Bindings, Ray};
 use crate::cpu::wide::{self, Slabs};
 

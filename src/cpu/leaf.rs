@@ -1,0 +1,111 @@
+//! A leaf's primitives against one ray, for the CPU's single-ray walks of either tree
+//! (`traverse.rs`) and the packets' lanes that walk alone (`packet/single.rs`): four
+//! triangles at once from the leaf's block, and the surfaces a shadow ray crosses in the
+//! order `transmission` multiplies their factors. (The closest-hit test of a leaf,
+//! `closest_in_leaf`, stays beside `first_in`, the twin of traverse.wgsl's that it calls.)
+
+use glam::{Vec3, Vec4};
+
+use super::intersect::{self, lanes_of};
+use super::types::{Bindings, Ray};
+use crate::gpu_types::GpuPrim;
+
+/// The lanes of the first `len` whose `t` lies in `(tmin, tmax)`, a bit each.
+#[inline(always)]
+pub(super) fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> u32 {
+    let inside = t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
+    inside.bitmask() & ((1 << len) - 1)
+}
+
+/// `intersect_triangles4` of the leaf `leaf` starting at primitive `first`: from its
+/// block where the scene has one (`bvh::blocks`, made once), else gathered from `leaf`.
+/// Every single-ray walk of the CPU's leaves tests them here.
+#[inline(always)]
+pub(crate) fn leaf_triangles4(
+    b: &Bindings,
+    first: u32,
+    leaf: &[GpuPrim],
+    ray: &Ray,
+) -> Option<(Vec4, Vec4, Vec4)> {
+    match b.blocks.and_then(|blocks| blocks.get(first)) {
+        Some(block) => Some(intersect::triangles4(block, ray)),
+        None => intersect::intersect_triangles4(leaf, ray),
+    }
+}
+
+/// Each primitive of the leaf that the segment `(0, tmax)` crosses, in the order
+/// `transmission` multiplies their factors, and how many times (a sphere or a cone can be
+/// passed through): `cross(material, times)`, until it returns false; false when it did.
+/// The packets' lone shadow lanes (`packet/single.rs`) cross leaves here too.
+#[inline(always)]
+pub(crate) fn leaf_crossings(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    (first, count): (u32, u32),
+    tmax: f32,
+    mut cross: impl FnMut(u32, u32) -> bool,
+) -> bool {
+    let leaf = &b.prims[first as usize..(first + count) as usize];
+    // Loops, not `Iterator::all`, which the compiler leaves out of line, where it loses
+    // the single-ray walk's instruction set (`closest_wide_v3`).
+    if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
+        // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
+        for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
+            if !cross(leaf[k].material(), 1) {
+                return false;
+            }
+        }
+        return true;
+    }
+    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
+        // Four spheres at once, then in order, as the loop below would.
+        let in0 = crossings(t0, 0.0, tmax, leaf.len());
+        let in1 = crossings(t1, 0.0, tmax, leaf.len());
+        for k in lanes_of(in0 | in1) {
+            if !cross(leaf[k].material(), (in0 >> k & 1) + (in1 >> k & 1)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    for p in leaf {
+        let t = intersect::intersect_prim(p, ray, inv_dir);
+        let times = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
+        if times > 0 && !cross(p.material(), times) {
+            return false;
+        }
+    }
+    true
+}
+
+/// Multiplies `light` by the transmission of each crossing of the leaf's primitives within
+/// `(0, tmax)`; false when one of them is opaque.
+#[inline(always)]
+pub(super) fn transmit_leaf(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    leaf: (u32, u32),
+    tmax: f32,
+    light: &mut Vec3,
+) -> bool {
+    leaf_crossings(
+        b,
+        ray,
+        inv_dir,
+        leaf,
+        tmax,
+        #[inline(always)]
+        |material, times| {
+            let m = &b.materials[material as usize];
+            if m.t <= 0.0 {
+                return false;
+            }
+            for _ in 0..times {
+                *light *= m.t * m.color;
+            }
+            true
+        },
+    )
+}
