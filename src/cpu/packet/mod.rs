@@ -20,6 +20,7 @@
 //! intrinsics (the single-ray walk's one AVX box test is `wide::SlabsAvx`), `x86_walks.rs`
 //! compiles the walks for each set.
 
+mod answer;
 mod frustum;
 pub mod lanes;
 mod leaf;
@@ -34,12 +35,10 @@ mod x86_walks;
 use glam::Vec3;
 
 use super::intersect::lanes_of;
-use super::traverse::{closest_hit, transmission, transmit_planes};
 use super::types::{Bindings, Hit, Ray};
-use crate::bvh::wide::WideNode;
 use crate::error::{Error, Result};
 pub use lanes::MAX_LANES;
-use rays::{Found, Occluded, Rows};
+use rays::Rows;
 
 /// The instruction sets the packet kernels are compiled for, widest first.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -105,9 +104,6 @@ enum Kind {
     Portable,
 }
 
-/// Fewer lanes than this in a packet, and its rays are traced one at a time.
-const MIN_LANES: u32 = 2;
-
 impl Kernels {
     /// `isa`'s kernels, where this machine has its instructions.
     pub fn new(isa: Isa) -> Option<Self> {
@@ -166,88 +162,25 @@ impl Kernels {
         self.isa().lanes()
     }
 
-    fn closest_kernel(
-        &self,
-        b: &Bindings,
-        wide: &[WideNode],
-        rows: &Rows,
-        lanes: u32,
-        found: &mut Found,
-    ) {
-        #[cfg(target_arch = "x86_64")]
-        use x86_walks::Kernels as _;
-        match self.kind {
-            #[cfg(target_arch = "x86_64")]
-            Kind::Avx512(l) => l.closest(b, wide, rows, lanes, found),
-            #[cfg(target_arch = "x86_64")]
-            Kind::Avx2(l) => l.closest(b, wide, rows, lanes, found),
-            #[cfg(target_arch = "x86_64")]
-            Kind::Sse(l) => l.closest(b, wide, rows, lanes, found),
-            Kind::Portable => walk::closest(lanes::Portable, b, wide, rows, lanes, found),
-        }
-    }
-
-    fn occluded_kernel(
-        &self,
-        b: &Bindings,
-        wide: &[WideNode],
-        rows: &Rows,
-        lanes: u32,
-    ) -> Occluded {
-        #[cfg(target_arch = "x86_64")]
-        use x86_walks::Kernels as _;
-        match self.kind {
-            #[cfg(target_arch = "x86_64")]
-            Kind::Avx512(l) => l.occluded(b, wide, rows, lanes),
-            #[cfg(target_arch = "x86_64")]
-            Kind::Avx2(l) => l.occluded(b, wide, rows, lanes),
-            #[cfg(target_arch = "x86_64")]
-            Kind::Sse(l) => l.occluded(b, wide, rows, lanes),
-            Kind::Portable => walk::occluded(lanes::Portable, b, wide, rows, lanes),
-        }
-    }
-
-    /// `closest_hit(b, ray, tmin, tmax)` of every ray of `p`, into `hits` (lane by lane;
-    /// `cost` 0, as the wide walk counts none; `nodes`, the packet's node fetches shared
-    /// among the lanes it traced, `share`, plus a lane's own walk if it took one). Returns the lanes the packet answered; the
-    /// others went alone: all of them where `b` has no wide tree or the packet is nearly
-    /// empty, rays from or towards infinity, and lanes that met two surfaces at one distance.
+    /// `closest_hit(b, ray, tmin, tmax)` of every ray of `p`, into `hits`: see
+    /// `answer::closest_hits`. Returns the lanes the packet answered.
     pub fn closest_hits(&self, b: &Bindings, p: &Packet, hits: &mut [Hit; MAX_LANES]) -> u32 {
-        let mut found = Found::default();
-        let packed = match b.wide {
-            Some(wide) if p.rows.lanes.count_ones() >= MIN_LANES => {
-                self.closest_kernel(b, wide, &p.rows, p.rows.lanes, &mut found);
-                found.traced & !found.tied
-            }
-            _ => 0,
-        };
-        let nodes = share(found.nodes, found.traced);
-        // Field by field: a `Hit` built whole on the stack and copied stalls on store
-        // forwarding, a tenth of a packet's time.
-        for k in lanes_of(packed) {
-            let h = &mut hits[k];
-            (h.t, h.prim, h.u, h.v, h.cost, h.nodes) = (
-                found.t[k],
-                found.prim[k],
-                found.u[k],
-                found.v[k],
-                0,
-                nodes[k],
-            );
+        #[cfg(target_arch = "x86_64")]
+        use x86_walks::Kernels as _;
+        match self.kind {
+            #[cfg(target_arch = "x86_64")]
+            Kind::Avx512(l) => l.closest_hits(b, &p.rows, hits),
+            #[cfg(target_arch = "x86_64")]
+            Kind::Avx2(l) => l.closest_hits(b, &p.rows, hits),
+            #[cfg(target_arch = "x86_64")]
+            Kind::Sse(l) => l.closest_hits(b, &p.rows, hits),
+            Kind::Portable => answer::closest_hits(lanes::Portable, b, &p.rows, hits),
         }
-        for k in lanes_of(p.rows.lanes & !packed) {
-            hits[k] = closest_hit(b, &p.rows.ray(k), p.rows.tmin[k], p.rows.tmax[k]);
-            hits[k].nodes += nodes[k];
-        }
-        packed
     }
 
     /// `transmission(b, ray, tmax)` of every ray of `p` (whose `tmin` must be 0), into
-    /// `light`, and the node fetches of each lane into `nodes` (as `closest_hits` counts
-    /// them). Returns the lanes the occlusion packet answered: blocked, crossing nothing,
-    /// or crossing surfaces of one material that transmits light; the planes are each
-    /// lane's own, and lanes crossing two such materials go alone, as do all where the
-    /// packet cannot (see `closest_hits`).
+    /// `light`, and each lane's node fetches into `nodes`: see `answer::transmissions`.
+    /// Returns the lanes the occlusion packet answered.
     pub fn transmissions(
         &self,
         b: &Bindings,
@@ -259,57 +192,18 @@ impl Kernels {
             lanes_of(p.rows.lanes).all(|k| p.rows.tmin[k] == 0.0),
             "a shadow ray starts at its origin"
         );
-        // The planes first, lane by lane (most scenes have none: all lanes open).
-        let mut open = if b.planes.is_empty() { p.rows.lanes } else { 0 };
-        light.fill(Vec3::ONE);
-        for k in lanes_of(p.rows.lanes & !open) {
-            match transmit_planes(b, &p.rows.ray(k), p.rows.tmax[k]) {
-                Some(l) => {
-                    light[k] = l;
-                    open |= 1 << k;
-                }
-                None => light[k] = Vec3::ZERO,
-            }
-        }
-        let found = match b.wide {
-            Some(wide) if open.count_ones() >= MIN_LANES => {
-                self.occluded_kernel(b, wide, &p.rows, open)
-            }
-            _ => Occluded::default(),
-        };
-        let packed = found.traced;
-        *nodes = share(found.nodes, found.traced);
-        for k in lanes_of(open) {
-            let bit = 1 << k;
-            if packed & bit == 0 || found.mixed & bit != 0 {
-                light[k] = transmission(b, &p.rows.ray(k), p.rows.tmax[k], &mut nodes[k]);
-            } else if found.blocked & bit != 0 {
-                light[k] = Vec3::ZERO;
-            } else if found.transmits & bit != 0 {
-                // `transmission`'s product: the same factor each time, so in any order.
-                let m = &b.materials[found.material[k] as usize];
-                for _ in 0..found.crossings[k] {
-                    light[k] *= m.t * m.color;
-                }
-            }
-        }
-        packed & !found.mixed
-    }
-}
-
-/// A packet's `nodes` fetches shared among its `lanes` (a bit each), so that they add up
-/// to the packet's: a node fetched once for the packet serves each of its rays, and the
-/// count per ray is the memory traffic a ray cost (`counters`). The first lanes take the
-/// remainder; lanes outside `lanes` take none.
-fn share(nodes: u32, lanes: u32) -> [u32; MAX_LANES] {
-    let mut out = [0; MAX_LANES];
-    let n = lanes.count_ones();
-    if let Some(each) = nodes.checked_div(n) {
-        for (i, k) in lanes_of(lanes).enumerate() {
-            out[k] = each + u32::from((i as u32) < nodes % n);
+        #[cfg(target_arch = "x86_64")]
+        use x86_walks::Kernels as _;
+        match self.kind {
+            #[cfg(target_arch = "x86_64")]
+            Kind::Avx512(l) => l.transmissions(b, &p.rows, light, nodes),
+            #[cfg(target_arch = "x86_64")]
+            Kind::Avx2(l) => l.transmissions(b, &p.rows, light, nodes),
+            #[cfg(target_arch = "x86_64")]
+            Kind::Sse(l) => l.transmissions(b, &p.rows, light, nodes),
+            Kind::Portable => answer::transmissions(lanes::Portable, b, &p.rows, light, nodes),
         }
     }
-    out
 }
 
 /// Up to `MAX_LANES` rays with their intervals, lane `k` the `k`-th.
@@ -349,34 +243,5 @@ impl Packet {
     /// Lane `k`'s interval end.
     pub fn tmax(&self, k: usize) -> f32 {
         self.rows.tmax[k]
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A packet's fetches are all counted, once, and shared within one a lane.
-    #[test]
-    fn a_packets_node_fetches_are_shared_and_add_up() {
-        for (nodes, lanes) in [(0, 0b1011), (7, 0), (7, 0b1), (10, 0b1011), (37, 0xffff)] {
-            let s = share(nodes, lanes);
-            let total: u32 = s.iter().sum();
-            assert_eq!(
-                total,
-                if lanes == 0 { 0 } else { nodes },
-                "{nodes} over {lanes:b}"
-            );
-            let mine: Vec<u32> = lanes_of(lanes).map(|k| s[k]).collect();
-            if let (Some(lo), Some(hi)) = (mine.iter().min(), mine.iter().max()) {
-                assert!(hi - lo <= 1, "{mine:?}");
-            }
-            for (k, &n) in s.iter().enumerate() {
-                assert!(
-                    lanes & 1 << k != 0 || n == 0,
-                    "lane {k} is not in the packet"
-                );
-            }
-        }
     }
 }

@@ -1,80 +1,104 @@
-//! The packet walks compiled for each x86-64 instruction set: `walk.rs`'s generic walks
-//! instantiated with a `Lanes` token inside a `#[target_feature]` function, so that the
-//! whole walk, inlined, uses that set's registers and instructions; SSE needs no such
-//! function, being the baseline.
+//! The packet kernels compiled for each x86-64 instruction set: `answer.rs`'s generic
+//! answers (and so `walk.rs`'s walks) instantiated with a `Lanes` token inside a
+//! `#[target_feature]` function, so that the whole of it, inlined, uses that set's
+//! registers and instructions; SSE needs no such function, being the baseline.
 
-use super::rays::{Found, Occluded, Rows};
-use super::walk;
+use glam::Vec3;
+
+use super::answer;
+use super::lanes::MAX_LANES;
+use super::rays::Rows;
 use super::x86::{Avx2, Avx512, Sse};
-use crate::bvh::wide::WideNode;
-use crate::cpu::types::Bindings;
+use crate::cpu::types::{Bindings, Hit};
 
-/// The kernels of one instruction set: `walk`'s two walks compiled for it.
+/// The kernels of one instruction set: `answer`'s two compiled for it.
 pub trait Kernels {
-    fn closest(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32, found: &mut Found);
-    fn occluded(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded;
+    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32;
+    fn transmissions(
+        self,
+        b: &Bindings,
+        rows: &Rows,
+        light: &mut [Vec3; MAX_LANES],
+        nodes: &mut [u32; MAX_LANES],
+    ) -> u32;
 }
 
 impl Kernels for Sse {
-    fn closest(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32, found: &mut Found) {
-        walk::closest(self, b, wide, rows, lanes, found)
+    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+        answer::closest_hits(self, b, rows, hits)
     }
-    fn occluded(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded {
-        walk::occluded(self, b, wide, rows, lanes)
+    fn transmissions(
+        self,
+        b: &Bindings,
+        rows: &Rows,
+        light: &mut [Vec3; MAX_LANES],
+        nodes: &mut [u32; MAX_LANES],
+    ) -> u32 {
+        answer::transmissions(self, b, rows, light, nodes)
     }
 }
 
 // The features of x86-64-v3, which `Avx2::detect` checks; v4's adds AVX-512F.
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_v3(
-    l: Avx2,
-    b: &Bindings,
-    wide: &[WideNode],
-    rows: &Rows,
-    lanes: u32,
-    found: &mut Found,
-) {
-    walk::closest(l, b, wide, rows, lanes, found)
+fn closest_hits_v3(l: Avx2, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+    answer::closest_hits(l, b, rows, hits)
 }
 
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn occluded_v3(l: Avx2, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded {
-    walk::occluded(l, b, wide, rows, lanes)
+fn transmissions_v3(
+    l: Avx2,
+    b: &Bindings,
+    rows: &Rows,
+    light: &mut [Vec3; MAX_LANES],
+    nodes: &mut [u32; MAX_LANES],
+) -> u32 {
+    answer::transmissions(l, b, rows, light, nodes)
 }
 
 #[target_feature(enable = "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_v4(
+fn closest_hits_v4(l: Avx512, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+    answer::closest_hits(l, b, rows, hits)
+}
+
+#[target_feature(enable = "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+fn transmissions_v4(
     l: Avx512,
     b: &Bindings,
-    wide: &[WideNode],
     rows: &Rows,
-    lanes: u32,
-    found: &mut Found,
-) {
-    walk::closest(l, b, wide, rows, lanes, found)
-}
-
-#[target_feature(enable = "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn occluded_v4(l: Avx512, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded {
-    walk::occluded(l, b, wide, rows, lanes)
+    light: &mut [Vec3; MAX_LANES],
+    nodes: &mut [u32; MAX_LANES],
+) -> u32 {
+    answer::transmissions(l, b, rows, light, nodes)
 }
 
 // SAFETY (the four calls below): a token exists only where `detect` found the features
 // the called function is compiled for.
 impl Kernels for Avx2 {
-    fn closest(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32, found: &mut Found) {
-        unsafe { closest_v3(self, b, wide, rows, lanes, found) }
+    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+        unsafe { closest_hits_v3(self, b, rows, hits) }
     }
-    fn occluded(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded {
-        unsafe { occluded_v3(self, b, wide, rows, lanes) }
+    fn transmissions(
+        self,
+        b: &Bindings,
+        rows: &Rows,
+        light: &mut [Vec3; MAX_LANES],
+        nodes: &mut [u32; MAX_LANES],
+    ) -> u32 {
+        unsafe { transmissions_v3(self, b, rows, light, nodes) }
     }
 }
 
 impl Kernels for Avx512 {
-    fn closest(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32, found: &mut Found) {
-        unsafe { closest_v4(self, b, wide, rows, lanes, found) }
+    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+        unsafe { closest_hits_v4(self, b, rows, hits) }
     }
-    fn occluded(self, b: &Bindings, wide: &[WideNode], rows: &Rows, lanes: u32) -> Occluded {
-        unsafe { occluded_v4(self, b, wide, rows, lanes) }
+    fn transmissions(
+        self,
+        b: &Bindings,
+        rows: &Rows,
+        light: &mut [Vec3; MAX_LANES],
+        nodes: &mut [u32; MAX_LANES],
+    ) -> u32 {
+        unsafe { transmissions_v4(self, b, rows, light, nodes) }
     }
 }
