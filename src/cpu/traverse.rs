@@ -270,14 +270,18 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         return hit;
     }
     if let Some(wide) = b.wide {
+        // The planes' answer goes over as its two values, not as the `Hit` just written:
+        // read back whole, in other widths than its fields were written in, it stalled
+        // on store forwarding.
+        let planes = (hit.t, hit.prim);
         #[cfg(target_arch = "x86_64")]
         if isa::x86_64_v3() {
             // SAFETY: the processor has the features the function is compiled for.
-            return unsafe { closest_wide_v3(b, wide, ray, tmin, hit) };
+            return unsafe { closest_wide_v3(b, wide, ray, tmin, planes) };
         }
         let inv_dir = intersect::safe_inverse(ray.dir);
         let slabs = Slabs::new(ray.origin, inv_dir);
-        return closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, hit);
+        return closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes);
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut walk = start_walk(ray);
@@ -295,9 +299,10 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     hit
 }
 
-/// `closest_hit` through the CPU's eight-wide tree (`wide.rs`), the planes done, with the
-/// slab test `slabs`: inlined whole into its callers, so that `closest_wide_v3` is the
-/// same walk in AVX's encoding.
+/// `closest_hit` through the CPU's eight-wide tree (`wide.rs`), the planes done (the
+/// nearest plane's distance, or `tmax`, and its `prim`), with the slab test `slabs`:
+/// inlined whole into its callers, so that `closest_wide_v3` is the same walk in AVX's
+/// encoding.
 #[inline(always)]
 fn closest_wide(
     b: &Bindings,
@@ -305,10 +310,17 @@ fn closest_wide(
     ray: &Ray,
     (inv_dir, slabs): (Vec3, &impl wide::Boxes),
     tmin: f32,
-    mut hit: Hit,
+    (tmax, prim): (f32, u32),
 ) -> Hit {
+    let mut hit = Hit {
+        t: tmax,
+        prim,
+        u: 0.0,
+        v: 0.0,
+        cost: 0,
+        nodes: 0,
+    };
     let mut nodes = 0;
-    let tmax = hit.t;
     // The closure inlined too: called once a leaf, it would otherwise stay a call.
     wide::walk::<true>(
         wide,
@@ -341,11 +353,17 @@ fn closest_wide(
 /// result: the bits are the baseline's.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_wide_v3(b: &Bindings, wide: &[WideNode], ray: &Ray, tmin: f32, hit: Hit) -> Hit {
+fn closest_wide_v3(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    tmin: f32,
+    planes: (f32, u32),
+) -> Hit {
     let inv_dir = intersect::safe_inverse(ray.dir);
     // SAFETY: the function's features include AVX.
     let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, hit)
+    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
 }
 
 /// `transmission` through the eight-wide tree, the planes' factor `light` done; inlined
