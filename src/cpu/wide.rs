@@ -221,6 +221,17 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
                 next = entry(mask.trailing_zeros() as usize);
                 continue;
             }
+            if NEAREST_FIRST && mask.count_ones() == 2 {
+                // Two (the next most common): on to the nearer, the other pushed, as the
+                // insertion below would order them (on a tie, the second lane first).
+                let a = entry(mask.trailing_zeros() as usize);
+                let b = entry((mask & (mask - 1)).trailing_zeros() as usize);
+                let (near, far) = if a.near < b.near { (a, b) } else { (b, a) };
+                stack[sp] = MaybeUninit::new(far);
+                sp += 1;
+                next = near;
+                continue;
+            }
             // Push the children reached farthest first, so that the nearest is taken
             // next: insertion into the run pushed for this node.
             let base = sp;
