@@ -1,7 +1,7 @@
 //! The packet kernels compiled for each x86-64 instruction set: `answer.rs`'s generic
 //! answers (and so `walk.rs`'s walks) instantiated with a `Lanes` token inside a
 //! `#[target_feature]` function, so that the whole of it, inlined, uses that set's
-//! registers and instructions; SSE needs no such function, being the baseline.
+//! registers and instructions.
 
 use glam::Vec3;
 
@@ -23,82 +23,50 @@ pub trait Kernels {
     ) -> u32;
 }
 
-impl Kernels for Sse {
-    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
-        answer::closest_hits(self, b, rows, hits)
-    }
-    fn transmissions(
-        self,
-        b: &Bindings,
-        rows: &Rows,
-        light: &mut [Vec3; MAX_LANES],
-        nodes: &mut [u32; MAX_LANES],
-    ) -> u32 {
-        answer::transmissions(self, b, rows, light, nodes)
-    }
+/// `Kernels` for the token type `$token`, `answer`'s functions compiled with `$features`,
+/// the features its `detect` checks (SSE2, the baseline, needs no check).
+macro_rules! kernels {
+    ($token:ty, $features:literal) => {
+        impl Kernels for $token {
+            fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    l: $token,
+                    b: &Bindings,
+                    rows: &Rows,
+                    hits: &mut [Hit; MAX_LANES],
+                ) -> u32 {
+                    answer::closest_hits(l, b, rows, hits)
+                }
+                // SAFETY: a token exists only where its features are.
+                unsafe { compiled(self, b, rows, hits) }
+            }
+
+            fn transmissions(
+                self,
+                b: &Bindings,
+                rows: &Rows,
+                light: &mut [Vec3; MAX_LANES],
+                nodes: &mut [u32; MAX_LANES],
+            ) -> u32 {
+                #[target_feature(enable = $features)]
+                fn compiled(
+                    l: $token,
+                    b: &Bindings,
+                    rows: &Rows,
+                    light: &mut [Vec3; MAX_LANES],
+                    nodes: &mut [u32; MAX_LANES],
+                ) -> u32 {
+                    answer::transmissions(l, b, rows, light, nodes)
+                }
+                // SAFETY: as in `closest_hits`.
+                unsafe { compiled(self, b, rows, light, nodes) }
+            }
+        }
+    };
 }
 
+kernels!(Sse, "sse2");
 // The features of x86-64-v3, which `Avx2::detect` checks; v4's adds AVX-512F.
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_hits_v3(l: Avx2, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
-    answer::closest_hits(l, b, rows, hits)
-}
-
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn transmissions_v3(
-    l: Avx2,
-    b: &Bindings,
-    rows: &Rows,
-    light: &mut [Vec3; MAX_LANES],
-    nodes: &mut [u32; MAX_LANES],
-) -> u32 {
-    answer::transmissions(l, b, rows, light, nodes)
-}
-
-#[target_feature(enable = "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_hits_v4(l: Avx512, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
-    answer::closest_hits(l, b, rows, hits)
-}
-
-#[target_feature(enable = "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn transmissions_v4(
-    l: Avx512,
-    b: &Bindings,
-    rows: &Rows,
-    light: &mut [Vec3; MAX_LANES],
-    nodes: &mut [u32; MAX_LANES],
-) -> u32 {
-    answer::transmissions(l, b, rows, light, nodes)
-}
-
-// SAFETY (the four calls below): a token exists only where `detect` found the features
-// the called function is compiled for.
-impl Kernels for Avx2 {
-    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
-        unsafe { closest_hits_v3(self, b, rows, hits) }
-    }
-    fn transmissions(
-        self,
-        b: &Bindings,
-        rows: &Rows,
-        light: &mut [Vec3; MAX_LANES],
-        nodes: &mut [u32; MAX_LANES],
-    ) -> u32 {
-        unsafe { transmissions_v3(self, b, rows, light, nodes) }
-    }
-}
-
-impl Kernels for Avx512 {
-    fn closest_hits(self, b: &Bindings, rows: &Rows, hits: &mut [Hit; MAX_LANES]) -> u32 {
-        unsafe { closest_hits_v4(self, b, rows, hits) }
-    }
-    fn transmissions(
-        self,
-        b: &Bindings,
-        rows: &Rows,
-        light: &mut [Vec3; MAX_LANES],
-        nodes: &mut [u32; MAX_LANES],
-    ) -> u32 {
-        unsafe { transmissions_v4(self, b, rows, light, nodes) }
-    }
-}
+kernels!(Avx2, "avx2,fma,bmi1,bmi2,lzcnt,popcnt");
+kernels!(Avx512, "avx512f,avx2,fma,bmi1,bmi2,lzcnt,popcnt");
