@@ -348,20 +348,23 @@ pub fn occlusion<L: Lanes>(
     out: &mut Occluded,
 ) {
     let (zero, tmax) = (l.splat(0.0), l.load(&rows.tmax));
-    let inside = |t: L::F| l.and(l.gt(t, zero), l.lt(t, tmax));
-    // The lanes crossing a surface of two roots once, and those crossing it twice (a
-    // function, not a closure: one the compiler leaves out of line loses the kernel's
-    // instruction set, and every operation becomes a call).
+    // Functions, not closures: one the compiler leaves out of line loses the kernel's
+    // instruction set, and every operation becomes a call.
+    // The lanes whose `t` lies in `(0, tmax)`.
+    #[inline(always)]
+    fn inside<L: Lanes>(l: L, t: L::F, zero: L::F, tmax: L::F) -> L::M {
+        l.and(l.gt(t, zero), l.lt(t, tmax))
+    }
+    // The lanes crossing a surface of two roots once, and those crossing it twice.
     #[inline(always)]
     fn roots<L: Lanes>(l: L, (t0, t1): (L::F, L::F), zero: L::F, tmax: L::F) -> (u32, u32) {
-        let inside = |t: L::F| l.and(l.gt(t, zero), l.lt(t, tmax));
-        let (in0, in1) = (inside(t0), inside(t1));
+        let (in0, in1) = (inside(l, t0, zero, tmax), inside(l, t1, zero, tmax));
         (l.bits(l.or(in0, in1)), l.bits(l.and(in0, in1)))
     }
     for i in first..first + count {
         let p = &b.prims[i as usize];
         let (once, twice) = match p.kind() {
-            PRIM_TRIANGLE => (l.bits(inside(triangle(l, p, r).0)), 0),
+            PRIM_TRIANGLE => (l.bits(inside(l, triangle(l, p, r).0, zero, tmax)), 0),
             PRIM_SPHERE => roots(l, sphere(l, p, r), zero, tmax),
             PRIM_CONE => roots(l, cone(l, p, r), zero, tmax),
             _ => lanes_of(lanes).fold((0, 0), |(once, twice), k| {
