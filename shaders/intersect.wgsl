@@ -134,24 +134,24 @@ fn slab_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32
 // kind uses are fetched; kinds the scene lacks are compiled out (see the overrides).
 fn intersect_prim(i: u32, ray: Ray, inv_dir: vec3<f32>) -> vec4<f32> {
     let kind = load_prim_tag(i) >> PRIM_KIND_SHIFT;
-    let a = texel(prim_texels, 3u * i);
+    let a = prim_texel(3u * i);
     let p0 = bitcast<vec3<f32>>(a.xyz);
     var t = vec4<f32>(NO_HIT, NO_HIT, 0.0, 0.0);
     if (SPHERES && kind == PRIM_SPHERE) {
         t = vec4<f32>(intersect_sphere(p0, bitcast<f32>(a.w), ray), 0.0, 0.0);
     }
     if (TRIANGLES && kind == PRIM_TRIANGLE) {
-        let e1 = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 1u).xyz);
-        let e2 = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 2u).xyz);
+        let e1 = bitcast<vec3<f32>>(prim_texel(3u * i + 1u).xyz);
+        let e2 = bitcast<vec3<f32>>(prim_texel(3u * i + 2u).xyz);
         let h = intersect_triangle(p0, e1, e2, ray);
         t = vec4<f32>(h.x, NO_HIT, h.y, h.z);
     }
     if (CONES && kind == PRIM_CONE) {
-        let b = texel(prim_texels, 3u * i + 1u);
+        let b = prim_texel(3u * i + 1u);
         t = vec4<f32>(intersect_cone(p0, bitcast<f32>(a.w), bitcast<vec3<f32>>(b.xyz), bitcast<f32>(b.w), ray), 0.0, 0.0);
     }
     if (BOXES && kind == PRIM_BOX) {
-        let hi = bitcast<vec3<f32>>(texel(prim_texels, 3u * i + 1u).xyz);
+        let hi = bitcast<vec3<f32>>(prim_texel(3u * i + 1u).xyz);
         t = vec4<f32>(slabs(p0, hi, ray.origin, inv_dir), 0.0, 0.0);
     }
     return t;

@@ -232,17 +232,60 @@ override LAYER_SHIFT: u32 = 25u;
 // for every scene and image size.
 @group(0) @binding(0) var<storage, read> globals: Globals;
 @group(0) @binding(1) var<uniform> tile: Tile;
-// BVH nodes and primitives, the data every traversal step reads, come through rgba32uint
-// textures holding the very bytes of `array<Node>` (`array<WideNode>` for the wide walk)
-// and `array<Prim>` (2, 7 and 3 texels each, TEXTURE_WIDTH texels a row): lavapipe loads
-// a storage buffer one component and one invocation at a time, but a texel with one
-// 16-byte load a lane. Read-only storage textures rather than sampled ones, whose fetch
-// works out each lane's mip level and strides first (docs/gpu.md, item 2; the host's
-// side is `upload::TEXEL_FORMAT`).
+// BVH nodes and primitives, the data every traversal step reads, and the triangles'
+// shading normals: the very bytes of `array<Node>` (`array<WideNode>` for the wide walk),
+// `array<Prim>` and `array<TriNormals>` (2, 7 and 3 texels each), fetched a 16-byte
+// texel at a time by `node_texel`, `prim_texel` and `normal_texel`. The host keeps one of
+// the two blocks below (src/gpu/shaders.rs, `Fetch`), as the bind group layout it made
+// says. Textures on software adapters: lavapipe loads a storage buffer one component and
+// one invocation at a time, but a texel with one 16-byte load a lane; read-only storage
+// textures rather than sampled ones, whose fetch works out each lane's mip level and
+// strides first (docs/gpu.md, item 2; the host's side is `upload::TEXEL_FORMAT`), in
+// layers of 2^LAYER_SHIFT texels, rows of TEXTURE_WIDTH. Storage buffers on hardware
+// GPUs, which read them through the same caches without the texture unit's tiled
+// layout and addressing.
+// fetch: textures {
 alias Texels = texture_storage_2d_array<rgba32uint, read>;
 @group(0) @binding(2) var node_texels: Texels;
 @group(0) @binding(3) var prim_texels: Texels;
 @group(0) @binding(4) var normal_texels: Texels;
+
+// Texel `i` of a texture array: layers of 2^LAYER_SHIFT texels, rows of TEXTURE_WIDTH
+// (both powers of two, so the divisions are shifts).
+fn texel(texels: Texels, i: u32) -> vec4<u32> {
+    let j = i & ((1u << LAYER_SHIFT) - 1u);
+    return textureLoad(texels, vec2<u32>(j % TEXTURE_WIDTH, j / TEXTURE_WIDTH), i >> LAYER_SHIFT);
+}
+
+fn node_texel(i: u32) -> vec4<u32> {
+    return texel(node_texels, i);
+}
+
+fn prim_texel(i: u32) -> vec4<u32> {
+    return texel(prim_texels, i);
+}
+
+fn normal_texel(i: u32) -> vec4<u32> {
+    return texel(normal_texels, i);
+}
+// } fetch: textures
+// fetch: buffers {
+@group(0) @binding(2) var<storage, read> node_texels: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> prim_texels: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> normal_texels: array<vec4<u32>>;
+
+fn node_texel(i: u32) -> vec4<u32> {
+    return node_texels[i];
+}
+
+fn prim_texel(i: u32) -> vec4<u32> {
+    return prim_texels[i];
+}
+
+fn normal_texel(i: u32) -> vec4<u32> {
+    return normal_texels[i];
+}
+// } fetch: buffers
 @group(0) @binding(5) var<storage, read> planes: array<Plane>;
 @group(0) @binding(6) var<storage, read> materials: array<Material>;
 @group(0) @binding(7) var<storage, read> lights: array<Light>;
@@ -271,16 +314,10 @@ fn prim_material(p: Prim) -> u32 {
     return p.tag & PRIM_MATERIAL_MASK;
 }
 
-// Texel `i` of a texture array: layers of 2^LAYER_SHIFT texels, rows of TEXTURE_WIDTH
-// (both powers of two, so the divisions are shifts).
-fn texel(texels: Texels, i: u32) -> vec4<u32> {
-    let j = i & ((1u << LAYER_SHIFT) - 1u);
-    return textureLoad(texels, vec2<u32>(j % TEXTURE_WIDTH, j / TEXTURE_WIDTH), i >> LAYER_SHIFT);
-}
 
 fn load_node(i: u32) -> Node {
-    let a = texel(node_texels, 2u * i);
-    let b = texel(node_texels, 2u * i + 1u);
+    let a = node_texel(2u * i);
+    let b = node_texel(2u * i + 1u);
     return Node(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
 }
 
@@ -288,37 +325,37 @@ fn load_wide_node(i: u32) -> WideNode {
     let b = 7u * i;
     return WideNode(
         array<vec4<f32>, 3>(
-            bitcast<vec4<f32>>(texel(node_texels, b)),
-            bitcast<vec4<f32>>(texel(node_texels, b + 1u)),
-            bitcast<vec4<f32>>(texel(node_texels, b + 2u)),
+            bitcast<vec4<f32>>(node_texel(b)),
+            bitcast<vec4<f32>>(node_texel(b + 1u)),
+            bitcast<vec4<f32>>(node_texel(b + 2u)),
         ),
         array<vec4<f32>, 3>(
-            bitcast<vec4<f32>>(texel(node_texels, b + 3u)),
-            bitcast<vec4<f32>>(texel(node_texels, b + 4u)),
-            bitcast<vec4<f32>>(texel(node_texels, b + 5u)),
+            bitcast<vec4<f32>>(node_texel(b + 3u)),
+            bitcast<vec4<f32>>(node_texel(b + 4u)),
+            bitcast<vec4<f32>>(node_texel(b + 5u)),
         ),
-        texel(node_texels, b + 6u),
+        node_texel(b + 6u),
     );
 }
 
 fn load_cwide_node(i: u32) -> CwideNode {
     let b = 5u * i;
-    let head = texel(node_texels, b);
-    let bases = texel(node_texels, b + 1u);
+    let head = node_texel(b);
+    let bases = node_texel(b + 1u);
     return CwideNode(
         bitcast<vec3<f32>>(head.xyz),
         head.w,
         bases.x,
         bases.y,
         bases.zw,
-        array<vec4<u32>, 3>(texel(node_texels, b + 2u), texel(node_texels, b + 3u), texel(node_texels, b + 4u)),
+        array<vec4<u32>, 3>(node_texel(b + 2u), node_texel(b + 3u), node_texel(b + 4u)),
     );
 }
 
 fn load_tri_normals(i: u32) -> TriNormals {
-    let a = texel(normal_texels, 3u * i);
-    let b = texel(normal_texels, 3u * i + 1u);
-    let c = texel(normal_texels, 3u * i + 2u);
+    let a = normal_texel(3u * i);
+    let b = normal_texel(3u * i + 1u);
+    let c = normal_texel(3u * i + 2u);
     return TriNormals(
         bitcast<vec3<f32>>(a.xyz),
         0u,
@@ -330,9 +367,9 @@ fn load_tri_normals(i: u32) -> TriNormals {
 }
 
 fn load_prim(i: u32) -> Prim {
-    let a = texel(prim_texels, 3u * i);
-    let b = texel(prim_texels, 3u * i + 1u);
-    let c = texel(prim_texels, 3u * i + 2u);
+    let a = prim_texel(3u * i);
+    let b = prim_texel(3u * i + 1u);
+    let c = prim_texel(3u * i + 2u);
     return Prim(
         bitcast<vec3<f32>>(a.xyz),
         bitcast<f32>(a.w),
@@ -345,7 +382,7 @@ fn load_prim(i: u32) -> Prim {
 
 // The tag (kind and material) of primitive i: the last word of its third texel.
 fn load_prim_tag(i: u32) -> u32 {
-    return texel(prim_texels, 3u * i + 2u).w;
+    return prim_texel(3u * i + 2u).w;
 }
 
 fn node_count(n: Node) -> u32 {

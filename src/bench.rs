@@ -150,6 +150,10 @@ pub fn run(config: &BenchConfig) -> Result<()> {
             TRAVERSAL_NAMES[t as usize],
             TRAVERSAL_NAMES.join("|")
         );
+        eprintln!(
+            "scene data  {} (GPURT_FETCH=textures|buffers to choose)",
+            r.fetch().name()
+        );
     }
     if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());

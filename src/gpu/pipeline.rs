@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use super::device::{Device, Slot};
-use super::shaders;
+use super::shaders::{self, Fetch};
 use super::specialization::Specialization;
 use crate::error::Result;
 use crate::gpu_types::GpuTile;
@@ -66,14 +66,24 @@ impl DiskCache {
 }
 
 /// The shader modules made so far, one per length of `trace`'s ray stack (the only part
-/// of a specialisation written into the source, `shaders::source`), each on first use;
-/// shared by the `main` and `resume` pipelines.
-#[derive(Default)]
-pub(super) struct Modules(Mutex<HashMap<u32, wgpu::ShaderModule>>);
+/// of a specialisation written into the source, `shaders::source`), each on first use,
+/// all reading the scene as the renderer's `Fetch` says; shared by the `main` and
+/// `resume` pipelines.
+pub(super) struct Modules {
+    fetch: Fetch,
+    made: Mutex<HashMap<u32, wgpu::ShaderModule>>,
+}
 
 impl Modules {
+    pub(super) fn new(fetch: Fetch) -> Self {
+        Modules {
+            fetch,
+            made: Mutex::default(),
+        }
+    }
+
     fn get(&self, gpu: &Device, trace_stack: u32) -> Result<wgpu::ShaderModule> {
-        let mut modules = self.0.lock().expect("not poisoned");
+        let mut modules = self.made.lock().expect("not poisoned");
         if let Some(m) = modules.get(&trace_stack) {
             return Ok(m.clone());
         }
@@ -85,7 +95,7 @@ impl Modules {
             // within the stack and the ray depth within the ray stack (whose length,
             // `SceneBuffers::trace_stack`, bounds the rays a trace holds). The checks cost
             // lavapipe about a quarter of its tracing time.
-            unsafe { gpu.unchecked_shader("gpurt", shaders::source(trace_stack)) }
+            unsafe { gpu.unchecked_shader("gpurt", shaders::source(trace_stack, self.fetch)) }
         })?;
         modules.insert(trace_stack, module.clone());
         Ok(module)
@@ -138,18 +148,23 @@ impl ResumePipelines {
 }
 
 /// The bindings of `types.wgsl`: globals (read-only storage) and tile (uniform, one
-/// record per dispatch), nodes, primitives and triangle normals (texture arrays, split
-/// into layers as large as the device allows), the other scene arrays (read-only
-/// storage), the tile's output and its counts (read-write storage).
-pub(super) fn bind_group_layout(gpu: &Device) -> wgpu::BindGroupLayout {
+/// record per dispatch), nodes, primitives and triangle normals (as `fetch` says: texture
+/// arrays, split into layers as large as the device allows, or read-only storage), the
+/// other scene arrays (read-only storage), the tile's output and its counts (read-write
+/// storage).
+pub(super) fn bind_group_layout(gpu: &Device, fetch: Fetch) -> wgpu::BindGroupLayout {
     use Slot::*;
     let tile = UniformRecord {
         size: size_of::<GpuTile>() as u64,
     };
+    let texels = match fetch {
+        Fetch::Textures => Texels,
+        Fetch::Buffers => ReadOnly,
+    };
     gpu.bind_group_layout(
         "gpurt",
         &[
-            ReadOnly, tile, Texels, Texels, Texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
+            ReadOnly, tile, texels, texels, texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
             ReadWrite,
         ],
     )

@@ -4,6 +4,7 @@
 //! and how the frame is cut into work.
 
 use super::cut::{BAND_BYTES, Cut, Shape};
+use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::gpu_types::{
     AOV_COLOR, GpuGlobals, GpuWaveState, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WORKGROUP_SIDE,
@@ -29,6 +30,26 @@ pub(super) fn traversal_from_env() -> Result<u32> {
                 TRAVERSAL_NAMES.join(", ")
             ))),
         },
+    }
+}
+
+/// How a renderer's shaders read the scene's nodes, primitives and normals: `GPURT_FETCH`
+/// (`textures` or `buffers`) where set; else storage textures on software adapters,
+/// which lavapipe loads a texel at a time where it loads a storage buffer a component at
+/// a time (docs/gpu.md, item 2), and storage buffers on hardware ones. On an H100 (docs/gpu.md,
+/// "Storage buffers"), buffers traced every frame of seven scenes 10 to 25% faster than
+/// the textures, whose tiled layout and surface loads a BVH's scattered 16-byte fetches
+/// pay for; images are the same to the byte. In the browser, unmeasured so far, the
+/// textures stay.
+pub(super) fn fetch_for(software: bool) -> Result<Fetch> {
+    match std::env::var("GPURT_FETCH").as_deref() {
+        Err(_) | Ok("") if software || !cfg!(feature = "native") => Ok(Fetch::Textures),
+        Err(_) | Ok("") => Ok(Fetch::Buffers),
+        Ok("textures") => Ok(Fetch::Textures),
+        Ok("buffers") => Ok(Fetch::Buffers),
+        Ok(v) => Err(Error::Render(format!(
+            "GPURT_FETCH={v}: expected textures or buffers"
+        ))),
     }
 }
 

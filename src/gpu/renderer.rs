@@ -17,9 +17,10 @@ use super::pipeline::{
     resume_group_layout,
 };
 use super::policy::{
-    cut_for, gpu_shape, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
+    cut_for, fetch_for, gpu_shape, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
 };
 use super::scene::{GpuScene, bind};
+use super::shaders::Fetch;
 use super::specialization::Specialization;
 use super::trace::encode_band;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
@@ -46,6 +47,8 @@ pub struct GpuRenderer {
     shape: Shape,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
+    /// How its shaders read the scene's nodes, primitives and normals.
+    fetch: Fetch,
     /// The wavefront kernels' pipelines, shared with the uploaded scenes, and whether
     /// colour frames take them (`None`: as `policy::wavefront_for` chooses).
     wave: Arc<WavePipelines>,
@@ -65,11 +68,22 @@ impl GpuRenderer {
     /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
     /// `PIPELINE_CACHE` (pass `None` to skip the cache).
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
+        let fetch = fetch_for(Device::new(device).runs_on_cpu())?;
+        Self::fetching(device, adapter_info, fetch)
+    }
+
+    /// `new`, its shaders reading the scene's nodes, primitives and normals as `fetch`
+    /// says whatever the adapter (`policy::fetch_for` chooses for `new`).
+    pub fn fetching(
+        device: &wgpu::Device,
+        adapter_info: Option<&wgpu::AdapterInfo>,
+        fetch: Fetch,
+    ) -> Result<Self> {
         let start = Instant::now();
         let gpu = &Device::new(device);
         let software = gpu.runs_on_cpu();
         let cache_file = DiskCache::file(gpu, adapter_info);
-        let layout = bind_group_layout(gpu);
+        let layout = bind_group_layout(gpu, fetch);
         let resume_layout = resume_group_layout(gpu);
         let (pipeline_layout, resume_pipeline_layout, cache) =
             gpu.scoped("compiling the shader", || {
@@ -80,7 +94,7 @@ impl GpuRenderer {
                     cache_file.map(|file| DiskCache::open(gpu, file)),
                 )
             })?;
-        let modules = Arc::new(Modules::default());
+        let modules = Arc::new(Modules::new(fetch));
         let wave = gpu.scoped("compiling the shader", || {
             WavePipelines::new(gpu, &layout, modules.clone())
         })?;
@@ -100,6 +114,7 @@ impl GpuRenderer {
             software,
             shape: shape_for(software)?,
             traversal: traversal_from_env()?,
+            fetch,
             wave: Arc::new(wave),
             wavefront: kernels_from_env()?,
             layer_rows: upload::layer_rows(&gpu.limits()),
@@ -201,9 +216,15 @@ impl GpuRenderer {
     }
 
     /// The scene's arrays on the device, laid out for the walk `traversal` as this
-    /// renderer's textures are (`layer_rows`, `texture_margin`).
+    /// renderer's shaders read them (`fetch`, `layer_rows`, `texture_margin`).
     fn upload_scene(&self, gpu: &Gpu, scene: &SceneBuffers, traversal: u32) -> Result<SceneData> {
-        upload_scene(gpu, scene, traversal, self.layer_rows, self.texture_margin)
+        let (fetch, rows, margin) = (self.fetch, self.layer_rows, self.texture_margin);
+        upload_scene(gpu, scene, traversal, fetch, rows, margin)
+    }
+
+    /// How this renderer's shaders read the scene's nodes, primitives and normals.
+    pub fn fetch(&self) -> Fetch {
+        self.fetch
     }
 
     /// Compiles (once) the pipeline for a scene and render settings. The first time, the
@@ -313,6 +334,7 @@ impl GpuRenderer {
             scene,
             globals.traversal,
             cut.band_bytes(),
+            self.fetch,
             self.layer_rows,
         )?;
         scene.check(globals)?;
@@ -335,7 +357,7 @@ impl GpuRenderer {
             bound,
             pipeline,
             cut,
-            scene_bytes: scene_bytes(scene, globals.traversal, self.layer_rows),
+            scene_bytes: scene_bytes(scene, globals.traversal, self.fetch, self.layer_rows),
             resume: self.resume.clone(),
             spec,
             dispatch_budget: self.dispatch_budget,
@@ -381,6 +403,7 @@ impl GpuRenderer {
                 scene,
                 globals.traversal,
                 cut.band_bytes(),
+                self.fetch,
                 self.layer_rows,
             )?;
             uploaded.bound = bind(

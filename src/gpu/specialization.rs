@@ -117,7 +117,8 @@ mod tests {
     /// is set (a missing one would silently keep its default).
     #[test]
     fn constants_name_exactly_the_shader_overrides() {
-        let (module, _) = crate::gpu::shaders::validate().expect("shader validates");
+        let (module, _) = crate::gpu::shaders::validate(crate::gpu::shaders::Fetch::Textures)
+            .expect("shader validates");
         let mut wgsl: Vec<String> = module
             .overrides
             .iter()

@@ -1,8 +1,10 @@
 //! A scene's arrays on the device: uploaded once (nodes, primitives and triangle normals
-//! as texture arrays, which grow by layers past one texture's size; the small rest as
-//! storage buffers), checked first against the device's limits.
+//! as texture arrays, which grow by layers past one texture's size, or as storage
+//! buffers, as the renderer's `Fetch` says; the small rest as storage buffers), checked
+//! first against the device's limits.
 
 use super::device::Gpu;
+use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::fault::AddressSpaceCap;
 use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_WIDE};
@@ -10,12 +12,28 @@ use crate::pack::SceneBuffers;
 
 /// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
 pub(super) struct SceneData {
-    pub(super) nodes: wgpu::TextureView,
-    pub(super) prims: wgpu::TextureView,
-    pub(super) tri_normals: wgpu::TextureView,
+    pub(super) nodes: Texels,
+    pub(super) prims: Texels,
+    pub(super) tri_normals: Texels,
     pub(super) planes: wgpu::Buffer,
     pub(super) materials: wgpu::Buffer,
     pub(super) lights: wgpu::Buffer,
+}
+
+/// One of the arrays the shader reads a texel at a time (`Fetch`): a texture array's
+/// view, or a storage buffer.
+pub(super) enum Texels {
+    Texture(wgpu::TextureView),
+    Buffer(wgpu::Buffer),
+}
+
+impl Texels {
+    pub(super) fn binding(&self) -> wgpu::BindingResource<'_> {
+        match self {
+            Texels::Texture(view) => wgpu::BindingResource::TextureView(view),
+            Texels::Buffer(buffer) => buffer.as_entire_binding(),
+        }
+    }
 }
 
 /// The bytes of the BVH the walk `traversal` reads: the wide nodes for `TRAVERSAL_WIDE`,
@@ -43,11 +61,19 @@ fn prim_bytes(scene: &SceneBuffers, traversal: u32) -> &[u8] {
 }
 
 /// Device memory a scene's arrays take: the node and primitive textures (padded to whole
-/// rows) and the other arrays.
-pub(super) fn scene_bytes(scene: &SceneBuffers, traversal: u32, layer_rows: u32) -> u64 {
-    let texture = |bytes: usize| {
-        let (rows, layers) = texture_extent(bytes, layer_rows);
-        u64::from(rows) * u64::from(layers) * u64::from(TEXTURE_WIDTH) * 16
+/// rows) or buffers (to whole texels), and the other arrays.
+pub(super) fn scene_bytes(
+    scene: &SceneBuffers,
+    traversal: u32,
+    fetch: Fetch,
+    layer_rows: u32,
+) -> u64 {
+    let texture = |bytes: usize| match fetch {
+        Fetch::Textures => {
+            let (rows, layers) = texture_extent(bytes, layer_rows);
+            u64::from(rows) * u64::from(layers) * u64::from(TEXTURE_WIDTH) * 16
+        }
+        Fetch::Buffers => bytes.max(16).next_multiple_of(16) as u64,
     };
     texture(node_bytes(scene, traversal).len())
         + texture(size_of_val(&scene.prims[..]))
@@ -62,30 +88,45 @@ pub(super) fn scene_bytes(scene: &SceneBuffers, traversal: u32, layer_rows: u32)
         .sum::<u64>()
 }
 
-/// Uploads a scene's arrays: nodes and primitives as textures, the rest as storage. With
-/// `texture_margin`, each texture is allocated with the address space capped that far
-/// above the process's size (`GpuRenderer::with_texture_margin`).
+/// Uploads a scene's arrays: nodes, primitives and normals as `fetch` says, the rest as
+/// storage. With `texture_margin`, each of the three is allocated with the address space
+/// capped that far above the process's size (`GpuRenderer::with_texture_margin`).
 pub(super) fn upload_scene(
     gpu: &Gpu,
     scene: &SceneBuffers,
     traversal: u32,
+    fetch: Fetch,
     layer_rows: u32,
     texture_margin: Option<u64>,
 ) -> Result<SceneData> {
     let storage = |label: &str, bytes: &[u8]| gpu.read_only_storage(label, bytes);
     gpu.scoped("uploading the scene", || {
-        let texels = |label, bytes| texels(gpu, label, bytes, layer_rows, texture_margin);
-        let nodes = texels("nodes", node_bytes(scene, traversal))?;
-        let prims = texels("prims", prim_bytes(scene, traversal))?;
-        let normals = texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?;
         let array = wgpu::TextureViewDescriptor {
             dimension: Some(wgpu::TextureViewDimension::D2Array),
             ..Default::default()
         };
+        let texels = |label, bytes: &[u8]| -> Result<Texels> {
+            Ok(match fetch {
+                Fetch::Textures => Texels::Texture(
+                    texels(gpu, label, bytes, layer_rows, texture_margin)?.create_view(&array),
+                ),
+                Fetch::Buffers => {
+                    let _cap = texture_margin.map(AddressSpaceCap::new).transpose()?;
+                    // Whole texels: the shader reads an array of vec4<u32>.
+                    let mut padded = bytes.len().max(16).next_multiple_of(16);
+                    padded -= bytes.len();
+                    let buffer = match padded {
+                        0 => storage(label, bytes),
+                        _ => storage(label, &[bytes, &vec![0; padded]].concat()),
+                    };
+                    Texels::Buffer(buffer)
+                }
+            })
+        };
         Ok(SceneData {
-            nodes: nodes.create_view(&array),
-            prims: prims.create_view(&array),
-            tri_normals: normals.create_view(&array),
+            nodes: texels("nodes", node_bytes(scene, traversal))?,
+            prims: texels("prims", prim_bytes(scene, traversal))?,
+            tri_normals: texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?,
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
             lights: storage("lights", non_empty(&scene.lights)),
@@ -187,9 +228,18 @@ pub(super) fn check_sizes(
     scene: &SceneBuffers,
     traversal: u32,
     out_bytes: u64,
+    fetch: Fetch,
     layer_rows: u32,
 ) -> Result<()> {
     let max_side = limits.max_texture_dimension_2d;
+    let texel_arrays = [
+        ("BVH nodes", node_bytes(scene, traversal).len()),
+        ("primitives", size_of_val(&scene.prims[..])),
+        ("triangle normals", size_of_val(&scene.tri_normals[..])),
+    ];
+    if fetch == Fetch::Buffers {
+        return check_buffers(limits, scene, texel_arrays, out_bytes);
+    }
     if max_side < TEXTURE_WIDTH {
         return Err(Error::Gpu(format!(
             "the scene's BVH nodes and primitives travel in textures {TEXTURE_WIDTH} texels \
@@ -198,11 +248,7 @@ pub(super) fn check_sizes(
         )));
     }
     let max_layers = limits.max_texture_array_layers;
-    for (what, bytes) in [
-        ("BVH nodes", node_bytes(scene, traversal).len()),
-        ("primitives", size_of_val(&scene.prims[..])),
-        ("triangle normals", size_of_val(&scene.tri_normals[..])),
-    ] {
+    for (what, bytes) in texel_arrays {
         let (_, layers) = texture_extent(bytes, layer_rows);
         if layers > max_layers {
             return Err(Error::Gpu(format!(
@@ -212,6 +258,17 @@ pub(super) fn check_sizes(
             )));
         }
     }
+    check_buffers(limits, scene, [], out_bytes)
+}
+
+/// `check_sizes` for the arrays in storage buffers: the small ones, the output band, and
+/// `texel_arrays` where the scene's large arrays are buffers too.
+fn check_buffers<const N: usize>(
+    limits: &wgpu::Limits,
+    scene: &SceneBuffers,
+    texel_arrays: [(&str, usize); N],
+    out_bytes: u64,
+) -> Result<()> {
     let max_binding = limits.max_storage_buffer_binding_size;
     let max_buffer = limits.max_buffer_size;
     let arrays = [
@@ -220,13 +277,17 @@ pub(super) fn check_sizes(
         ("lights", size_of_val(&scene.lights[..]) as u64),
         ("output band", out_bytes),
     ];
-    for (what, bytes) in arrays {
+    // Textures may hold the large arrays where a buffer cannot: they grow by layers.
+    let arrays = arrays.map(|(what, bytes)| (what, bytes, ""));
+    let texel_arrays =
+        texel_arrays.map(|(what, bytes)| (what, bytes as u64, "GPURT_FETCH=textures or "));
+    for (what, bytes, textures) in arrays.into_iter().chain(texel_arrays) {
         let limit = max_binding.min(max_buffer);
         if bytes > limit {
             return Err(Error::Gpu(format!(
                 "the scene's {what} need {bytes} bytes in one storage buffer, but this adapter's \
                  max_storage_buffer_binding_size is {max_binding} (max_buffer_size {max_buffer}); \
-                 render it with --backend cpu"
+                 render it with {textures}--backend cpu"
             )));
         }
     }

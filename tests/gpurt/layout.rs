@@ -124,7 +124,7 @@ fn rust_layouts() -> Vec<Layout> {
 
 #[test]
 fn shared_structs_match_wgsl_layout() {
-    let (module, _) = shaders::validate().expect("shader validates");
+    let (module, _) = shaders::validate(shaders::Fetch::Textures).expect("shader validates");
     let mut layouter = naga::proc::Layouter::default();
     layouter
         .update(module.to_ctx())
@@ -155,7 +155,7 @@ fn shared_structs_match_wgsl_layout() {
 /// The plane struct pads with three named u32 in WGSL and an array in Rust.
 #[test]
 fn plane_layout_matches() {
-    let (module, _) = shaders::validate().expect("shader validates");
+    let (module, _) = shaders::validate(shaders::Fetch::Textures).expect("shader validates");
     let (_, ty) = module
         .types
         .iter()
@@ -242,7 +242,7 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
 /// of the same type (an `f32` to the bit), and the generator writes exactly these.
 #[test]
 fn shared_constants_match() {
-    let (module, _) = shaders::validate().expect("shader validates");
+    let (module, _) = shaders::validate(shaders::Fetch::Textures).expect("shader validates");
     for (name, value) in shared_constants() {
         let want = match value {
             WgslValue::U32(v) => naga::Literal::U32(v),
@@ -375,6 +375,18 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     ("prim_kind", "reads the tag the CPU matches on directly"),
     ("prim_material", "reads the tag the CPU masks directly"),
     ("texel", "texture fetch: the CPU indexes the arrays"),
+    (
+        "node_texel",
+        "texture or buffer fetch: the CPU indexes the arrays",
+    ),
+    (
+        "prim_texel",
+        "texture or buffer fetch: the CPU indexes the arrays",
+    ),
+    (
+        "normal_texel",
+        "texture or buffer fetch: the CPU indexes the arrays",
+    ),
     ("load_node", "texture fetch: the CPU indexes the arrays"),
     ("load_prim", "texture fetch: the CPU indexes the arrays"),
     (
@@ -514,7 +526,7 @@ fn function_names(src: &str) -> Vec<String> {
 /// the same order, but for the documented exceptions (and naga knows every WGSL one).
 #[test]
 fn wgsl_functions_have_cpu_twins_in_order() {
-    let (module, _) = shaders::validate().expect("shader validates");
+    let (module, _) = shaders::validate(shaders::Fetch::Textures).expect("shader validates");
     let known: Vec<String> = module
         .functions
         .iter()

@@ -1,12 +1,16 @@
 //! The GPU's traversals: each walk its adapter does not use by default matches the CPU
-//! too, a scene deeper than the traversal stack renders, and nodes and primitives spread
-//! over several texture layers are walked as in one.
+//! too, a scene deeper than the traversal stack renders, nodes and primitives spread
+//! over several texture layers are walked as in one, and read from storage buffers
+//! rather than textures (or the other way round) give the same images to the bit.
 
 use std::path::Path;
 use std::sync::OnceLock;
 
+use gpurt::film::Film;
+use gpurt::frame;
 use gpurt::frame::RenderOptions;
 use gpurt::gpu::GpuRenderer;
+use gpurt::gpu::shaders::Fetch;
 use gpurt::gpu_types::*;
 use gpurt::pack;
 use gpurt::scene;
@@ -126,4 +130,98 @@ fn scenes_over_several_texture_layers_match_cpu() {
         }
     }
     check_all(cases);
+}
+
+/// Where two films differ first, by bits: the size, a pixel's channel, or the rays traced.
+fn same_to_the_bit(a: &(Film, u64), b: &(Film, u64)) -> Result<(), String> {
+    if (a.0.width, a.0.height) != (b.0.width, b.0.height) {
+        return Err(format!(
+            "{}x{} against {}x{}",
+            a.0.width, a.0.height, b.0.width, b.0.height
+        ));
+    }
+    let pixels = a.0.pixels.iter().zip(&b.0.pixels).enumerate();
+    for (i, (p, q)) in pixels {
+        if p.map(f32::to_bits) != q.map(f32::to_bits) {
+            return Err(format!("pixel {i}: {p:?} against {q:?}"));
+        }
+    }
+    match a.1 == b.1 {
+        true => Ok(()),
+        false => Err(format!("{} rays against {}", a.1, b.1)),
+    }
+}
+
+/// The comparison above fails a film one pixel's channel one step of f32 away, and one
+/// ray short.
+#[test]
+fn the_bitwise_film_comparison_fails_a_perturbed_film() {
+    let mut film = Film::new(3, 2);
+    film.pixels[4] = [0.25, 0.5, 1.0];
+    let a = (film.clone(), 10);
+    assert!(same_to_the_bit(&a, &a.clone()).is_ok());
+    let mut nudged = a.clone();
+    nudged.0.pixels[4][1] = f32::from_bits(0.5f32.to_bits() + 1);
+    assert!(same_to_the_bit(&a, &nudged).is_err());
+    assert!(same_to_the_bit(&a, &(film, 9)).is_err());
+}
+
+/// The way of reading the scene's arrays the adapter does not use by default (storage
+/// buffers on lavapipe, textures on a hardware GPU) gives the same films to the bit, and
+/// the same rays, as the default: colour at 4 samples per pixel, the cost AOV (the nodes
+/// each pixel's walk visited) and the normals, on the features scene, the bundled scenes
+/// and three SPD scenes. The default is checked against the CPU by every other test.
+#[test]
+fn the_other_way_of_fetching_the_scene_gives_the_same_images() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let other = match g.renderer.fetch() {
+        Fetch::Textures => Fetch::Buffers,
+        Fetch::Buffers => Fetch::Textures,
+    };
+    let fetching = GpuRenderer::fetching(&g.ctx.device, None, other).expect("shader compiles");
+    let mut scenes = vec![("features".to_string(), features_scene(""))];
+    for f in files_with(&own_scenes(), &[".nff"]) {
+        let scene = scene::load(&f).expect("own scene loads");
+        scenes.push((f.display().to_string(), scene));
+    }
+    if let Some(root) = shared_scenes() {
+        for name in ["spd/balls-3.nff", "spd/mount-5.nff", "spd/teapot-6.nff"] {
+            let scene = scene::load(&root.join(name)).expect("shared scene loads");
+            scenes.push((name.to_string(), scene));
+        }
+    }
+    let never = std::sync::atomic::AtomicBool::new(false);
+    let mut differ = Vec::new();
+    for (name, scene) in &scenes {
+        let buffers = pack::pack(scene.clone()).expect("scene packs");
+        for (what, spp, aov) in [
+            ("colour", 4, AOV_COLOR),
+            ("cost", 1, AOV_COST),
+            ("normal", 1, AOV_NORMAL),
+        ] {
+            let o = RenderOptions {
+                spp,
+                aov,
+                ..opts(scene)
+            };
+            let globals = g.renderer.frame(&buffers, &frame::globals(&buffers, &o));
+            let [a, b] = [&g.renderer, &fetching].map(|r| {
+                r.render(
+                    &g.ctx.device,
+                    &g.ctx.queue,
+                    &buffers,
+                    &globals,
+                    &|_| {},
+                    &never,
+                )
+                .unwrap_or_else(|e| panic!("{name} {what}: GPU render failed: {e}"))
+            });
+            if let Err(e) = same_to_the_bit(&a, &b) {
+                differ.push(format!("{name} {what} ({}): {e}", other.name()));
+            }
+        }
+    }
+    assert!(differ.is_empty(), "{}", differ.join("\n"));
 }
