@@ -5,15 +5,21 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [tests] [bench] [quick] [huge]    (default: tests bench)
-# Output goes to $OUT (or ./device-out): tests.log, bench.md, bench.log, huge.log.
+# Usage: benches/gpu-device.sh [images] [bench] [quick] [tests] [huge]
+#        (default: images bench tests, run in that order whatever the order given)
+# Output goes to $OUT (or ./device-out): images.log, bench.md, bench.log, tests.log,
+# huge.log. `images` renders three scenes at 4K with the scene read from textures and
+# from storage buffers (GPURT_FETCH) and compares the PNGs byte for byte. `tests` runs
+# the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
+# they do not finish, lists the tests that had not reported, so that a hang costs no more
+# than the limit and still says where it was.
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
 set -uo pipefail
 
 OUT=${OUT:-$PWD/device-out}
 mkdir -p "$OUT"
-what=${*:-tests bench}
+what=${*:-images bench tests}
 
 for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
 chmod +x .device/gpurt* 2>/dev/null
@@ -40,10 +46,21 @@ cp .device/gpurt-debug target/debug/gpurt
 export GPURT_REQUIRE_GPU=1 CI=true GPURT_ADAPTER=${GPURT_ADAPTER:-nvidia}
 ./.device/gpurt "$manifest/scenes/spheres.nff" -o "$OUT/spheres.png" -v --stats 2>&1
 
-if [[ $what == *tests* ]]; then
-    echo "== tests"
-    ./.device/gpurt-tests --test-threads "$(nproc)" 2>&1 | tee "$OUT/tests.log" | grep -v '^test .* ok$' | tail -60
-    [[ -d target/gpu-vs-cpu ]] && tar -C target -czf "$OUT/gpu-vs-cpu.tar.gz" gpu-vs-cpu
+
+if [[ $what == *images* ]]; then
+    echo "== images"
+    spd="$manifest/../shared/scenes/spd"
+    for s in balls-4 mount-9 teapot-6; do
+        for f in textures buffers; do
+            GPURT_FETCH=$f ./.device/gpurt "$(ls "$spd/$s".nff* | head -1)" -o "/tmp/$s-$f.png" \
+                --width 3840 --height 2160 --spp 3 --backend gpu 2>&1 | tail -1
+        done
+        if cmp "/tmp/$s-textures.png" "/tmp/$s-buffers.png"; then
+            echo "$s: textures and buffers byte-identical"
+        else
+            echo "$s: textures and buffers DIFFER"
+        fi
+    done 2>&1 | tee "$OUT/images.log"
 fi
 
 if [[ $what == *bench* ]]; then
@@ -70,6 +87,19 @@ if [[ $what == *bench* ]]; then
     echo "exit $?"
     tail -5 "$OUT/bench.log"
     cat "$OUT/bench.md"
+fi
+
+if [[ $what == *tests* ]]; then
+    echo "== tests"
+    timeout "${TESTS_TIMEOUT:-300}" ./.device/gpurt-tests --test-threads "$(nproc)" >"$OUT/tests.log" 2>&1
+    status=$?
+    grep -v '^test .* ok$' "$OUT/tests.log" | tail -60
+    if [[ $status == 124 ]]; then
+        echo "tests stopped after ${TESTS_TIMEOUT:-300} s; not reported:"
+        ./.device/gpurt-tests --list 2>/dev/null | sed -n 's/: test$//p' | sort >/tmp/all-tests
+        grep -oE '^test [^ ]+' "$OUT/tests.log" | cut -d' ' -f2 | sort | comm -23 /tmp/all-tests - | head -40
+    fi
+    [[ -d target/gpu-vs-cpu ]] && tar -C target -czf "$OUT/gpu-vs-cpu.tar.gz" gpu-vs-cpu
 fi
 
 if [[ $what == *huge* ]]; then

@@ -11,7 +11,8 @@ pub enum Fault {
     /// `lose-device`: the device is destroyed once the first band of a render is in.
     LoseDevice,
     /// `out-of-memory`: the device is opened with small memory blocks (`memory_hints`),
-    /// and each texture of the scene is allocated with the process's address space capped
+    /// and each texture (or storage buffer, `Fetch::Buffers`) of the scene's nodes,
+    /// primitives and normals is allocated with the process's address space capped
     /// at its size plus `OUT_OF_MEMORY_MARGIN` (`AddressSpaceCap`,
     /// `GpuRenderer::with_texture_margin`), so that the driver fails to allocate one
     /// larger than that, as on a device whose memory is full. A software adapter's device

@@ -110,17 +110,7 @@ pub(super) fn upload_scene(
                 Fetch::Textures => Texels::Texture(
                     texels(gpu, label, bytes, layer_rows, texture_margin)?.create_view(&array),
                 ),
-                Fetch::Buffers => {
-                    let _cap = texture_margin.map(AddressSpaceCap::new).transpose()?;
-                    // Whole texels: the shader reads an array of vec4<u32>.
-                    let mut padded = bytes.len().max(16).next_multiple_of(16);
-                    padded -= bytes.len();
-                    let buffer = match padded {
-                        0 => storage(label, bytes),
-                        _ => storage(label, &[bytes, &vec![0; padded]].concat()),
-                    };
-                    Texels::Buffer(buffer)
-                }
+                Fetch::Buffers => Texels::Buffer(texel_buffer(gpu, label, bytes, texture_margin)?),
             })
         };
         Ok(SceneData {
@@ -208,6 +198,33 @@ pub(super) fn texels(
         write(whole, 1, &last);
     }
     Ok(texture)
+}
+
+/// Bytes written per upload step of a texel buffer: 4 MB, as a texture's `UPLOAD_ROWS`.
+const UPLOAD_BYTES: usize = 4 << 20;
+
+/// A storage buffer of 16-byte texels holding `bytes`, zero-padded to whole texels (at
+/// least one). Allocated first, with `margin` as `texels` has it (the allocation alone
+/// under the cap, as for a texture), then written from `bytes` in place in waited bands
+/// of `UPLOAD_BYTES`, so that wgpu's staging copies stay small.
+fn texel_buffer(gpu: &Gpu, label: &str, bytes: &[u8], margin: Option<u64>) -> Result<wgpu::Buffer> {
+    let size = bytes.len().max(16).next_multiple_of(16);
+    let cap = margin.map(AddressSpaceCap::new).transpose()?;
+    let buffer = gpu.texel_buffer(label, size as u64);
+    drop(cap);
+    // Whole bands, then the rest padded to a whole texel.
+    let whole = bytes.len() / UPLOAD_BYTES * UPLOAD_BYTES;
+    for (k, band) in bytes[..whole].chunks(UPLOAD_BYTES).enumerate() {
+        gpu.write(&buffer, (k * UPLOAD_BYTES) as u64, band);
+        // A lost device surfaces at the upload's final wait.
+        let _ = gpu.finish();
+    }
+    if whole < size {
+        let mut last = bytes[whole..].to_vec();
+        last.resize(size - whole, 0);
+        gpu.write(&buffer, whole as u64, &last);
+    }
+    Ok(buffer)
 }
 
 /// wgpu cannot bind an empty buffer: empty arrays are uploaded as one zeroed element

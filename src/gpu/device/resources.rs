@@ -86,6 +86,14 @@ impl Device<'_> {
         self.buffer(label, size, U::STORAGE | U::INDIRECT | U::COPY_DST)
     }
 
+    /// Storage the shaders read and the host fills with `Gpu::write` after making it: a
+    /// scene's nodes, primitives or normals (`Fetch::Buffers`), written in bands so that
+    /// the host never holds a second copy of the whole array.
+    pub(crate) fn texel_buffer(&self, label: &str, size: u64) -> wgpu::Buffer {
+        use wgpu::BufferUsages as U;
+        self.buffer(label, size, U::STORAGE | U::COPY_DST)
+    }
+
     /// A buffer an `output` is copied into, to be `read` by the host.
     pub(crate) fn readback(&self, label: &str, size: u64) -> wgpu::Buffer {
         use wgpu::BufferUsages as U;

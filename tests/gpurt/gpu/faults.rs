@@ -8,6 +8,7 @@ use glam::Vec3;
 use gpurt::agreement::noise_floor;
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu::GpuRenderer;
+use gpurt::gpu::shaders::Fetch;
 use gpurt::pack;
 use gpurt::scene::Scene;
 
@@ -81,15 +82,19 @@ fn render_with(
         .map(|_| ())
 }
 
-fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, scene: &Scene) -> String {
-    let renderer = GpuRenderer::new(device, None).expect("shader module");
+/// The error a renderer reading the scene as `fetch` says gives for `scene`.
+fn refusal(device: &wgpu::Device, queue: &wgpu::Queue, fetch: Fetch, scene: &Scene) -> String {
+    let renderer = GpuRenderer::fetching(device, None, fetch).expect("shader module");
     render_with(device, queue, &renderer, scene)
         .expect_err("oversized scene must be refused")
         .to_string()
 }
 
 /// A scene larger than a storage binding or a texture the device allows is refused with a
-/// message that names the limit and what needed more, never rendered as a black image.
+/// message that names the limit and what needed more, never rendered as a black image:
+/// under either way of reading the nodes, primitives and normals (textures, which grow by
+/// layers, or storage buffers, whose refusal names the textures as the way out), whatever
+/// the adapter's default.
 #[test]
 fn oversized_scene_is_refused_with_the_limit_named() {
     let Some(g) = gpu() else {
@@ -110,18 +115,30 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             position: glam::Vec3::new(i as f32, 0.0, 10.0),
             color: None,
         }));
-    let msg = refusal(&device, &queue, &lit);
+    for fetch in [Fetch::Textures, Fetch::Buffers] {
+        let msg = refusal(&device, &queue, fetch, &lit);
+        assert!(
+            msg.contains("lights")
+                && msg.contains("max_storage_buffer_binding_size")
+                && msg.contains(&mib.to_string()),
+            "{msg}"
+        );
+    }
+    // Read from storage buffers, a wall of 30000 triangles is refused under that 1 MiB
+    // limit (their primitives take 1.4 MB, 48 bytes each), the message naming the textures
+    // as the way out.
+    let wall = with_a_wall_of_normals(30_000);
+    let msg = refusal(&device, &queue, Fetch::Buffers, &wall);
     assert!(
-        msg.contains("lights")
-            && msg.contains("max_storage_buffer_binding_size")
-            && msg.contains(&mib.to_string()),
+        msg.contains("primitives need")
+            && msg.contains("bytes in one storage buffer")
+            && msg.contains("max_storage_buffer_binding_size is 1048576")
+            && msg.contains("GPURT_FETCH=textures"),
         "{msg}"
     );
-    // Triangle normals travel in a texture array, like nodes and primitives: 30000
-    // triangles' normals (1.4 MiB) render under that 1 MiB storage limit, to the CPU's
-    // image, which differs without them (so it is the normals that agree).
-    let renderer = GpuRenderer::new(&device, None).expect("shader module");
-    let wall = with_a_wall_of_normals(30_000);
+    // In a texture array, like nodes and primitives, they render under that limit, to the
+    // CPU's image, which differs without them (so it is the normals that agree).
+    let renderer = GpuRenderer::fetching(&device, None, Fetch::Textures).expect("shader module");
     let never = AtomicBool::new(false);
     let frame_of = |scene: &Scene| {
         let buffers = pack::pack(scene.clone()).expect("packs");
@@ -155,7 +172,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             ..g.ctx.adapter.limits()
         },
     );
-    let msg = refusal(&device, &queue, &with_triangles(30_000));
+    let msg = refusal(&device, &queue, Fetch::Textures, &with_triangles(30_000));
     assert!(
         msg.contains("4096 texels wide") && msg.contains("max_texture_dimension_2d is 16"),
         "{msg}"
@@ -169,7 +186,7 @@ fn oversized_scene_is_refused_with_the_limit_named() {
             ..g.ctx.adapter.limits()
         },
     );
-    let renderer = GpuRenderer::new(&device, None)
+    let renderer = GpuRenderer::fetching(&device, None, Fetch::Textures)
         .expect("shader module")
         .with_layer_rows(2);
     let msg = render_with(&device, &queue, &renderer, &with_triangles(30_000))
