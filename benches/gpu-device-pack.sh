@@ -2,7 +2,8 @@
 # Builds what benches/gpu-device.sh runs and puts it, stripped, in .device/ (ignored by
 # git): the release gpurt, the SPD generator (examples/spd.rs), the integration-test
 # binary, the debug gpurt the CLI tests call, and a copy of ../shared/scenes. Also fetches the Vulkan loader packages into .gl/
-# when missing (a machine without a Rust toolchain may lack them too).
+# when missing (a machine without a Rust toolchain may lack them too). .device/ is made
+# afresh: keep nothing else there (a script to run on the device belongs in benches/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
