@@ -168,11 +168,8 @@ impl GpuSession {
     /// Opens `ctx`'s device for `scene`; shader pipelines are compiled on first use (and
     /// cached on disk where the device allows, keyed by the adapter).
     pub fn new(ctx: GpuContext, scene: Arc<SceneBuffers>) -> Result<Self> {
-        let mut renderer = gpu::GpuRenderer::new(&ctx.device, Some(&ctx.info))?;
         let fault = Fault::from_env()?;
-        if fault == Some(Fault::OutOfMemory) {
-            renderer = renderer.with_texture_margin(OUT_OF_MEMORY_MARGIN);
-        }
+        let renderer = renderer_for(&ctx, &scene, fault)?;
         Ok(GpuSession {
             ctx,
             renderer,
@@ -184,7 +181,8 @@ impl GpuSession {
     }
 
     /// Moves the session to another scene (a batch): the next frame uploads it; the
-    /// compiled pipelines stay, so scenes of one kind compile once.
+    /// compiled pipelines stay, so scenes of one kind compile once (unless the scene is
+    /// too large for the renderer's way of reading it: `GpuRenderer::suits`).
     pub fn set_scene(&mut self, scene: Arc<SceneBuffers>) {
         self.uploaded = None;
         self.scene = scene;
@@ -251,6 +249,9 @@ impl Renderer for GpuSession {
 impl GpuSession {
     /// Gets the uploaded scene ready for the frame `globals`, uploading it the first time.
     fn set_frame(&mut self, globals: &GpuGlobals) -> Result<()> {
+        if self.uploaded.is_none() && !self.renderer.suits(&self.ctx.device, &self.scene) {
+            self.renderer = renderer_for(&self.ctx, &self.scene, self.fault)?;
+        }
         let (device, queue) = (&self.ctx.device, &self.ctx.queue);
         let slot = &mut self.uploaded;
         if self
@@ -261,6 +262,20 @@ impl GpuSession {
         }
         Ok(())
     }
+}
+
+/// The renderer for frames of `scene` on `ctx`'s device (`GpuRenderer::for_scene`), its
+/// uploads under the out-of-memory fault's cap where `fault` asks for it.
+fn renderer_for(
+    ctx: &GpuContext,
+    scene: &SceneBuffers,
+    fault: Option<Fault>,
+) -> Result<gpu::GpuRenderer> {
+    let renderer = gpu::GpuRenderer::for_scene(&ctx.device, Some(&ctx.info), scene)?;
+    Ok(match fault {
+        Some(Fault::OutOfMemory) => renderer.with_texture_margin(OUT_OF_MEMORY_MARGIN),
+        _ => renderer,
+    })
 }
 
 /// Which renderer traces a command's rays (`--backend`).

@@ -36,18 +36,26 @@ pub(super) fn traversal_from_env() -> Result<u32> {
 /// How a renderer's shaders read the scene's nodes, primitives and normals: `GPURT_FETCH`
 /// (`textures` or `buffers`) where set; else storage textures on software adapters,
 /// which lavapipe loads a texel at a time where it loads a storage buffer a component at
-/// a time (docs/gpu.md, item 2), and storage buffers on hardware ones. On an H100 (docs/gpu.md,
-/// "Storage buffers"), buffers traced every frame of seven scenes 10 to 25% faster than
-/// the textures, whose tiled layout and surface loads a BVH's scattered 16-byte fetches
-/// pay for; images are the same to the byte. In the browser, unmeasured so far, the
-/// textures stay.
-pub(super) fn fetch_for(software: bool) -> Result<Fetch> {
-    match std::env::var("GPURT_FETCH").as_deref() {
-        Err(_) | Ok("") if software || !cfg!(feature = "native") => Ok(Fetch::Textures),
-        Err(_) | Ok("") => Ok(Fetch::Buffers),
-        Ok("textures") => Ok(Fetch::Textures),
-        Ok("buffers") => Ok(Fetch::Buffers),
-        Ok(v) => Err(Error::Render(format!(
+/// a time (docs/gpu.md, item 2), and storage buffers on hardware ones, unless the scenes
+/// in hand (`buffers_fit` false) have an array larger than one storage buffer may be
+/// (textures grow by layers). On an H100 (docs/gpu.md, "Storage buffers") buffers traced
+/// every frame of seven scenes 1.07 to 1.34 times faster than the textures, with the same
+/// rays and node fetches. In the browser, unmeasured so far, the textures stay.
+pub(super) fn fetch_for(software: bool, buffers_fit: bool) -> Result<Fetch> {
+    let var = std::env::var("GPURT_FETCH");
+    fetch_by(var.as_deref().ok(), software, buffers_fit)
+}
+
+/// `fetch_for` with `GPURT_FETCH`'s value given (`None`: unset).
+fn fetch_by(var: Option<&str>, software: bool, buffers_fit: bool) -> Result<Fetch> {
+    match var {
+        None | Some("") if software || !cfg!(feature = "native") || !buffers_fit => {
+            Ok(Fetch::Textures)
+        }
+        None | Some("") => Ok(Fetch::Buffers),
+        Some("textures") => Ok(Fetch::Textures),
+        Some("buffers") => Ok(Fetch::Buffers),
+        Some(v) => Err(Error::Render(format!(
             "GPURT_FETCH={v}: expected textures or buffers"
         ))),
     }
@@ -204,4 +212,40 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
         (cut.tile_width, cut.tile_rows) = (side, side);
     }
     cut
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Fetch, fetch_by};
+
+    /// Unset, a hardware adapter reads buffers, a software one textures, and a scene too
+    /// large for one buffer textures on any; set, `GPURT_FETCH` decides, even for such a
+    /// scene (whose upload is then refused with the limit named); anything else is an
+    /// error naming the variable.
+    #[test]
+    fn the_fetch_follows_the_adapter_the_scene_and_the_variable() {
+        let native = cfg!(feature = "native");
+        let hardware = if native {
+            Fetch::Buffers
+        } else {
+            Fetch::Textures
+        };
+        for unset in [None, Some("")] {
+            assert_eq!(fetch_by(unset, false, true).unwrap(), hardware);
+            assert_eq!(fetch_by(unset, true, true).unwrap(), Fetch::Textures);
+            assert_eq!(fetch_by(unset, false, false).unwrap(), Fetch::Textures);
+        }
+        for (software, fit) in [(false, true), (true, true), (false, false)] {
+            let by = |v| fetch_by(Some(v), software, fit).unwrap();
+            assert_eq!(by("textures"), Fetch::Textures);
+            assert_eq!(by("buffers"), Fetch::Buffers);
+        }
+        let e = fetch_by(Some("texture"), false, true)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("GPURT_FETCH=texture") && e.contains("textures or buffers"),
+            "{e}"
+        );
+    }
 }

@@ -68,8 +68,30 @@ impl GpuRenderer {
     /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
     /// `PIPELINE_CACHE` (pass `None` to skip the cache).
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
-        let fetch = fetch_for(Device::new(device).runs_on_cpu())?;
+        let fetch = fetch_for(Device::new(device).runs_on_cpu(), true)?;
         Self::fetching(device, adapter_info, fetch)
+    }
+
+    /// `new`, for frames of `scene`: where its nodes, primitives or normals would not fit
+    /// one of the device's storage buffers, its shaders read them from textures, which
+    /// grow by layers, whatever the adapter (`policy::fetch_for`).
+    pub fn for_scene(
+        device: &wgpu::Device,
+        adapter_info: Option<&wgpu::AdapterInfo>,
+        scene: &SceneBuffers,
+    ) -> Result<Self> {
+        let gpu = Device::new(device);
+        let traversal = scene.traversal_for(traversal_from_env()?);
+        let fit = upload::fits_buffers(&gpu.limits(), scene, traversal);
+        Self::fetching(device, adapter_info, fetch_for(gpu.runs_on_cpu(), fit)?)
+    }
+
+    /// Whether this renderer reads `scene` as `for_scene` would have it: false only where
+    /// it reads buffers and one of the scene's arrays would not fit one.
+    pub fn suits(&self, device: &wgpu::Device, scene: &SceneBuffers) -> bool {
+        let limits = Device::new(device).limits();
+        let traversal = scene.traversal_for(self.traversal);
+        self.fetch == Fetch::Textures || upload::fits_buffers(&limits, scene, traversal)
     }
 
     /// `new`, its shaders reading the scene's nodes, primitives and normals as `fetch`

@@ -238,6 +238,26 @@ pub(super) fn non_empty<T: bytemuck::Pod>(v: &[T]) -> &[u8] {
     }
 }
 
+/// The arrays the shader reads a texel at a time, named, and their sizes in bytes.
+fn texel_arrays(scene: &SceneBuffers, traversal: u32) -> [(&'static str, usize); 3] {
+    [
+        ("BVH nodes", node_bytes(scene, traversal).len()),
+        ("primitives", size_of_val(&scene.prims[..])),
+        ("triangle normals", size_of_val(&scene.tri_normals[..])),
+    ]
+}
+
+/// Whether each of those arrays, for the walk `traversal`, fits one storage buffer of a
+/// device of `limits` (`Fetch::Buffers`; textures grow by layers instead).
+pub(super) fn fits_buffers(limits: &wgpu::Limits, scene: &SceneBuffers, traversal: u32) -> bool {
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    texel_arrays(scene, traversal)
+        .iter()
+        .all(|&(_, bytes)| bytes.next_multiple_of(16) as u64 <= limit)
+}
+
 /// Refuses scenes that need a larger texture, storage binding or buffer than the device
 /// allows, naming the limit and the size needed.
 pub(super) fn check_sizes(
@@ -249,11 +269,7 @@ pub(super) fn check_sizes(
     layer_rows: u32,
 ) -> Result<()> {
     let max_side = limits.max_texture_dimension_2d;
-    let texel_arrays = [
-        ("BVH nodes", node_bytes(scene, traversal).len()),
-        ("primitives", size_of_val(&scene.prims[..])),
-        ("triangle normals", size_of_val(&scene.tri_normals[..])),
-    ];
+    let texel_arrays = texel_arrays(scene, traversal);
     if fetch == Fetch::Buffers {
         return check_buffers(limits, scene, texel_arrays, out_bytes);
     }
@@ -316,6 +332,41 @@ mod tests {
     use super::*;
     use crate::gpu_types::{TRAVERSAL_NAMES, TRAVERSAL_PAIRS, TRAVERSAL_SINGLE};
     use crate::scene::nff;
+
+    /// A scene fits buffers while its largest texel array (here its 7 primitives, 336
+    /// bytes, or the wide tree's nodes) is within both the binding and the buffer limit.
+    #[test]
+    fn buffers_fit_while_the_largest_array_is_within_the_limits() {
+        let src = b"v from 0 -5 1 at 0 0 0 up 0 0 1 angle 40 resolution 8 8
+            l 1 -2 3
+            f 1 0 0 1 0 1 0 1
+            s 0 0 0 1  s 2 0 0 0.5  s -2 0 0 0.5  s 0 0 2 0.3  s 0 2 0 0.4  s 1 1 1 0.2
+            s 3 3 3 0.1";
+        let scene = nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap();
+        let b = crate::pack::pack(scene).unwrap();
+        let largest = texel_arrays(&b, TRAVERSAL_WIDE)
+            .iter()
+            .map(|&(_, bytes)| bytes.next_multiple_of(16) as u64)
+            .max()
+            .unwrap();
+        assert!(largest >= 336, "{largest}");
+        let limits = |binding: u64, buffer: u64| wgpu::Limits {
+            max_storage_buffer_binding_size: binding,
+            max_buffer_size: buffer,
+            ..wgpu::Limits::default()
+        };
+        assert!(fits_buffers(&limits(largest, largest), &b, TRAVERSAL_WIDE));
+        assert!(!fits_buffers(
+            &limits(largest - 16, 1 << 30),
+            &b,
+            TRAVERSAL_WIDE
+        ));
+        assert!(!fits_buffers(
+            &limits(1 << 30, largest - 16),
+            &b,
+            TRAVERSAL_WIDE
+        ));
+    }
 
     /// What a walk uploads comes from its own tree, and no other tree is built: the
     /// compressed one brings a reordered copy of every primitive (a 2M-triangle scene's
