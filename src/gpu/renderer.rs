@@ -4,6 +4,8 @@
 //! frame's dispatches then do is `trace`'s; this module decides which pipeline, which
 //! walk of the BVH and which cut.
 
+mod overrides;
+
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -17,7 +19,7 @@ use super::pipeline::{
     resume_group_layout,
 };
 use super::policy::{
-    cut_for, fetch_for, gpu_shape, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
+    cut_for, fetch_for, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
 };
 use super::scene::{GpuScene, bind};
 use super::shaders::Fetch;
@@ -145,52 +147,6 @@ impl GpuRenderer {
         })
     }
 
-    /// This renderer splitting the node and primitive textures into layers of `rows`
-    /// rows (a power of two, at most the device's), as a scene too large for one layer
-    /// is split: lets the tests check many layers on small scenes.
-    pub fn with_layer_rows(self, rows: u32) -> Self {
-        assert!(rows.is_power_of_two() && rows <= self.layer_rows);
-        GpuRenderer {
-            layer_rows: rows,
-            ..self
-        }
-    }
-
-    /// This renderer allocating each texture of a scene with the process's address space
-    /// capped `margin` bytes above its size (the out-of-memory fault, `fault.rs`): on a
-    /// software adapter, whose device memory is the process's own, a texture larger than
-    /// that cannot be allocated. Only the allocations run capped, not the copies into
-    /// them, which lavapipe compiles code for.
-    pub fn with_texture_margin(self, margin: u64) -> Self {
-        GpuRenderer {
-            texture_margin: Some(margin),
-            ..self
-        }
-    }
-
-    /// This renderer holding each dispatch to `budget` (instead of `DISPATCH_BUDGET` on
-    /// GPUs and none on software adapters): lets the tests make lavapipe refine its cut.
-    pub fn with_dispatch_budget(self, budget: Duration) -> Self {
-        GpuRenderer {
-            dispatch_budget: Some(budget),
-            ..self
-        }
-    }
-
-    /// This renderer cutting frames as on a GPU (`policy::gpu_shape`: strips of the
-    /// frame's width, several samples a pass), with dispatches of at most
-    /// `dispatch_samples` pixel samples, whatever its adapter: lets the tests trace
-    /// frames in several strips on lavapipe.
-    pub fn with_gpu_shape(self, dispatch_samples: u64) -> Self {
-        GpuRenderer {
-            shape: Shape {
-                dispatch_samples,
-                ..gpu_shape()
-            },
-            ..self
-        }
-    }
-
     /// The pipeline a frame of `scene` needs on this renderer.
     fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
         Specialization {
@@ -204,20 +160,6 @@ impl GpuRenderer {
     /// use the walk `frame` gives for its scene.
     pub fn traversal(&self) -> u32 {
         self.traversal
-    }
-
-    /// This renderer walking the BVH as `traversal` says, whatever its adapter.
-    pub fn with_traversal(self, traversal: u32) -> Self {
-        GpuRenderer { traversal, ..self }
-    }
-
-    /// This renderer tracing colour frames through the wavefront kernels (`true`) or
-    /// the one kernel (`false`), whatever its adapter and the scene.
-    pub fn with_wavefront(self, wavefront: bool) -> Self {
-        GpuRenderer {
-            wavefront: Some(wavefront),
-            ..self
-        }
     }
 
     /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`)
