@@ -73,7 +73,7 @@ pub(super) fn scene_bytes(
             let (rows, layers) = texture_extent(bytes, layer_rows);
             u64::from(rows) * u64::from(layers) * u64::from(TEXTURE_WIDTH) * 16
         }
-        Fetch::Buffers => bytes.max(16).next_multiple_of(16) as u64,
+        Fetch::Buffers => texel_buffer_size(bytes),
     };
     texture(node_bytes(scene, traversal).len())
         + texture(size_of_val(&scene.prims[..]))
@@ -200,6 +200,12 @@ pub(super) fn texels(
     Ok(texture)
 }
 
+/// The size of the texel buffer holding `bytes`: whole 16-byte texels, at least one (wgpu
+/// binds no empty buffer).
+fn texel_buffer_size(bytes: usize) -> u64 {
+    bytes.max(16).next_multiple_of(16) as u64
+}
+
 /// Bytes written per upload step of a texel buffer: 4 MB, as a texture's `UPLOAD_ROWS`.
 const UPLOAD_BYTES: usize = 4 << 20;
 
@@ -208,7 +214,7 @@ const UPLOAD_BYTES: usize = 4 << 20;
 /// under the cap, as for a texture), then written from `bytes` in place in waited bands
 /// of `UPLOAD_BYTES`, so that wgpu's staging copies stay small.
 fn texel_buffer(gpu: &Gpu, label: &str, bytes: &[u8], margin: Option<u64>) -> Result<wgpu::Buffer> {
-    let size = bytes.len().max(16).next_multiple_of(16);
+    let size = texel_buffer_size(bytes.len()) as usize;
     let cap = margin.map(AddressSpaceCap::new).transpose()?;
     let buffer = gpu.texel_buffer(label, size as u64);
     drop(cap);
@@ -255,7 +261,7 @@ pub(super) fn fits_buffers(limits: &wgpu::Limits, scene: &SceneBuffers, traversa
         .min(limits.max_buffer_size);
     texel_arrays(scene, traversal)
         .iter()
-        .all(|&(_, bytes)| bytes.next_multiple_of(16) as u64 <= limit)
+        .all(|&(_, bytes)| texel_buffer_size(bytes) <= limit)
 }
 
 /// Refuses scenes that need a larger texture, storage binding or buffer than the device
@@ -312,8 +318,8 @@ fn check_buffers<const N: usize>(
     ];
     // Textures may hold the large arrays where a buffer cannot: they grow by layers.
     let arrays = arrays.map(|(what, bytes)| (what, bytes, ""));
-    let texel_arrays =
-        texel_arrays.map(|(what, bytes)| (what, bytes as u64, "GPURT_FETCH=textures or "));
+    let texel_arrays = texel_arrays
+        .map(|(what, bytes)| (what, texel_buffer_size(bytes), "GPURT_FETCH=textures or "));
     for (what, bytes, textures) in arrays.into_iter().chain(texel_arrays) {
         let limit = max_binding.min(max_buffer);
         if bytes > limit {
@@ -346,7 +352,7 @@ mod tests {
         let b = crate::pack::pack(scene).unwrap();
         let largest = texel_arrays(&b, TRAVERSAL_WIDE)
             .iter()
-            .map(|&(_, bytes)| bytes.next_multiple_of(16) as u64)
+            .map(|&(_, bytes)| texel_buffer_size(bytes))
             .max()
             .unwrap();
         assert!(largest >= 336, "{largest}");
