@@ -1,299 +1,436 @@
-// wavefront.wgsl: the wavefront path. The work `main` does for a tile's
-// pixels, cut into kernels that each do one kind of work for a queue of pixels:
-// `wf_generate` starts every pixel's first sample; `wf_extend` finds the closest hit of
-// each pixel's ray under way; `wf_shadow` traces each pixel's shadow ray under way;
-// `wf_shade` shades the hits and the light samples they bring back, takes the next
-// light sample, pushes reflected and refracted rays, starts the next sample, and writes
-// the pixel out when its samples are done. Each kernel appends the pixels to the queue
-// of the kernel they need next; `wf_advance_rays` and `wf_advance_shade` (one
-// invocation each) turn the queues just filled into the next inputs and the indirect
-// dispatch sizes, so that the host encodes rounds without reading anything back.
+// wavefront.wgsl: the wavefront path. A wave holds a tile's paths, one per pixel sample
+// of the pass, and traces them a generation of rays at a time: round d takes every ray of
+// depth d. `wf_generate` starts each path with its eye ray. A round then runs
+// `wf_advance` (the rays written last round become the input), `wf_extend` (closest hits,
+// and how many reflected and refracted rays each hit sends, summed over its workgroup),
+// `wf_scan` (where each workgroup's rays of the next round begin), `wf_shade` (each
+// hit's shadow rays, in a slot per light, and its rays of the next round, written in
+// path order), `wf_advance_shadows`, `wf_shadow` (any hit: each shadow ray's light) and
+// `wf_gather` (each path adds its rays' light, in queue order); `wf_finish` adds the
+// paths' colours to their pixels in sample order. The host encodes a wave's rounds
+// ahead, a fixed count of indirect dispatches, without reading anything back.
 //
-// A pixel's steps are those of `trace` and `direct` (and `resume`), in the same order
-// with the same arithmetic, so its sum is the megakernel's to the bit; only which pixels
-// run together changes: a warp traces rays alone, with no lanes idle in shading code or
-// waiting on a neighbour's deeper ray tree. Each invocation does one traversal or one
-// shading step, the bounded work lavapipe's loop limit and GPU watchdogs need.
-// (CPU twin: src/cpu/wavefront.rs, the same kernels over the same queues, run one after
-// another; the CPU renderer itself runs the same steps in one loop, `trace`.)
+// The rays of a round stay in path order (a prefix sum places them, no atomic counter),
+// so a path's rays are contiguous and one invocation adds their light: the sums are the
+// same every run, with no float atomics (WGSL has none). A path adds its light a
+// generation at a time, where the one kernel adds it depth first: the rays and their
+// light are the same, the sums differ by rounding. A round keeps at most
+// `WAVE_RAYS_PER_PATH` rays a path on average; a path whose rays do not fit is flagged
+// cut short, and `resume` traces its pixel again.
+//
+// Area lights take the one kernel (`policy::wavefront_for`): their samples draw from a
+// path's random stream in the depth-first order of its ray tree, which rounds by depth
+// cannot follow. (CPU twin: src/cpu/wavefront.rs, the same kernels run one after
+// another.)
 
-// Where a pixel of the wave stands: its samples so far, the sample under way (its
-// colour, random stream and pending rays), the hit being shaded and its light so far,
-// the ray `wf_extend` traces next, the light sample whose shadow ray `wf_shadow` traces,
-// and what came back (src/gpu_types.rs: GpuWaveState).
-struct WaveState {
-    sum: vec3<f32>,
-    sample: u32,
+// A path of the wave: one pixel sample's colour so far, its rays, counts, and whether
+// any of its work was cut short (src/gpu_types.rs: GpuWavePath).
+struct WavePath {
     colour: vec3<f32>,
-    rng: u32,
-    lit: vec3<f32>,
     rays: u32,
-    point: vec3<f32>,
-    sp: u32,
-    ng: vec3<f32>,
-    light: u32,
-    ns: vec3<f32>,
-    light_sample: u32,
-    ray_in: Pending,
-    shadow: LightRay,
-    shadow_light: vec3<f32>,
-    hit: Hit,
-    material: u32,
-    entering: u32,
-    cut: u32,
-    // What `wf_shade` has to do: PHASE_RAY, shade `hit`; PHASE_LIGHT, add the light
-    // `shadow` brought back.
-    phase: u32,
     counts: PixelCounts,
-    stack: array<Pending, TRACE_STACK>,
+    cut: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
-// The wave's pixels, its queues and their lengths; and the sizes of the indirect
-// dispatches, in a group of their own, bound only for the two kernels that write them
-// (a buffer may not be storage and the source of a dispatch's size at once). Queue q (0:
-// extend, 1: shadow, 2: shade) has two halves of arrayLength / 6 entries: kernels read
-// the half `wave_counts[q]` names (its length in wave_counts[3 + q]) and append to the
-// other (its length in wave_counts[6 + q]).
-@group(2) @binding(0) var<storage, read_write> wave: array<WaveState>;
-@group(2) @binding(1) var<storage, read_write> wave_queues: array<u32>;
-@group(2) @binding(2) var<storage, read_write> wave_counts: array<atomic<u32>, 9>;
-@group(3) @binding(0) var<storage, read_write> wave_args: array<u32, 9>;
-
-fn wave_half(q: u32, next: bool) -> u32 {
-    let size = arrayLength(&wave_queues) / 6u;
-    let half = atomicLoad(&wave_counts[q]) ^ u32(next);
-    return (2u * q + half) * size;
+// A ray of a round: its origin and direction, what its light is worth to its path, and
+// the path (src/gpu_types.rs: GpuWaveRay). Its depth is the round's; its tmin, hither for
+// eye rays and 0 after.
+struct WaveRay {
+    origin: vec3<f32>,
+    weight: f32,
+    dir: vec3<f32>,
+    path: u32,
 }
 
-// Appends pixel `i` to queue q, for the kernel of the next round.
-fn wave_push(q: u32, i: u32) {
-    let k = atomicAdd(&wave_counts[6u + q], 1u);
-    wave_queues[wave_half(q, true) + k] = i;
+// What `wf_extend` found for the ray of the same index: its closest hit, the nodes its
+// walk fetched, `flags` (WAVE_CUT when the walk was cut short, and from bit
+// WAVE_SENDS_SHIFT the rays of the next round it sends), and where the first of those
+// goes within its workgroup's; and from `wf_shade`, the light the hit gives before its
+// lights (the ambient term) (src/gpu_types.rs: GpuWaveHit).
+struct WaveHit {
+    hit: Hit,
+    nodes: u32,
+    flags: u32,
+    children: u32,
+    ambient: vec3<f32>,
 }
 
-// The pixel of entry `k` of queue q, or none past its length.
-fn wave_pixel(q: u32, k: u32) -> u32 {
-    if (k >= atomicLoad(&wave_counts[3u + q])) {
-        return NO_PRIM;
+// The shadow ray of light `slot % n_lights` at the hit of ray `slot / n_lights`: its ray,
+// and the light's term where nothing blocks it, which `wf_shadow` replaces with what the
+// light gives through the scene (src/gpu_types.rs: GpuWaveShadow). `flags`: WAVE_TRACED
+// when the light is above the surface (else no ray and no light), WAVE_CUT when the walk
+// was cut short.
+struct WaveShadow {
+    origin: vec3<f32>,
+    dist: f32,
+    dir: vec3<f32>,
+    flags: u32,
+    light: vec3<f32>,
+    nodes: u32,
+}
+
+// The wave's paths; its rays, two halves of arrayLength / 2 (round d reads half d % 2 and
+// writes the other); their hits; a shadow slot per ray and light, and the queue of the
+// slots that hold a ray; a first ray of the next round per workgroup of `wf_extend`; and
+// the counts (`WAVE_ROUND`, ...). The sizes of the indirect dispatches are in a group of
+// their own, bound only for the kernels that write them (a buffer may not be storage
+// and the source of a dispatch's size at once): rays, then shadow rays.
+@group(2) @binding(0) var<storage, read_write> wave_paths: array<WavePath>;
+@group(2) @binding(1) var<storage, read_write> wave_rays: array<WaveRay>;
+@group(2) @binding(2) var<storage, read_write> wave_hits: array<WaveHit>;
+@group(2) @binding(3) var<storage, read_write> wave_shadows: array<WaveShadow>;
+@group(2) @binding(4) var<storage, read_write> wave_queue: array<u32>;
+@group(2) @binding(5) var<storage, read_write> wave_scan: array<u32>;
+@group(2) @binding(6) var<storage, read_write> wave_counts: array<atomic<u32>, WAVE_COUNT_WORDS>;
+@group(3) @binding(0) var<storage, read_write> wave_args: array<u32, 6>;
+
+var<workgroup> wave_local: array<u32, WORKGROUP_INVOCATIONS>;
+
+// Rays a half of `wave_rays` holds.
+fn wave_capacity() -> u32 {
+    return arrayLength(&wave_rays) / 2u;
+}
+
+// Index of ray k of round d (0: the round being generated by `wf_generate`) in
+// `wave_rays`.
+fn wave_ray_index(d: u32, k: u32) -> u32 {
+    return (d % 2u) * wave_capacity() + k;
+}
+
+// The material of what `hit` hit.
+fn wave_material(hit: Hit) -> Material {
+    if (PLANES && (hit.prim & PLANE_FLAG) != 0u) {
+        return materials[planes[hit.prim & ~PLANE_FLAG].material];
     }
-    return wave_queues[wave_half(q, false) + k];
+    return materials[prim_material(load_prim(hit.prim))];
 }
 
-// The queue filled last becomes the input: its half, its length, its dispatch size.
-fn wave_advance(q: u32) {
-    atomicXor(&wave_counts[q], 1u);
-    let n = atomicExchange(&wave_counts[6u + q], 0u);
-    atomicStore(&wave_counts[3u + q], n);
-    wave_args[3u * q] = (n + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
-    wave_args[3u * q + 1u] = 1u;
-    wave_args[3u * q + 2u] = 1u;
+// Rays of the next round a ray of round d that hit `hit` sends: reflected where the
+// material reflects, refracted where it transmits, none at the last depth or on a miss.
+fn wave_children(d: u32, hit: Hit) -> u32 {
+    if (hit.prim == NO_PRIM || d >= globals.max_depth) {
+        return 0u;
+    }
+    let m = wave_material(hit);
+    return u32(REFLECTION && m.ks > 0.0) + u32(REFRACTION && m.t > 0.0);
 }
 
-// Pixel i of the tile, as (x, y) in the image, and its slot in the band's output.
+// Where ray k of the round places its first ray of the next round: its workgroup's first,
+// from `wf_scan`, and its own within the workgroup, from `wf_extend`.
+fn wave_child_index(k: u32) -> u32 {
+    return wave_scan[k / WORKGROUP_INVOCATIONS] + wave_hits[k].children;
+}
+
+// Pixel i of the tile, as (x, y) in the image, and its slot in the band's output. The
+// tile's rows go in strips of WORKGROUP_SIDE (the last one what is left), each strip
+// column by column, so that a workgroup's paths, and their rays in every round, start
+// from a square of neighbouring pixels: coherent rays, as `main`'s blocks trace.
 fn wave_xy(i: u32) -> vec3<u32> {
-    let x = i % tile.width;
-    let y = i / tile.width;
+    let strip = WORKGROUP_SIDE * tile.width;
+    let full = tile.height / WORKGROUP_SIDE;
+    var rows = WORKGROUP_SIDE;
+    var s = i / strip;
+    var j = i % strip;
+    if (s >= full) {
+        rows = tile.height - full * WORKGROUP_SIDE;
+        s = full;
+        j = i - full * strip;
+    }
+    let x = j / rows;
+    let y = s * WORKGROUP_SIDE + j % rows;
     return vec3<u32>(tile.x + x, tile.y + y, tile.out_base + y * tile.out_stride + x);
 }
 
-// Starts pixel i's sample `wave[i].sample`: its eye ray is the ray to extend.
-fn wave_start_sample(i: u32) {
-    let p = wave_xy(i);
-    let s = wave[i].sample;
-    var rng = rng_seed(p.y * globals.width + p.x, s, globals.seed);
-    let off = sample_offset(s, globals.spp, &rng);
-    let ray = camera_ray(f32(p.x) + off.x, f32(p.y) + off.y, &rng);
-    wave[i].rng = rng;
-    wave[i].rays += 1u;
-    if (COUNTERS) {
-        wave[i].counts.eye_rays += 1u;
-    }
-    wave[i].colour = vec3<f32>(0.0);
-    wave[i].sp = 0u;
-    wave[i].ray_in = Pending(ray.origin, ray.dir, 1.0, 1u, globals.hither);
-    wave_push(0u, i);
+// Writes the dispatch size for `n` invocations at word `at` of `wave_args`.
+fn wave_dispatch(at: u32, n: u32) {
+    wave_args[at] = (n + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
+    wave_args[at + 1u] = 1u;
+    wave_args[at + 2u] = 1u;
 }
 
-// The next pending ray of pixel i's sample, or its next sample, or its output.
-fn wave_next_ray(i: u32) {
-    let sp = wave[i].sp;
-    if (sp > 0u) {
-        wave[i].sp = sp - 1u;
-        wave[i].ray_in = wave[i].stack[sp - 1u];
-        wave_push(0u, i);
-        return;
-    }
-    wave[i].sum += wave[i].colour;
-    wave[i].sample += 1u;
-    if (wave[i].sample < tile.sample_start + tile.sample_count) {
-        wave_start_sample(i);
-        return;
-    }
-    let slot = wave_xy(i).z;
-    let cut = wave[i].cut != 0u || cut_short;
-    output[slot] = PixelOut(wave[i].sum, wave[i].rays | select(0u, PIXEL_CUT_SHORT, cut));
-    if (COUNTERS) {
-        counters[slot] = wave[i].counts;
-    }
-}
-
-// Takes pixel i's next light sample that sends a shadow ray, to `wf_shadow`; once every
-// light is sampled, adds the hit's light to the sample and pushes its reflected and
-// refracted rays, as `trace` does.
-fn wave_next_light(i: u32) {
-    let s = Surface(wave[i].point, wave[i].ng, wave[i].ns, wave[i].entering != 0u, wave[i].material);
-    let ray_in = wave[i].ray_in;
-    let m = materials[s.material];
-    let r = reflect_dir(ray_in.dir, s.ns);
-    var li = wave[i].light;
-    var k = wave[i].light_sample;
-    var rng = wave[i].rng;
-    for (; li < globals.n_lights; li++) {
-        let light = lights[li];
-        let samples = light_samples(light);
-        for (; k < samples; k++) {
-            let lr = light_ray(s, m, ray_in.dir, r, light, k, &rng);
-            if (lr.traced != 0u) {
-                wave[i].rng = rng;
-                wave[i].light = li;
-                wave[i].light_sample = k + 1u;
-                wave[i].shadow = lr;
-                wave_push(1u, i);
-                return;
-            }
-        }
-        k = 0u;
-    }
-    wave[i].rng = rng;
-    wave[i].colour += ray_in.weight * wave[i].lit;
-    if (ray_in.depth < globals.max_depth) {
-        var sp = wave[i].sp;
-        if (REFLECTION && m.ks > 0.0) {
-            wave[i].rays += 1u;
-            if (COUNTERS) {
-                wave[i].counts.secondary_rays += 1u;
-            }
-            wave[i].stack[sp] = secondary(s, reflect_dir(ray_in.dir, s.ns), ray_in, m.ks);
-            sp += 1u;
-        }
-        if (REFRACTION && m.t > 0.0) {
-            wave[i].rays += 1u;
-            if (COUNTERS) {
-                wave[i].counts.secondary_rays += 1u;
-            }
-            wave[i].stack[sp] = secondary(s, refracted_dir(s, m, ray_in.dir), ray_in, m.t);
-            sp += 1u;
-        }
-        wave[i].sp = sp;
-    }
-    wave_next_ray(i);
-}
-
+// Path p is sample `tile.sample_start + p % tile.sample_count` of pixel
+// `p / tile.sample_count`: its eye ray is ray p of the first round.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn wf_generate(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = gid.x;
-    if (i >= tile.width * tile.height) {
+    let p = gid.x;
+    let paths = tile.width * tile.height * tile.sample_count;
+    if (p == 0u) {
+        atomicStore(&wave_counts[WAVE_NEXT], paths);
+    }
+    if (p >= paths) {
         return;
     }
-    let slot = wave_xy(i).z;
-    let before = output[slot];
-    wave[i].sum = before.color;
-    wave[i].rays = before.rays & ~PIXEL_CUT_SHORT;
-    wave[i].cut = u32((before.rays & PIXEL_CUT_SHORT) != 0u);
+    let xy = wave_xy(p / tile.sample_count);
+    let s = tile.sample_start + p % tile.sample_count;
+    var rng = rng_seed(xy.y * globals.width + xy.x, s, globals.seed);
+    let off = sample_offset(s, globals.spp, &rng);
+    let ray = camera_ray(f32(xy.x) + off.x, f32(xy.y) + off.y, &rng);
+    var eye = PixelCounts();
     if (COUNTERS) {
-        wave[i].counts = counters[slot];
+        eye.eye_rays = 1u;
     }
-    wave[i].sample = tile.sample_start;
-    wave_start_sample(i);
+    wave_paths[p] = WavePath(vec3<f32>(0.0), 1u, eye, u32(cut_short), 0u, 0u, 0u);
+    wave_rays[wave_ray_index(1u, p)] = WaveRay(ray.origin, 1.0, ray.dir, p);
 }
 
+// The next round: the rays written last round are its input, and the dispatches over
+// them are sized.
 @compute @workgroup_size(1, 1, 1)
-fn wf_advance_rays() {
-    wave_advance(0u);
-    wave_advance(1u);
+fn wf_advance() {
+    atomicAdd(&wave_counts[WAVE_ROUND], 1u);
+    let n = min(atomicExchange(&wave_counts[WAVE_NEXT], 0u), wave_capacity());
+    atomicStore(&wave_counts[WAVE_RAYS], n);
+    atomicStore(&wave_counts[WAVE_SHADOWS], 0u);
+    wave_dispatch(0u, n);
 }
 
-@compute @workgroup_size(1, 1, 1)
-fn wf_advance_shade() {
-    wave_advance(2u);
-}
-
+// The closest hit of each ray of the round, and how many rays of the next round it sends,
+// summed over the workgroup (an inclusive scan in workgroup memory): every invocation
+// reaches the barriers, those past the round's rays with nothing to add.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn wf_extend(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
+    @builtin(workgroup_id) group: vec3<u32>,
 ) {
     stack_base = local_index;
-    let i = wave_pixel(0u, gid.x);
-    if (i == NO_PRIM) {
-        return;
+    let k = gid.x;
+    let d = atomicLoad(&wave_counts[WAVE_ROUND]);
+    let n = atomicLoad(&wave_counts[WAVE_RAYS]);
+    var children = 0u;
+    if (k < n) {
+        let r = wave_rays[wave_ray_index(d, k)];
+        let tmin = select(0.0, globals.hither, d == 1u);
+        let hit = closest_hit(Ray(r.origin, r.dir), tmin, NO_HIT);
+        children = wave_children(d, hit);
+        let flags = select(0u, WAVE_CUT, cut_short) | (children << WAVE_SENDS_SHIFT);
+        wave_hits[k] = WaveHit(hit, fetched, flags, 0u, vec3<f32>(0.0));
     }
-    let ray_in = wave[i].ray_in;
-    let hit = closest_hit(Ray(ray_in.origin, ray_in.dir), ray_in.tmin, NO_HIT);
-    wave[i].hit = hit;
-    wave[i].phase = PHASE_RAY;
-    if (COUNTERS) {
-        if (ray_in.depth == 1u) {
-            wave[i].counts.eye_nodes += fetched;
-        } else {
-            wave[i].counts.secondary_nodes += fetched;
+    wave_local[local_index] = children;
+    for (var step = 1u; step < WORKGROUP_INVOCATIONS; step *= 2u) {
+        workgroupBarrier();
+        var add = 0u;
+        if (local_index >= step) {
+            add = wave_local[local_index - step];
         }
+        workgroupBarrier();
+        wave_local[local_index] += add;
     }
-    wave[i].cut |= u32(cut_short);
-    wave_push(2u, i);
+    if (k < n) {
+        wave_hits[k].children = wave_local[local_index] - children;
+    }
+    if (local_index == WORKGROUP_INVOCATIONS - 1u) {
+        wave_scan[group.x] = wave_local[local_index];
+    }
 }
 
+// Turns the workgroups' totals of `wf_extend` into where each workgroup's rays of the next
+// round begin (an exclusive scan: each invocation sums a run of workgroups, the runs'
+// sums are scanned, and each run is scanned from its start), and counts the next round's
+// rays. One workgroup.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
+fn wf_scan(@builtin(local_invocation_index) local_index: u32) {
+    let n = atomicLoad(&wave_counts[WAVE_RAYS]);
+    let groups = (n + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
+    let run = (groups + WORKGROUP_INVOCATIONS - 1u) / WORKGROUP_INVOCATIONS;
+    let first = local_index * run;
+    let end = min(first + run, groups);
+    var total = 0u;
+    for (var g = first; g < end; g++) {
+        total += wave_scan[g];
+    }
+    wave_local[local_index] = total;
+    workgroupBarrier();
+    if (local_index == 0u) {
+        var sum = 0u;
+        for (var i = 0u; i < WORKGROUP_INVOCATIONS; i++) {
+            let t = wave_local[i];
+            wave_local[i] = sum;
+            sum += t;
+        }
+        atomicStore(&wave_counts[WAVE_NEXT], sum);
+    }
+    workgroupBarrier();
+    var at = wave_local[local_index];
+    for (var g = first; g < end; g++) {
+        let t = wave_scan[g];
+        wave_scan[g] = at;
+        at += t;
+    }
+}
+
+// Shades the hit of each ray of the round: a shadow slot for every light, queued where the
+// light is above the surface, and its reflected and refracted rays, where the next
+// round's rays hold them (as `trace` pushes them: reflected first).
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
+fn wf_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let k = gid.x;
+    let d = atomicLoad(&wave_counts[WAVE_ROUND]);
+    if (k >= atomicLoad(&wave_counts[WAVE_RAYS])) {
+        return;
+    }
+    let hit = wave_hits[k].hit;
+    if (hit.prim == NO_PRIM) {
+        return;
+    }
+    let r = wave_rays[wave_ray_index(d, k)];
+    let ray = Ray(r.origin, r.dir);
+    let s = surface(ray, hit);
+    let m = materials[s.material];
+    wave_hits[k].ambient = globals.ambient * m.kd * m.color;
+    let mirror = reflect_dir(ray.dir, s.ns);
+    // Area lights take the one kernel: no light here draws from the random stream.
+    var rng = 0u;
+    for (var li = 0u; li < globals.n_lights; li++) {
+        let lr = light_ray(s, m, ray.dir, mirror, lights[li], 0u, &rng);
+        let slot = k * globals.n_lights + li;
+        let flags = select(0u, WAVE_TRACED, lr.traced != 0u);
+        wave_shadows[slot] = WaveShadow(lr.origin, lr.dist, lr.dir, flags, lr.term, 0u);
+        if (lr.traced != 0u) {
+            wave_queue[atomicAdd(&wave_counts[WAVE_SHADOWS], 1u)] = slot;
+        }
+    }
+    if (d >= globals.max_depth) {
+        return;
+    }
+    let parent = Pending(r.origin, r.dir, r.weight, d, 0.0);
+    var at = wave_child_index(k);
+    if (REFLECTION && m.ks > 0.0) {
+        if (at < wave_capacity()) {
+            let c = secondary(s, mirror, parent, m.ks);
+            wave_rays[wave_ray_index(d + 1u, at)] = WaveRay(c.origin, c.weight, c.dir, r.path);
+        }
+        at += 1u;
+    }
+    if (REFRACTION && m.t > 0.0 && at < wave_capacity()) {
+        let c = secondary(s, refracted_dir(s, m, ray.dir), parent, m.t);
+        wave_rays[wave_ray_index(d + 1u, at)] = WaveRay(c.origin, c.weight, c.dir, r.path);
+    }
+}
+
+@compute @workgroup_size(1, 1, 1)
+fn wf_advance_shadows() {
+    wave_dispatch(3u, atomicLoad(&wave_counts[WAVE_SHADOWS]));
+}
+
+// What each queued shadow ray's light gives through the scene: its transmission times the
+// light's intensity times the term, in `light_sample`'s order.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn wf_shadow(
     @builtin(global_invocation_id) gid: vec3<u32>,
     @builtin(local_invocation_index) local_index: u32,
 ) {
     stack_base = local_index;
-    let i = wave_pixel(1u, gid.x);
-    if (i == NO_PRIM) {
+    if (gid.x >= atomicLoad(&wave_counts[WAVE_SHADOWS])) {
         return;
     }
-    let lr = wave[i].shadow;
-    wave[i].shadow_light = transmission(Ray(lr.origin, lr.dir), lr.dist);
-    wave[i].phase = PHASE_LIGHT;
-    if (COUNTERS) {
-        wave[i].counts.shadow_rays += 1u;
-        wave[i].counts.shadow_nodes += fetched;
-    }
-    wave[i].cut |= u32(cut_short);
-    wave_push(2u, i);
+    let slot = wave_queue[gid.x];
+    let sh = wave_shadows[slot];
+    let light = lights[slot % globals.n_lights];
+    let intensity = light.color / f32(light_samples(light));
+    let shadow = transmission(Ray(sh.origin, sh.dir), sh.dist);
+    wave_shadows[slot].light = shadow * intensity * sh.light;
+    wave_shadows[slot].nodes = fetched;
+    wave_shadows[slot].flags = sh.flags | select(0u, WAVE_CUT, cut_short);
 }
 
+// Each path adds its rays of the round (contiguous, in path order) to its colour: for a
+// hit, the ambient term (from `wf_shade`) plus each light that came through, in light
+// order, as `direct` sums them, times the ray's weight; for a miss, the background. The invocation of a
+// path's first ray does it; the path's rays, counts, and whether its work was cut short
+// (a walk cut short, or rays of the next round past the capacity) go with it.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
-fn wf_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let i = wave_pixel(2u, gid.x);
-    if (i == NO_PRIM) {
+fn wf_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let first = gid.x;
+    let d = atomicLoad(&wave_counts[WAVE_ROUND]);
+    let n = atomicLoad(&wave_counts[WAVE_RAYS]);
+    if (first >= n) {
         return;
     }
-    if (wave[i].phase == PHASE_LIGHT) {
-        // `light_sample`'s product, in its order, added as `direct` adds it.
-        let lr = wave[i].shadow;
-        wave[i].rays += 1u;
-        wave[i].lit += wave[i].shadow_light * lr.intensity * lr.term;
-        wave_next_light(i);
+    let p = wave_rays[wave_ray_index(d, first)].path;
+    if (first > 0u && wave_rays[wave_ray_index(d, first - 1u)].path == p) {
         return;
     }
-    let ray_in = wave[i].ray_in;
-    let hit = wave[i].hit;
-    if (hit.prim == NO_PRIM) {
-        wave[i].colour += ray_in.weight * globals.background;
-        wave_next_ray(i);
+    var path = wave_paths[p];
+    for (var k = first; k < n; k++) {
+        // Field by field: lavapipe loads a whole struct read from a buffer, used or not.
+        let at = wave_ray_index(d, k);
+        if (wave_rays[at].path != p) {
+            break;
+        }
+        let weight = wave_rays[at].weight;
+        let prim = wave_hits[k].hit.prim;
+        let sends = wave_hits[k].flags;
+        path.cut |= u32((sends & WAVE_CUT) != 0u);
+        if (COUNTERS) {
+            if (d == 1u) {
+                path.counts.eye_nodes += wave_hits[k].nodes;
+            } else {
+                path.counts.secondary_nodes += wave_hits[k].nodes;
+            }
+        }
+        if (prim == NO_PRIM) {
+            path.colour += weight * globals.background;
+            continue;
+        }
+        var lit = wave_hits[k].ambient;
+        for (var li = 0u; li < globals.n_lights; li++) {
+            let slot = k * globals.n_lights + li;
+            let flags = wave_shadows[slot].flags;
+            if ((flags & WAVE_TRACED) != 0u) {
+                path.rays += 1u;
+                lit += wave_shadows[slot].light;
+                path.cut |= u32((flags & WAVE_CUT) != 0u);
+                if (COUNTERS) {
+                    path.counts.shadow_rays += 1u;
+                    path.counts.shadow_nodes += wave_shadows[slot].nodes;
+                }
+            }
+        }
+        path.colour += weight * lit;
+        let children = sends >> WAVE_SENDS_SHIFT;
+        path.rays += children;
+        if (COUNTERS) {
+            path.counts.secondary_rays += children;
+        }
+        path.cut |= u32(children > 0u && wave_child_index(k) + children > wave_capacity());
+    }
+    wave_paths[p] = path;
+}
+
+// Adds each pixel's paths to what the passes before left, in sample order, as `main`
+// adds its samples, and writes it out.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
+fn wf_finish(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= tile.width * tile.height) {
         return;
     }
-    let s = surface(Ray(ray_in.origin, ray_in.dir), hit);
-    let m = materials[s.material];
-    wave[i].point = s.point;
-    wave[i].ng = s.ng;
-    wave[i].ns = s.ns;
-    wave[i].entering = u32(s.entering);
-    wave[i].material = s.material;
-    wave[i].lit = globals.ambient * m.kd * m.color;
-    wave[i].light = 0u;
-    wave[i].light_sample = 0u;
-    wave_next_light(i);
+    let slot = wave_xy(i).z;
+    let before = output[slot];
+    var sum = before.color;
+    var rays = before.rays & ~PIXEL_CUT_SHORT;
+    var cut = (before.rays & PIXEL_CUT_SHORT) != 0u;
+    var total = counters[slot];
+    for (var j = 0u; j < tile.sample_count; j++) {
+        let path = wave_paths[i * tile.sample_count + j];
+        sum += path.colour;
+        rays += path.rays;
+        cut = cut || path.cut != 0u;
+        if (COUNTERS) {
+            total.eye_rays += path.counts.eye_rays;
+            total.eye_nodes += path.counts.eye_nodes;
+            total.shadow_rays += path.counts.shadow_rays;
+            total.shadow_nodes += path.counts.shadow_nodes;
+            total.secondary_rays += path.counts.secondary_rays;
+            total.secondary_nodes += path.counts.secondary_nodes;
+        }
+    }
+    output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut));
+    if (COUNTERS) {
+        counters[slot] = total;
+    }
 }

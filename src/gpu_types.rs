@@ -18,7 +18,9 @@ use glam::{Vec3, Vec4};
 use crate::limits::MAX_DEPTH;
 
 mod pixel;
+mod wave;
 pub use pixel::*;
+pub use wave::*;
 
 /// Primitive kinds in the top bits of `GpuPrim::tag`.
 pub const PRIM_SPHERE: u32 = 0;
@@ -395,6 +397,14 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
         ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
         ("RESUME_X_MASK", U32(RESUME_X_MASK)),
         ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
+        ("WAVE_ROUND", U32(WAVE_ROUND)),
+        ("WAVE_RAYS", U32(WAVE_RAYS)),
+        ("WAVE_NEXT", U32(WAVE_NEXT)),
+        ("WAVE_SHADOWS", U32(WAVE_SHADOWS)),
+        ("WAVE_COUNT_WORDS", U32(WAVE_COUNT_WORDS)),
+        ("WAVE_TRACED", U32(WAVE_TRACED)),
+        ("WAVE_CUT", U32(WAVE_CUT)),
+        ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),

@@ -1,96 +1,122 @@
-//! CPU twin of `shaders/wavefront.wgsl`: the wavefront kernels' steps for a tile's pixels,
-//! over the same three queues of two halves, each kernel run over its whole queue before
-//! the next (on one thread: the shader's invocations one after another). A pixel's steps
-//! are `trace`'s and `direct`'s in their order, so each pixel's sum, rays and counts are
-//! `sample_sum`'s to the bit; what this twin lets the tests check without a GPU is the
-//! bookkeeping of the queues and of a pixel's state between kernels.
+//! CPU twin of `shaders/wavefront.wgsl`: the wavefront kernels over a tile's paths, with
+//! the same records, the same rounds (a generation of rays each) and the same order of
+//! rays in them, each kernel run over its whole dispatch before the next (on one thread:
+//! the shader's invocations one after another, a workgroup's scan as the shader's
+//! workgroup computes it). A path's rays and light are those of the CPU renderer's
+//! `trace`; its sums add a generation at a time where `trace` adds depth first, so they
+//! differ from `sample_sum`'s by rounding, and are the shader's to the bit. What this
+//! twin lets the tests check without a GPU is the bookkeeping: the scan that keeps a
+//! round's rays in path order, the shadow slots and queue, the gathering, the capacity.
 
 use glam::Vec3;
 
 use super::main::{camera_ray, sample_offset};
 use super::shade::{
-    LightRay, Pending, Surface, count_nodes, light_ray, light_samples, reflect_dir, refracted_dir,
-    secondary, surface,
+    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface,
 };
 use super::traverse::{closest_hit, transmission};
 use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
 use crate::gpu_types::*;
 
-/// Where a pixel of the wave stands (the shader's `WaveState`; `GpuWaveState` on the
-/// host): its samples so far, the sample under way, the hit being shaded and its light so
-/// far, the ray `wf_extend` traces next, the light sample whose shadow ray `wf_shadow`
-/// traces, and what came back.
+/// A path of the wave: one pixel sample's colour so far, its rays, counts, and whether any
+/// of its work was cut short (the shader's `WavePath`; `GpuWavePath` on the host).
 #[derive(Clone, Copy, Default)]
-struct WaveState {
-    sum: Vec3,
-    sample: u32,
+struct WavePath {
     colour: Vec3,
-    rng: u32,
-    lit: Vec3,
     rays: u32,
-    point: Vec3,
-    sp: usize,
-    ng: Vec3,
-    light: usize,
-    ns: Vec3,
-    light_sample: u32,
-    ray_in: Pending,
-    shadow: Option<LightRay>,
-    shadow_light: Vec3,
-    hit: Option<Hit>,
-    material: u32,
-    entering: bool,
-    phase: u32,
     counts: RayCounts,
-    stack: [Pending; RAY_STACK],
+    cut: u32,
 }
 
-/// A tile's wave: a state per pixel, the queues (queue q, 0: extend, 1: shadow, 2:
-/// shade, has two halves of `pixels` entries), their counts as the shader's
-/// `wave_counts` has them, and the pixels written out.
+/// A ray of a round (`WaveRay`).
+#[derive(Clone, Copy, Default)]
+struct WaveRay {
+    origin: Vec3,
+    weight: f32,
+    dir: Vec3,
+    path: u32,
+}
+
+/// What `wf_extend` found for the ray of the same index, and the ambient term `wf_shade`
+/// found (`WaveHit`; the walk's node fetches are the CPU hit's `nodes`).
+#[derive(Clone, Copy)]
+struct WaveHit {
+    hit: Hit,
+    flags: u32,
+    children: u32,
+    ambient: Vec3,
+}
+
+/// The shadow ray of one light at one hit (`WaveShadow`).
+#[derive(Clone, Copy, Default)]
+struct WaveShadow {
+    origin: Vec3,
+    dist: f32,
+    dir: Vec3,
+    flags: u32,
+    light: Vec3,
+    nodes: u32,
+}
+
+/// A tile's wave, as the shader's group 2 and 3 hold it, and the output it adds to.
 struct Wave<'w, 'a> {
     b: &'w Bindings<'a>,
     tile: GpuTile,
-    wave: Vec<WaveState>,
-    queues: Vec<u32>,
-    counts: [u32; 9],
+    paths: Vec<WavePath>,
+    rays: Vec<WaveRay>,
+    hits: Vec<WaveHit>,
+    shadows: Vec<WaveShadow>,
+    queue: Vec<u32>,
+    scan: Vec<u32>,
+    counts: [u32; WAVE_COUNT_WORDS as usize],
+    args: [u32; 6],
     out: Vec<(Vec3, u32, RayCounts)>,
 }
 
+const W: u32 = WORKGROUP_INVOCATIONS;
+
 impl Wave<'_, '_> {
-    fn wave_half(&self, q: usize, next: bool) -> usize {
-        let size = self.queues.len() / 6;
-        let half = (self.counts[q] ^ u32::from(next)) as usize;
-        (2 * q + half) * size
+    fn wave_capacity(&self) -> u32 {
+        self.rays.len() as u32 / 2
     }
 
-    /// Appends pixel `i` to queue q, for the kernel of the next round.
-    fn wave_push(&mut self, q: usize, i: u32) {
-        let k = self.counts[6 + q] as usize;
-        self.counts[6 + q] += 1;
-        let at = self.wave_half(q, true) + k;
-        self.queues[at] = i;
+    fn wave_ray_index(&self, d: u32, k: u32) -> usize {
+        ((d % 2) * self.wave_capacity() + k) as usize
     }
 
-    /// The pixel of entry `k` of queue q, or none past its length.
-    fn wave_pixel(&self, q: usize, k: u32) -> u32 {
-        if k >= self.counts[3 + q] {
-            return NO_PRIM;
+    fn wave_material(&self, hit: &Hit) -> &GpuMaterial {
+        let b = self.b;
+        let material = if hit.prim & PLANE_FLAG != 0 {
+            b.planes[(hit.prim & !PLANE_FLAG) as usize].material
+        } else {
+            b.prims[hit.prim as usize].material()
+        };
+        &b.materials[material as usize]
+    }
+
+    fn wave_children(&self, d: u32, hit: &Hit) -> u32 {
+        if hit.prim == NO_PRIM || d >= self.b.globals.max_depth {
+            return 0;
         }
-        self.queues[self.wave_half(q, false) + k as usize]
+        let m = self.wave_material(hit);
+        u32::from(m.ks > 0.0) + u32::from(m.t > 0.0)
     }
 
-    /// The queue filled last becomes the input (the shader also writes the size of the
-    /// kernel's indirect dispatch; here the host loops to the queue's length).
-    fn wave_advance(&mut self, q: usize) {
-        self.counts[q] ^= 1;
-        self.counts[3 + q] = std::mem::take(&mut self.counts[6 + q]);
+    fn wave_child_index(&self, k: u32) -> u32 {
+        self.scan[(k / W) as usize] + self.hits[k as usize].children
     }
 
-    /// Pixel i of the tile, as (x, y) in the image, and its slot in the output.
+    /// Pixel i of the tile: strips of `WORKGROUP_SIDE` rows, each column by column.
     fn wave_xy(&self, i: u32) -> (u32, u32, usize) {
         let t = &self.tile;
-        let (x, y) = (i % t.width, i / t.width);
+        let strip = WORKGROUP_SIDE * t.width;
+        let full = t.height / WORKGROUP_SIDE;
+        let (rows, s, j) = if i / strip >= full {
+            (t.height - full * WORKGROUP_SIDE, full, i - full * strip)
+        } else {
+            (WORKGROUP_SIDE, i / strip, i % strip)
+        };
+        let (x, y) = (j / rows, s * WORKGROUP_SIDE + j % rows);
         (
             t.x + x,
             t.y + y,
@@ -98,227 +124,344 @@ impl Wave<'_, '_> {
         )
     }
 
-    /// Starts pixel i's sample `sample`: its eye ray is the ray to extend.
-    fn wave_start_sample(&mut self, i: u32) {
+    /// The dispatch size for `n` invocations, at word `at` of the args; the twin's host
+    /// loop runs that many workgroups, as the GPU does.
+    fn wave_dispatch(&mut self, at: usize, n: u32) {
+        self.args[at] = n.div_ceil(W);
+        self.args[at + 1] = 1;
+        self.args[at + 2] = 1;
+    }
+
+    fn wf_generate(&mut self, p: u32) {
+        let t = self.tile;
+        let paths = t.width * t.height * t.sample_count;
+        if p == 0 {
+            self.counts[WAVE_NEXT as usize] = paths;
+        }
+        if p >= paths {
+            return;
+        }
         let g = self.b.globals;
-        let (px, py, _) = self.wave_xy(i);
-        let w = &mut self.wave[i as usize];
-        let s = w.sample;
-        let mut rng = rng_seed(py * g.width + px, s, g.seed);
+        let (x, y, _) = self.wave_xy(p / t.sample_count);
+        let s = t.sample_start + p % t.sample_count;
+        let mut rng = rng_seed(y * g.width + x, s, g.seed);
         let off = sample_offset(s, g.spp, &mut rng);
-        let ray = camera_ray(g, px as f32 + off.x, py as f32 + off.y, &mut rng);
-        w.rng = rng;
-        w.rays += 1;
-        w.counts.eye += 1;
-        w.colour = Vec3::ZERO;
-        w.sp = 0;
-        w.ray_in = Pending {
+        let ray = camera_ray(g, x as f32 + off.x, y as f32 + off.y, &mut rng);
+        let eye = RayCounts {
+            eye: 1,
+            ..RayCounts::default()
+        };
+        self.paths[p as usize] = WavePath {
+            colour: Vec3::ZERO,
+            rays: 1,
+            counts: eye,
+            cut: 0,
+        };
+        let at = self.wave_ray_index(1, p);
+        self.rays[at] = WaveRay {
             origin: ray.origin,
-            dir: ray.dir,
             weight: 1.0,
-            depth: 1,
-            tmin: g.hither,
+            dir: ray.dir,
+            path: p,
         };
-        self.wave_push(0, i);
     }
 
-    /// The next pending ray of pixel i's sample, or its next sample, or its output.
-    fn wave_next_ray(&mut self, i: u32) {
-        let w = &mut self.wave[i as usize];
-        if w.sp > 0 {
-            w.sp -= 1;
-            w.ray_in = w.stack[w.sp];
-            self.wave_push(0, i);
-            return;
-        }
-        w.sum += w.colour;
-        w.sample += 1;
-        if w.sample < self.tile.sample_start + self.tile.sample_count {
-            self.wave_start_sample(i);
-            return;
-        }
-        let (sum, rays, counts) = (w.sum, w.rays, w.counts);
-        let slot = self.wave_xy(i).2;
-        self.out[slot] = (sum, rays, counts);
+    fn wf_advance(&mut self) {
+        self.counts[WAVE_ROUND as usize] += 1;
+        let next = std::mem::take(&mut self.counts[WAVE_NEXT as usize]);
+        let n = next.min(self.wave_capacity());
+        self.counts[WAVE_RAYS as usize] = n;
+        self.counts[WAVE_SHADOWS as usize] = 0;
+        self.wave_dispatch(0, n);
     }
 
-    /// Takes pixel i's next light sample that sends a shadow ray, to `wf_shadow`; once
-    /// every light is sampled, adds the hit's light to the sample and pushes its reflected
-    /// and refracted rays, as `trace` does.
-    fn wave_next_light(&mut self, i: u32) {
-        let b = self.b;
-        let g = b.globals;
-        let w = &mut self.wave[i as usize];
-        let s = Surface {
-            point: w.point,
-            ng: w.ng,
-            ns: w.ns,
-            entering: w.entering,
-            material: w.material,
-        };
-        let ray_in = w.ray_in;
-        let m = &b.materials[s.material as usize];
-        let r = reflect_dir(ray_in.dir, s.ns);
-        let mut rng = w.rng;
-        while w.light < b.lights.len() {
-            let light = &b.lights[w.light];
-            while w.light_sample < light_samples(light) {
-                let k = w.light_sample;
-                w.light_sample += 1;
-                if let Some(lr) = light_ray(b, &s, m, ray_in.dir, r, light, k, &mut rng) {
-                    w.rng = rng;
-                    w.shadow = Some(lr);
-                    self.wave_push(1, i);
-                    return;
-                }
+    /// One workgroup of `wf_extend`: each invocation's closest hit, then the workgroup's
+    /// inclusive scan of the rays of the next round they send.
+    fn wf_extend(&mut self, group: u32) {
+        let d = self.counts[WAVE_ROUND as usize];
+        let n = self.counts[WAVE_RAYS as usize];
+        let mut local = [0u32; W as usize];
+        for (i, sum) in local.iter_mut().enumerate() {
+            let k = group * W + i as u32;
+            if k >= n {
+                continue;
             }
-            w.light += 1;
-            w.light_sample = 0;
+            let r = self.rays[self.wave_ray_index(d, k)];
+            let tmin = if d == 1 { self.b.globals.hither } else { 0.0 };
+            let ray = Ray {
+                origin: r.origin,
+                dir: r.dir,
+            };
+            let hit = closest_hit(self.b, &ray, tmin, NO_HIT);
+            *sum = self.wave_children(d, &hit);
+            self.hits[k as usize] = WaveHit {
+                hit,
+                flags: *sum << WAVE_SENDS_SHIFT,
+                children: 0,
+                ambient: Vec3::ZERO,
+            };
         }
-        w.rng = rng;
-        w.colour += ray_in.weight * w.lit;
-        if ray_in.depth < g.max_depth {
-            if m.ks > 0.0 {
-                w.rays += 1;
-                w.counts.reflected += 1;
-                w.stack[w.sp] =
-                    secondary(&s, reflect_dir(ray_in.dir, s.ns), &ray_in, m.ks, g.epsilon);
-                w.sp += 1;
+        let mut total = 0;
+        for (i, &children) in local.iter().enumerate() {
+            let k = group * W + i as u32;
+            if k < n {
+                self.hits[k as usize].children = total;
             }
-            if m.t > 0.0 {
-                w.rays += 1;
-                w.counts.refracted += 1;
-                let dir = refracted_dir(&s, m, ray_in.dir);
-                w.stack[w.sp] = secondary(&s, dir, &ray_in, m.t, g.epsilon);
-                w.sp += 1;
-            }
+            total += children;
         }
-        self.wave_next_ray(i);
+        self.scan[group as usize] = total;
     }
 
-    /// Starts pixel i: its first sample of the tile.
-    fn wf_generate(&mut self, i: u32) {
-        self.wave[i as usize].sample = self.tile.sample_start;
-        self.wave_start_sample(i);
-    }
-
-    fn wf_advance_rays(&mut self) {
-        self.wave_advance(0);
-        self.wave_advance(1);
-    }
-
-    fn wf_advance_shade(&mut self) {
-        self.wave_advance(2);
-    }
-
-    /// The closest hit of the ray of entry `k` of the extend queue's pixel.
-    fn wf_extend(&mut self, k: u32) {
-        let i = self.wave_pixel(0, k);
-        if i == NO_PRIM {
-            return;
+    /// `wf_scan`'s one workgroup: where each workgroup's rays of the next round begin.
+    fn wf_scan(&mut self) {
+        let n = self.counts[WAVE_RAYS as usize];
+        let groups = n.div_ceil(W) as usize;
+        let mut at = 0;
+        for g in 0..groups {
+            let t = self.scan[g];
+            self.scan[g] = at;
+            at += t;
         }
-        let w = &mut self.wave[i as usize];
-        let ray_in = w.ray_in;
-        let ray = Ray {
-            origin: ray_in.origin,
-            dir: ray_in.dir,
-        };
-        let hit = closest_hit(self.b, &ray, ray_in.tmin, NO_HIT);
-        count_nodes(&mut w.counts, ray_in.depth, hit.nodes);
-        w.hit = Some(hit);
-        w.phase = PHASE_RAY;
-        self.wave_push(2, i);
+        self.counts[WAVE_NEXT as usize] = at;
     }
 
-    /// The transmission of the shadow ray of entry `k` of the shadow queue's pixel.
-    fn wf_shadow(&mut self, k: u32) {
-        let i = self.wave_pixel(1, k);
-        if i == NO_PRIM {
-            return;
-        }
-        let w = &mut self.wave[i as usize];
-        let lr = w
-            .shadow
-            .expect("a pixel in the shadow queue has a shadow ray");
-        let mut nodes = 0;
-        w.shadow_light = transmission(self.b, &lr.ray, lr.dist, &mut nodes);
-        w.phase = PHASE_LIGHT;
-        w.counts.shadow += 1;
-        w.counts.shadow_nodes += u64::from(nodes);
-        self.wave_push(2, i);
-    }
-
-    /// Shades the hit, or adds the light sample, of entry `k` of the shade queue's pixel.
     fn wf_shade(&mut self, k: u32) {
-        let i = self.wave_pixel(2, k);
-        if i == NO_PRIM {
+        let d = self.counts[WAVE_ROUND as usize];
+        if k >= self.counts[WAVE_RAYS as usize] {
+            return;
+        }
+        let hit = self.hits[k as usize].hit;
+        if hit.prim == NO_PRIM {
             return;
         }
         let b = self.b;
         let g = b.globals;
-        let w = &mut self.wave[i as usize];
-        if w.phase == PHASE_LIGHT {
-            // `light_sample`'s product, in its order, added as `direct` adds it.
-            let lr = w.shadow.expect("a light sample came back");
-            w.rays += 1;
-            w.lit += w.shadow_light * lr.intensity * lr.term;
-            self.wave_next_light(i);
-            return;
-        }
-        let ray_in = w.ray_in;
-        let hit = w.hit.expect("an extended ray has a hit");
-        if hit.prim == NO_PRIM {
-            w.colour += ray_in.weight * g.background;
-            self.wave_next_ray(i);
-            return;
-        }
+        let r = self.rays[self.wave_ray_index(d, k)];
         let ray = Ray {
-            origin: ray_in.origin,
-            dir: ray_in.dir,
+            origin: r.origin,
+            dir: r.dir,
         };
         let s = surface(b, &ray, &hit);
         let m = &b.materials[s.material as usize];
-        w.point = s.point;
-        w.ng = s.ng;
-        w.ns = s.ns;
-        w.entering = s.entering;
-        w.material = s.material;
-        w.lit = g.ambient * m.kd * m.color;
-        w.light = 0;
-        w.light_sample = 0;
-        self.wave_next_light(i);
+        self.hits[k as usize].ambient = g.ambient * m.kd * m.color;
+        let mirror = reflect_dir(ray.dir, s.ns);
+        // Area lights take the one kernel: no light here draws from the random stream.
+        let mut rng = 0;
+        let n_lights = b.lights.len() as u32;
+        for (li, light) in b.lights.iter().enumerate() {
+            let slot = k * n_lights + li as u32;
+            let lr = light_ray(b, &s, m, ray.dir, mirror, light, 0, &mut rng);
+            self.shadows[slot as usize] = match lr {
+                Some(lr) => WaveShadow {
+                    origin: lr.ray.origin,
+                    dist: lr.dist,
+                    dir: lr.ray.dir,
+                    flags: WAVE_TRACED,
+                    light: lr.term,
+                    nodes: 0,
+                },
+                None => WaveShadow::default(),
+            };
+            if lr.is_some() {
+                let q = self.counts[WAVE_SHADOWS as usize];
+                self.counts[WAVE_SHADOWS as usize] += 1;
+                self.queue[q as usize] = slot;
+            }
+        }
+        if d >= g.max_depth {
+            return;
+        }
+        let parent = Pending {
+            origin: r.origin,
+            dir: r.dir,
+            weight: r.weight,
+            depth: d,
+            tmin: 0.0,
+        };
+        let mut at = self.wave_child_index(k);
+        let push = |w: &mut Self, at: u32, c: Pending| {
+            let i = w.wave_ray_index(d + 1, at);
+            w.rays[i] = WaveRay {
+                origin: c.origin,
+                weight: c.weight,
+                dir: c.dir,
+                path: r.path,
+            };
+        };
+        if m.ks > 0.0 {
+            if at < self.wave_capacity() {
+                push(self, at, secondary(&s, mirror, &parent, m.ks, g.epsilon));
+            }
+            at += 1;
+        }
+        if m.t > 0.0 && at < self.wave_capacity() {
+            let dir = refracted_dir(&s, m, ray.dir);
+            push(self, at, secondary(&s, dir, &parent, m.t, g.epsilon));
+        }
+    }
+
+    fn wf_advance_shadows(&mut self) {
+        self.wave_dispatch(3, self.counts[WAVE_SHADOWS as usize]);
+    }
+
+    fn wf_shadow(&mut self, q: u32) {
+        if q >= self.counts[WAVE_SHADOWS as usize] {
+            return;
+        }
+        let slot = self.queue[q as usize] as usize;
+        let sh = self.shadows[slot];
+        let light = &self.b.lights[slot % self.b.lights.len()];
+        let intensity = light.color / light_samples(light) as f32;
+        let ray = Ray {
+            origin: sh.origin,
+            dir: sh.dir,
+        };
+        let mut nodes = 0;
+        let shadow = transmission(self.b, &ray, sh.dist, &mut nodes);
+        self.shadows[slot].light = shadow * intensity * sh.light;
+        self.shadows[slot].nodes = nodes;
+    }
+
+    fn wf_gather(&mut self, first: u32) {
+        let d = self.counts[WAVE_ROUND as usize];
+        let n = self.counts[WAVE_RAYS as usize];
+        if first >= n {
+            return;
+        }
+        let p = self.rays[self.wave_ray_index(d, first)].path;
+        if first > 0 && self.rays[self.wave_ray_index(d, first - 1)].path == p {
+            return;
+        }
+        let g = self.b.globals;
+        let n_lights = self.b.lights.len() as u32;
+        let mut path = self.paths[p as usize];
+        for k in first..n {
+            let r = self.rays[self.wave_ray_index(d, k)];
+            if r.path != p {
+                break;
+            }
+            let h = self.hits[k as usize];
+            path.cut |= u32::from(h.flags & WAVE_CUT != 0);
+            if d == 1 {
+                path.counts.eye_nodes += u64::from(h.hit.nodes);
+            } else {
+                path.counts.secondary_nodes += u64::from(h.hit.nodes);
+            }
+            if h.hit.prim == NO_PRIM {
+                path.colour += r.weight * g.background;
+                continue;
+            }
+            let mut lit = h.ambient;
+            for li in 0..n_lights {
+                let sh = &self.shadows[(k * n_lights + li) as usize];
+                if sh.flags & WAVE_TRACED != 0 {
+                    path.rays += 1;
+                    lit += sh.light;
+                    path.cut |= u32::from(sh.flags & WAVE_CUT != 0);
+                    path.counts.shadow += 1;
+                    path.counts.shadow_nodes += u64::from(sh.nodes);
+                }
+            }
+            path.colour += r.weight * lit;
+            let children = h.flags >> WAVE_SENDS_SHIFT;
+            path.rays += children;
+            if children > 0 {
+                // The CPU counts the two kinds apart; the GPU counts them together.
+                let m = self.wave_material(&h.hit);
+                path.counts.reflected += u64::from(m.ks > 0.0);
+                path.counts.refracted += u64::from(m.t > 0.0);
+            }
+            let past = self.wave_child_index(k) + children > self.wave_capacity();
+            path.cut |= u32::from(children > 0 && past);
+        }
+        self.paths[p as usize] = path;
+    }
+
+    fn wf_finish(&mut self, i: u32) {
+        let t = self.tile;
+        if i >= t.width * t.height {
+            return;
+        }
+        let slot = self.wave_xy(i).2;
+        let (mut sum, mut rays, mut total) = self.out[slot];
+        let mut cut = rays & PIXEL_CUT_SHORT != 0;
+        rays &= !PIXEL_CUT_SHORT;
+        for j in 0..t.sample_count {
+            let path = &self.paths[(i * t.sample_count + j) as usize];
+            sum += path.colour;
+            rays += path.rays;
+            cut = cut || path.cut != 0;
+            total.add(&path.counts);
+        }
+        let flag = if cut { PIXEL_CUT_SHORT } else { 0 };
+        self.out[slot] = (sum, rays | flag, total);
     }
 }
 
-/// Traces `tile`'s pixels (its `out_base` and `out_stride` place them in the returned
-/// array) through the kernels' steps, round after round as the host dispatches them
-/// (`gpu::waves`), until every queue is empty: each pixel's sum of its samples, rays and
-/// counts.
-pub fn wave_sums(b: &Bindings, tile: &GpuTile, out_len: usize) -> Vec<(Vec3, u32, RayCounts)> {
-    let pixels = (tile.width * tile.height) as usize;
+/// Traces `tile`'s paths (its pixels times its samples; `out_base` and `out_stride`
+/// place its pixels in the returned array, which starts at zero) through the kernels,
+/// dispatched as the host dispatches them (`gpu::waves`), each kernel over the
+/// invocations its dispatch size gives, with room for `room` rays a round (the GPU's wave
+/// has `WAVE_RAYS_PER_PATH` for each path it holds): each pixel's sum of its samples, its
+/// rays (`PIXEL_CUT_SHORT` set where a path's rays did not fit) and counts.
+pub fn wave_sums(
+    b: &Bindings,
+    tile: &GpuTile,
+    room: u32,
+    out_len: usize,
+) -> Vec<(Vec3, u32, RayCounts)> {
+    let paths = tile.width * tile.height * tile.sample_count;
+    let rays = room.max(paths) as usize;
+    let slots = rays * b.lights.len().max(1);
+    let hit = WaveHit {
+        hit: Hit {
+            t: NO_HIT,
+            prim: NO_PRIM,
+            u: 0.0,
+            v: 0.0,
+            cost: 0,
+            nodes: 0,
+        },
+        flags: 0,
+        children: 0,
+        ambient: Vec3::ZERO,
+    };
     let mut w = Wave {
         b,
         tile: *tile,
-        wave: vec![WaveState::default(); pixels],
-        queues: vec![0; 6 * pixels.max(1)],
-        counts: [0; 9],
+        paths: vec![WavePath::default(); paths as usize],
+        rays: vec![WaveRay::default(); 2 * rays],
+        hits: vec![hit; rays],
+        shadows: vec![WaveShadow::default(); slots],
+        queue: vec![0; slots],
+        scan: vec![0; rays.div_ceil(W as usize)],
+        counts: [0; WAVE_COUNT_WORDS as usize],
+        args: [0; 6],
         out: vec![(Vec3::ZERO, 0, RayCounts::default()); out_len],
     };
-    for i in 0..pixels as u32 {
-        w.wf_generate(i);
+    for p in 0..paths.div_ceil(W) * W {
+        w.wf_generate(p);
     }
-    while w.counts[6..].iter().any(|&n| n > 0) {
-        w.wf_advance_rays();
-        for k in 0..w.counts[3] {
-            w.wf_extend(k);
+    for _ in 0..b.globals.max_depth.max(1) {
+        w.wf_advance();
+        let invocations = w.args[0] * W;
+        for group in 0..w.args[0] {
+            w.wf_extend(group);
         }
-        for k in 0..w.counts[4] {
-            w.wf_shadow(k);
-        }
-        w.wf_advance_shade();
-        for k in 0..w.counts[5] {
+        w.wf_scan();
+        for k in 0..invocations {
             w.wf_shade(k);
         }
+        w.wf_advance_shadows();
+        for q in 0..w.args[3] * W {
+            w.wf_shadow(q);
+        }
+        for k in 0..invocations {
+            w.wf_gather(k);
+        }
+    }
+    for i in 0..(tile.width * tile.height).div_ceil(W) * W {
+        w.wf_finish(i);
     }
     w.out
 }

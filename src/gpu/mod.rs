@@ -15,7 +15,7 @@
 //! - `upload` puts a scene's arrays on the device;
 //! - `pipeline` owns the bind group layouts, the shader modules, the compiling of entry
 //!   points and the on-disk pipeline cache;
-//! - `wavefront` owns the wavefront kernels' pipelines and a scene's wave of pixels;
+//! - `wavefront` owns the wavefront kernels' pipelines and a scene's wave of paths;
 //! - `scene` holds a scene's GPU state (`GpuScene`) and what a frame binds besides it;
 //! - `resume` finishes the pixels whose work did not fit one invocation;
 //! - `waves` runs a band's tiles through the wavefront kernels, wave by wave;

@@ -7,7 +7,8 @@ use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::gpu_types::{
-    AOV_COLOR, GpuGlobals, GpuWaveState, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WORKGROUP_SIDE,
+    AOV_COLOR, GpuGlobals, LIGHT_AREA, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WAVE_RAYS_PER_PATH,
+    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
 };
 use crate::pack::SceneBuffers;
 
@@ -76,25 +77,32 @@ pub(super) fn kernels_from_env() -> Result<Option<bool>> {
 
 /// Whether a frame of `scene` traces through the wavefront kernels: as `forced` says
 /// when it says (`GPURT_KERNELS`, `GpuRenderer::with_wavefront`), else by what was
-/// measured. Colour frames only: an AOV traces eye rays alone, which one kernel does
-/// without idle lanes.
+/// measured. Colour frames without area lights only: an AOV traces eye rays alone, which
+/// one kernel does without idle lanes, and an area light's samples draw from a path's
+/// random stream in the depth-first order of its ray tree, which the wavefront's rounds
+/// (a generation of rays each) cannot follow.
 ///
-/// Measured (docs/gpu.md, "The wavefront kernels"): the one kernel wins everywhere so
-/// far, 3.5 to 7 times on lavapipe and 26 to 73 times on the H100, so every adapter keeps
-/// it.
+/// Measured (docs/gpu.md, "The wavefront kernels"): on lavapipe the one kernel is 1.3 to
+/// 1.7 times faster than the kernels over queues of rays; on GPUs these are not measured
+/// yet (the kernels over queues of pixels they replaced were 26 to 73 times slower on the
+/// H100), so every adapter keeps the one kernel.
 pub(super) fn wavefront_for(
     forced: Option<bool>,
     _software: bool,
-    _scene: &SceneBuffers,
+    scene: &SceneBuffers,
     globals: &GpuGlobals,
 ) -> bool {
-    globals.aov == AOV_COLOR && forced.unwrap_or(false)
+    let area_lights = scene.lights.iter().any(|l| l.kind == LIGHT_AREA);
+    globals.aov == AOV_COLOR && !area_lights && forced.unwrap_or(false)
 }
 
-/// Pixels a side of a wave's tile at most: a wave holds a `WaveState` per pixel (up to a
-/// kilobyte with the longest ray stack), 16 MiB at this side, less where the device's
-/// storage bindings are smaller (`cut_for`).
-const WAVE_TILE_SIDE: u32 = 128;
+/// Pixels a side of a wave's tile at most, before `cut_for` fits its records to
+/// `WAVE_BYTES` and the device's limits.
+const WAVE_TILE_SIDE: u32 = 1024;
+
+/// Device memory a wave's records may take (`gpu_types::wave_buffer_bytes`): about 500
+/// bytes a path for a scene of three lights, so a million paths.
+const WAVE_BYTES: u64 = 512 << 20;
 
 /// How much work a dispatch and a submission take on this adapter. Software adapters
 /// get small bands so that Ctrl-C and the progress bar respond within a second, one
@@ -198,15 +206,23 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
             .min(limits.max_buffer_size),
     );
     if globals.wavefront != 0 {
-        // A wave's states are one storage binding: halve the side (bands stay whole rows
-        // of tiles, sides being powers of two) until they fit the device's limit, down
-        // to one workgroup's square.
+        // Halve the side (bands stay whole rows of tiles, sides being powers of two),
+        // down to one workgroup's square, until each of the wave's records fits a
+        // storage binding, all of them `WAVE_BYTES`, and a dispatch over a round's rays
+        // the device's workgroups.
         let limit = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        let state = size_of::<GpuWaveState>() as u64;
+        let fits = |side: u32| {
+            let paths = u64::from(side * side) * u64::from(cut.pass_samples);
+            let bytes = wave_buffer_bytes(paths, u64::from(globals.n_lights));
+            let groups = (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
+            bytes.iter().all(|&b| b <= limit)
+                && bytes.iter().sum::<u64>() <= WAVE_BYTES
+                && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
+        };
         let mut side = cut.tile_rows.min(shape.wave_side);
-        while side > WORKGROUP_SIDE && u64::from(side * side) * state > limit {
+        while side > WORKGROUP_SIDE && !fits(side) {
             side /= 2;
         }
         (cut.tile_width, cut.tile_rows) = (side, side);

@@ -26,7 +26,7 @@ use super::shaders::Fetch;
 use super::specialization::Specialization;
 use super::trace::encode_band;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
-use super::wavefront::{Wave, WavePipelines};
+use super::wavefront::{Wave, WavePipelines, wave_paths};
 use crate::counters::gpu_node_bytes;
 use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
@@ -381,7 +381,7 @@ impl GpuRenderer {
             uploaded.cut = cut;
             *uploaded.finer.lock().expect("cut lock") = None;
         }
-        let wave_fits = |w: &Wave| w.capacity >= cut.tile_width * cut.tile_rows;
+        let wave_fits = |w: &Wave| w.capacity >= wave_paths(&cut) && w.lights == globals.n_lights;
         if (globals.wavefront != 0) != uploaded.wave.is_some()
             || uploaded
                 .wave
@@ -390,11 +390,14 @@ impl GpuRenderer {
         {
             uploaded.wave = self.wave_for(gpu, spec, &cut, globals)?;
         }
+        if let Some(w) = uploaded.wave.as_mut() {
+            w.depth = globals.max_depth;
+        }
         Ok(())
     }
 
     /// The wave a frame of `globals` (cut as `cut`) runs the wavefront kernels in, when
-    /// it takes them: a pixel's state for each pixel of a tile.
+    /// it takes them: a path for each pixel sample of a tile's pass.
     fn wave_for(
         &self,
         gpu: &Gpu<'_>,
@@ -403,7 +406,7 @@ impl GpuRenderer {
         globals: &GpuGlobals,
     ) -> Result<Option<Wave>> {
         (globals.wavefront != 0)
-            .then(|| Wave::new(gpu, &self.wave, spec, cut.tile_width * cut.tile_rows))
+            .then(|| Wave::new(gpu, &self.wave, spec, wave_paths(cut), globals))
             .transpose()
     }
 

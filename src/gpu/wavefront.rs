@@ -1,52 +1,67 @@
 //! The wavefront path's pipelines and buffers: the kernels of `shaders/wavefront.wgsl`
 //! (compiled once per `Specialization`, like `main`), and for an uploaded scene a wave:
-//! one `WaveState` per pixel of a tile, the kernels' queues, their lengths and the sizes
-//! of their indirect dispatches. The dispatch loop that runs a wave is `waves`.
+//! a path per pixel sample of a tile's pass, the rays of a round (two halves), their hits
+//! and shadow slots, the shadow queue, the workgroups' first rays, the counts and the
+//! sizes of the indirect dispatches. The dispatches that run a wave are `waves`'.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use super::cut::Cut;
 use super::device::{Device, Slot};
 use super::pipeline::{Modules, compile};
 use super::specialization::Specialization;
 use crate::error::Result;
-use crate::gpu_types::wave_state_bytes;
+use crate::gpu_types::{GpuGlobals, WAVE_COUNT_WORDS, wave_buffer_bytes};
+
+/// Paths a wave holds for frames cut as `cut`: a tile's pixels times a pass's samples.
+pub(super) fn wave_paths(cut: &Cut) -> u32 {
+    cut.tile_width * cut.tile_rows * cut.pass_samples
+}
 
 /// The kernels, in the order `Kernels` holds their pipelines.
-const ENTRIES: [&str; 6] = [
+const ENTRIES: [&str; 9] = [
     "wf_generate",
-    "wf_advance_rays",
+    "wf_advance",
     "wf_extend",
-    "wf_shadow",
-    "wf_advance_shade",
+    "wf_scan",
     "wf_shade",
+    "wf_advance_shadows",
+    "wf_shadow",
+    "wf_gather",
+    "wf_finish",
 ];
 
 /// The pipelines of the kernels, in `ENTRIES` order. Read by `waves`, which runs natively
-/// only (it waits on the device between rounds, which the browser cannot).
+/// only.
 #[cfg_attr(not(feature = "native"), allow(dead_code))]
 pub(super) struct Kernels {
     pub(super) generate: wgpu::ComputePipeline,
-    pub(super) advance_rays: wgpu::ComputePipeline,
+    pub(super) advance: wgpu::ComputePipeline,
     pub(super) extend: wgpu::ComputePipeline,
-    pub(super) shadow: wgpu::ComputePipeline,
-    pub(super) advance_shade: wgpu::ComputePipeline,
+    pub(super) scan: wgpu::ComputePipeline,
     pub(super) shade: wgpu::ComputePipeline,
+    pub(super) advance_shadows: wgpu::ComputePipeline,
+    pub(super) shadow: wgpu::ComputePipeline,
+    pub(super) gather: wgpu::ComputePipeline,
+    pub(super) finish: wgpu::ComputePipeline,
 }
 
-/// Words of `wave_counts` (the halves of the three queues, their lengths as inputs, their
-/// lengths as they fill) and of `wave_args` (three indirect dispatch sizes).
-pub(super) const COUNT_WORDS: u64 = 9;
-const ARG_WORDS: u64 = 9;
+/// Words of `wave_args`: the dispatch over a round's rays, then over its shadow rays.
+const ARG_WORDS: u64 = 6;
+/// Offset in `wave_args` of the dispatch over a round's shadow rays (read by `waves`,
+/// native only).
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
+pub(super) const SHADOW_ARGS: u64 = 12;
 
-/// Group 2 of the kernels (the wave), their pipeline layout (groups 0 and 2), and their
-/// pipelines compiled so far, one set per `Specialization`, shared by every scene a
-/// `GpuRenderer` uploads.
+/// Group 2 of the kernels (the wave), group 3 (the dispatch sizes), their pipeline
+/// layouts, and their pipelines compiled so far, one set per `Specialization`, shared by
+/// every scene a `GpuRenderer` uploads.
 pub(super) struct WavePipelines {
     layout: wgpu::BindGroupLayout,
     args_layout: wgpu::BindGroupLayout,
-    /// Groups 0 and 2, for the kernels that trace and shade; groups 2 and 3 for the two
-    /// that advance the queues.
+    /// Groups 0 and 2, for the kernels that trace, shade and sum; groups 2 and 3 for the
+    /// two that size the dispatches.
     pipeline_layout: wgpu::PipelineLayout,
     advance_layout: wgpu::PipelineLayout,
     modules: Arc<Modules>,
@@ -60,7 +75,7 @@ impl WavePipelines {
         modules: Arc<Modules>,
     ) -> Self {
         use Slot::ReadWrite;
-        let layout = gpu.bind_group_layout("gpurt wave", &[ReadWrite; 3]);
+        let layout = gpu.bind_group_layout("gpurt wave", &[ReadWrite; 7]);
         let args_layout = gpu.bind_group_layout("gpurt wave dispatches", &[ReadWrite]);
         let pipeline_layout =
             gpu.pipeline_layout("gpurt wave", &[Some(main_layout), None, Some(&layout)]);
@@ -92,76 +107,100 @@ impl WavePipelines {
             };
             made.push(compile(gpu, layout, &self.modules, entry, spec, None)?);
         }
-        let [generate, advance_rays, extend, shadow, advance_shade, shade] =
-            <[_; 6]>::try_from(made).unwrap_or_else(|_| unreachable!("one pipeline an entry"));
+        let [
+            generate,
+            advance,
+            extend,
+            scan,
+            shade,
+            advance_shadows,
+            shadow,
+            gather,
+            finish,
+        ] = <[_; 9]>::try_from(made).unwrap_or_else(|_| unreachable!("one pipeline an entry"));
         let kernels = Arc::new(Kernels {
             generate,
-            advance_rays,
+            advance,
             extend,
-            shadow,
-            advance_shade,
+            scan,
             shade,
+            advance_shadows,
+            shadow,
+            gather,
+            finish,
         });
         compiled.insert(spec, kernels.clone());
         Ok(kernels)
     }
 }
 
-/// A scene's wave on the device: room for `capacity` pixels, the kernels it runs, and
-/// the buffer its queue lengths are read back through (read by `waves`, native only).
+/// A scene's wave on the device: room for `capacity` paths (pixel samples) of a scene
+/// with `lights` lights, the kernels it runs, and the rounds a wave takes, one per depth
+/// (read by `waves`, native only).
 #[cfg_attr(not(feature = "native"), allow(dead_code))]
 pub(super) struct Wave {
     pub(super) kernels: Arc<Kernels>,
     pub(super) group: wgpu::BindGroup,
     pub(super) args_group: wgpu::BindGroup,
     pub(super) counts: wgpu::Buffer,
-    pub(super) counts_back: wgpu::Buffer,
     pub(super) args: wgpu::Buffer,
     pub(super) capacity: u32,
+    pub(super) lights: u32,
+    pub(super) depth: u32,
     /// Device memory the wave holds, in bytes.
     pub(super) bytes: u64,
 }
 
 impl Wave {
-    /// A wave of `capacity` pixels for the kernels of `spec` (whose ray stack holds
-    /// `spec.trace_stack` rays).
+    /// A wave of `capacity` paths for the kernels of `spec`, for frames of `globals`.
     pub(super) fn new(
         gpu: &Device,
         pipelines: &WavePipelines,
         spec: Specialization,
         capacity: u32,
+        globals: &GpuGlobals,
     ) -> Result<Wave> {
+        let lights = globals.n_lights;
         let kernels = pipelines.get(gpu, spec)?;
         gpu.scoped("making the wave", || {
-            let pixels = u64::from(capacity.max(1));
-            let state_bytes = pixels * wave_state_bytes(spec.trace_stack);
-            let state = gpu.output("wave state", state_bytes);
-            // Three queues of two halves.
-            let queues = gpu.output("wave queues", 6 * 4 * pixels);
-            let counts = gpu.output("wave counts", 4 * COUNT_WORDS);
-            let counts_back = gpu.readback("wave counts readback", 4 * COUNT_WORDS);
+            let sizes = wave_buffer_bytes(u64::from(capacity.max(1)), u64::from(lights));
+            let labels = [
+                "wave paths",
+                "wave rays",
+                "wave hits",
+                "wave shadows",
+                "wave shadow queue",
+                "wave scan",
+            ];
+            let mut buffers: Vec<_> = labels
+                .iter()
+                .zip(sizes)
+                .map(|(label, size)| gpu.output(label, size))
+                .collect();
+            let counts_bytes = 4 * u64::from(WAVE_COUNT_WORDS);
+            buffers.push(gpu.output("wave counts", counts_bytes));
             let args = gpu.indirect_args("wave dispatches", 4 * ARG_WORDS);
             let group = gpu.bind_group(
                 "gpurt wave",
                 &pipelines.layout,
-                [&state, &queues, &counts]
-                    .map(|b| b.as_entire_binding())
-                    .into(),
+                buffers.iter().map(|b| b.as_entire_binding()).collect(),
             );
             let args_group = gpu.bind_group(
                 "gpurt wave dispatches",
                 &pipelines.args_layout,
                 vec![args.as_entire_binding()],
             );
+            let counts = buffers.pop().expect("the counts were pushed last");
             Wave {
                 kernels,
                 group,
                 args_group,
                 counts,
-                counts_back,
                 args,
                 capacity,
-                bytes: state_bytes + 6 * 4 * pixels + 8 * COUNT_WORDS + 4 * ARG_WORDS,
+                lights,
+                depth: globals.max_depth,
+                bytes: sizes.iter().sum::<u64>() + counts_bytes + 4 * ARG_WORDS,
             }
         })
     }

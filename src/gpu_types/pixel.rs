@@ -1,7 +1,6 @@
 //! What a pixel keeps on the device between dispatches: the state of a pixel continued
-//! by `resume` (`GpuPixelState`), of a pixel of the wavefront kernels (`GpuWaveState`),
-//! and what its rays cost (`GpuPixelCounts`), with the constants that go with them. Part
-//! of `gpu_types`, which re-exports all of it.
+//! by `resume` (`GpuPixelState`) and what its rays cost (`GpuPixelCounts`), with the
+//! constants that go with them. Part of `gpu_types`, which re-exports all of it.
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -35,42 +34,6 @@ pub struct GpuPixelState {
     /// The pixel's counts so far (`COUNTERS`).
     pub counts: GpuPixelCounts,
     pub stack: [[u32; 12]; RAY_STACK],
-}
-
-/// A pixel of the wavefront path (`WaveState` in `shaders/wavefront.wgsl`): the host only
-/// allocates them, `wave_state_bytes` each. Its `stack` holds `TRACE_STACK` pending rays
-/// in a shader (`RAY_STACK` here, the longest); `ray_in` and the stack's entries are
-/// WGSL `Pending`s (12 words), `shadow` a `LightRay` (16), `hit` a `Hit` (5).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct GpuWaveState {
-    pub sum: Vec3,
-    pub sample: u32,
-    pub colour: Vec3,
-    pub rng: u32,
-    pub lit: Vec3,
-    pub rays: u32,
-    pub point: Vec3,
-    pub sp: u32,
-    pub ng: Vec3,
-    pub light: u32,
-    pub ns: Vec3,
-    pub light_sample: u32,
-    pub ray_in: [u32; 12],
-    pub shadow: [u32; 16],
-    pub shadow_light: Vec3,
-    pub hit: [u32; 5],
-    pub material: u32,
-    pub entering: u32,
-    pub cut: u32,
-    pub phase: u32,
-    pub counts: GpuPixelCounts,
-    pub stack: [[u32; 12]; RAY_STACK],
-}
-
-/// Bytes of a `WaveState` in a shader whose ray stack holds `trace_stack` rays.
-pub const fn wave_state_bytes(trace_stack: u32) -> u64 {
-    (size_of::<GpuWaveState>() - 48 * (RAY_STACK - trace_stack as usize)) as u64
 }
 
 /// What one pixel's rays cost, by kind of ray, when counting (`GpuGlobals::counters`):
@@ -118,5 +81,4 @@ pub const PIXEL_CUT_SHORT: u32 = 1 << 31;
 const _: () = {
     assert!(size_of::<GpuPixelState>() == 192 + 48 * RAY_STACK);
     assert!(size_of::<GpuPixelCounts>() == 32);
-    assert!(size_of::<GpuWaveState>() == 288 + 48 * RAY_STACK);
 };

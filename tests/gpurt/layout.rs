@@ -32,32 +32,20 @@ fn rust_layouts() -> Vec<Layout> {
             [origin, exp_inner, child_base, prim_base, tags, quant]
         ),
         layout!(
-            "WaveState",
-            GpuWaveState,
-            [
-                sum,
-                sample,
-                colour,
-                rng,
-                lit,
-                rays,
-                point,
-                sp,
-                ng,
-                light,
-                ns,
-                light_sample,
-                ray_in,
-                shadow,
-                shadow_light,
-                hit,
-                material,
-                entering,
-                cut,
-                phase,
-                counts,
-                stack
-            ]
+            "WavePath",
+            GpuWavePath,
+            [colour, rays, counts, cut, _pad0, _pad1, _pad2]
+        ),
+        layout!("WaveRay", GpuWaveRay, [origin, weight, dir, path]),
+        layout!(
+            "WaveHit",
+            GpuWaveHit,
+            [hit, nodes, flags, children, ambient]
+        ),
+        layout!(
+            "WaveShadow",
+            GpuWaveShadow,
+            [origin, dist, dir, flags, light, nodes]
         ),
         layout!(
             "PixelCounts",
@@ -225,6 +213,14 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
         ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
         ("RESUME_X_MASK", U32(RESUME_X_MASK)),
         ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
+        ("WAVE_ROUND", U32(WAVE_ROUND)),
+        ("WAVE_RAYS", U32(WAVE_RAYS)),
+        ("WAVE_NEXT", U32(WAVE_NEXT)),
+        ("WAVE_SHADOWS", U32(WAVE_SHADOWS)),
+        ("WAVE_COUNT_WORDS", U32(WAVE_COUNT_WORDS)),
+        ("WAVE_TRACED", U32(WAVE_TRACED)),
+        ("WAVE_CUT", U32(WAVE_CUT)),
+        ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),

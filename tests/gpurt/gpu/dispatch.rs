@@ -283,7 +283,12 @@ fn a_gpus_strips_trace_the_frame_of_a_software_adapters_squares() {
                 gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
             (film, rays, up.counters().expect("counts"), shape)
         };
-        let new = || GpuRenderer::new(device, None).expect("shader module");
+        // The one kernel's cut (the wavefront kernels' tiles are their waves).
+        let new = || {
+            GpuRenderer::new(device, None)
+                .expect("shader module")
+                .with_wavefront(false)
+        };
         let (film, rays, counts, _) = render(new());
         let strip = u64::from(width) * 16 * 4;
         let (f, r, c, shape) = render(new().with_gpu_shape(strip));
