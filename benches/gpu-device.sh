@@ -5,10 +5,12 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [images] [bench] [quick] [tests] [huge]
-#        (default: images bench tests, run in that order whatever the order given)
-# Output goes to $OUT (or ./device-out): images.log, bench.md, bench.log, tests.log,
-# huge.log. `images` renders three scenes at 4K with the scene read from textures and
+# Usage: benches/gpu-device.sh [wavefront] [images] [bench] [quick] [tests] [huge]
+#        (default: wavefront images bench tests, run in that order whatever the order given)
+# Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
+# tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
+# kernel and through the wavefront kernels (GPURT_KERNELS), one after the other, and
+# renders balls-4 at 1080p both ways for `gpurt diff`. `images` renders three scenes at 4K with the scene read from textures and
 # from storage buffers (GPURT_FETCH) and compares the PNGs byte for byte. `tests` runs
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
@@ -19,7 +21,7 @@ set -uo pipefail
 
 OUT=${OUT:-$PWD/device-out}
 mkdir -p "$OUT"
-what=${*:-images bench tests}
+what=${*:-wavefront images bench tests}
 
 for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
 chmod +x .device/gpurt* 2>/dev/null
@@ -47,9 +49,27 @@ export GPURT_REQUIRE_GPU=1 CI=true GPURT_ADAPTER=${GPURT_ADAPTER:-nvidia}
 ./.device/gpurt "$manifest/scenes/spheres.nff" -o "$OUT/spheres.png" -v --stats 2>&1
 
 
+spd="$manifest/../shared/scenes/spd"
+scenes=()
+for s in balls-4 gears-4 mount-7 teapot-6 tree-11 balls-6 mount-9; do
+    scenes+=("$(ls "$spd/$s".nff* | head -1)")
+done
+
+if [[ $what == *wavefront* ]]; then
+    echo "== wavefront"
+    for k in main wavefront; do
+        GPURT_KERNELS=$k ./.device/gpurt bench "${scenes[@]}" --sizes 1920x1080,3840x2160 \
+            --spp 1,16 --frames 3 --backend gpu >"$OUT/wavefront-$k.md" 2>"$OUT/wavefront-$k.log"
+        echo "$k: exit $?"
+        cat "$OUT/wavefront-$k.md"
+        GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width 1920 \
+            --height 1080 --spp 4 --backend gpu 2>&1 | tail -1
+    done
+    ./.device/gpurt diff /tmp/balls-4-main.png /tmp/balls-4-wavefront.png 2>&1 | tee "$OUT/wavefront-diff.log"
+fi
+
 if [[ $what == *images* ]]; then
     echo "== images"
-    spd="$manifest/../shared/scenes/spd"
     for s in balls-4 mount-9 teapot-6; do
         for f in textures buffers; do
             GPURT_FETCH=$f ./.device/gpurt "$(ls "$spd/$s".nff* | head -1)" -o "/tmp/$s-$f.png" \
@@ -65,11 +85,6 @@ fi
 
 if [[ $what == *bench* ]]; then
     echo "== bench"
-    spd="$manifest/../shared/scenes/spd"
-    scenes=()
-    for s in balls-4 gears-4 mount-7 teapot-6 tree-11 balls-6 mount-9; do
-        scenes+=("$(ls "$spd/$s".nff* | head -1)")
-    done
     if [[ $what == *quick* ]]; then
         args=(--sizes 1920x1080,3840x2160 --spp 1 --backend gpu)
     else
