@@ -10,7 +10,8 @@
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
 # kernel and through the wavefront kernels (GPURT_KERNELS), one after the other, and
-# renders balls-4 at 1080p both ways for `gpurt diff`. `images` renders three scenes at 4K with the scene read from textures and
+# renders balls-4 at 1080p both ways for `gpurt diff`, then times waves of 4 GiB
+# (GPURT_WAVE_BYTES) on balls-4 and mount-9 at 4K. `images` renders three scenes at 4K with the scene read from textures and
 # from storage buffers (GPURT_FETCH) and compares the PNGs byte for byte. `tests` runs
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
@@ -66,6 +67,10 @@ if [[ $what == *wavefront* ]]; then
             --height 1080 --spp 4 --backend gpu 2>&1 | tail -1
     done
     ./.device/gpurt diff /tmp/balls-4-main.png /tmp/balls-4-wavefront.png 2>&1 | tee "$OUT/wavefront-diff.log"
+    # Waves of 4 GiB of records (a million paths and more) against the default 512 MiB.
+    GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) ./.device/gpurt bench "${scenes[0]}" \
+        "${scenes[6]}" --sizes 3840x2160 --spp 1 --frames 3 --backend gpu 2>&1 |
+        tee "$OUT/wavefront-4g.md" | grep '^|'
 fi
 
 if [[ $what == *images* ]]; then

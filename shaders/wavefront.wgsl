@@ -339,9 +339,10 @@ fn wf_shadow(
 
 // Each path adds its rays of the round (contiguous, in path order) to its colour: for a
 // hit, the ambient term (from `wf_shade`) plus each light that came through, in light
-// order, as `direct` sums them, times the ray's weight; for a miss, the background. The invocation of a
-// path's first ray does it; the path's rays, counts, and whether its work was cut short
-// (a walk cut short, or rays of the next round past the capacity) go with it.
+// order, as `direct` sums them, times the ray's weight; for a miss, the background. The
+// invocation of a path's first ray does it; the path's rays, counts, and whether its
+// work was cut short (a walk cut short, or rays of the next round past the capacity) go
+// with it.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn wf_gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     let first = gid.x;

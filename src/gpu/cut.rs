@@ -34,8 +34,10 @@ pub(super) struct Shape {
     pub(super) dispatch_samples: u64,
     /// Pixel samples one submission traces at most.
     pub(super) band_samples: u64,
-    /// Pixels a side of a wavefront frame's waves at most (`policy::cut_for`).
+    /// Pixels a side of a wavefront frame's waves at most, and the bytes a wave's
+    /// records may take (`policy::cut_for`).
     pub(super) wave_side: u32,
+    pub(super) wave_bytes: u64,
     /// Whether each dispatch scatters its workgroups over its tile (`scatter`): for
     /// drivers that split a dispatch's workgroups into one contiguous run per thread.
     pub(super) spread: bool,
@@ -270,6 +272,7 @@ mod tests {
             dispatch_samples,
             band_samples,
             wave_side: 128,
+            wave_bytes: 512 << 20,
             spread: false,
             strips: false,
             band_bytes: BAND_BYTES,

@@ -100,8 +100,8 @@ pub(super) fn wavefront_for(
 /// `WAVE_BYTES` and the device's limits.
 const WAVE_TILE_SIDE: u32 = 1024;
 
-/// Device memory a wave's records may take (`gpu_types::wave_buffer_bytes`): about 500
-/// bytes a path for a scene of three lights, so a million paths.
+/// Device memory a wave's records may take (`gpu_types::wave_buffer_bytes`): about 510 +
+/// 210 x lights bytes a path, so 262 144 paths (a power of two) for one to three lights.
 const WAVE_BYTES: u64 = 512 << 20;
 
 /// How much work a dispatch and a submission take on this adapter. Software adapters
@@ -112,8 +112,8 @@ const WAVE_BYTES: u64 = 512 << 20;
 /// samples a pass on strips as wide as the frame of up to `GPU_DISPATCH_SAMPLES` pixel
 /// samples, in bands of up to `GPU_BAND_BYTES`; a band is the most one submission should
 /// hold. `GPURT_PASS_SAMPLES`, `GPURT_DISPATCH_SAMPLES`, `GPURT_BAND_BYTES` and
-/// `GPURT_WAVE_SIDE` (a wavefront frame's wave, `WAVE_TILE_SIDE` by default) override the
-/// shape, for measuring it on one adapter.
+/// `GPURT_WAVE_SIDE` and `GPURT_WAVE_BYTES` (a wavefront frame's wave: `WAVE_TILE_SIDE`
+/// and `WAVE_BYTES` by default) override the shape, for measuring it on one adapter.
 pub(super) fn shape_for(software: bool) -> Result<Shape> {
     let mut shape = if software {
         Shape {
@@ -121,6 +121,7 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             dispatch_samples: 1 << 16,
             band_samples: 1 << 18,
             wave_side: WAVE_TILE_SIDE,
+            wave_bytes: WAVE_BYTES,
             spread: true,
             strips: false,
             band_bytes: BAND_BYTES,
@@ -141,6 +142,9 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
         // A power of two, as tile sides are.
         shape.wave_side = (n.min(1 << 15) as u32).next_power_of_two();
     }
+    if let Some(n) = count_from_env("GPURT_WAVE_BYTES")? {
+        shape.wave_bytes = n;
+    }
     Ok(shape)
 }
 
@@ -151,6 +155,7 @@ pub(super) fn gpu_shape() -> Shape {
         dispatch_samples: GPU_DISPATCH_SAMPLES,
         band_samples: 1 << 26,
         wave_side: WAVE_TILE_SIDE,
+        wave_bytes: WAVE_BYTES,
         spread: false,
         strips: true,
         band_bytes: GPU_BAND_BYTES,
@@ -208,8 +213,8 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
     if globals.wavefront != 0 {
         // Halve the side (bands stay whole rows of tiles, sides being powers of two),
         // down to one workgroup's square, until each of the wave's records fits a
-        // storage binding, all of them `WAVE_BYTES`, and a dispatch over a round's rays
-        // the device's workgroups.
+        // storage binding, all of them `shape.wave_bytes`, and a dispatch over a
+        // round's rays the device's workgroups.
         let limit = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
@@ -218,7 +223,7 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
             let bytes = wave_buffer_bytes(paths, u64::from(globals.n_lights));
             let groups = (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
             bytes.iter().all(|&b| b <= limit)
-                && bytes.iter().sum::<u64>() <= WAVE_BYTES
+                && bytes.iter().sum::<u64>() <= shape.wave_bytes
                 && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
         };
         let mut side = cut.tile_rows.min(shape.wave_side);
@@ -232,7 +237,73 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
 
 #[cfg(test)]
 mod tests {
-    use super::{Fetch, fetch_by};
+    use super::{Fetch, Shape, cut_for, fetch_by, gpu_shape, shape_for};
+    use crate::gpu::wavefront::wave_paths;
+    use crate::gpu_types::{
+        GpuGlobals, WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, wave_buffer_bytes,
+    };
+
+    /// A wavefront frame's waves fit: each record a storage binding, all of them the
+    /// shape's `wave_bytes`, a dispatch over a round's rays the device's workgroups; and
+    /// they are as large as that allows (twice the side would not fit, or the side is the
+    /// cap). More lights make smaller waves.
+    #[test]
+    fn a_waves_records_fit_the_budget_and_the_device() {
+        let big = wgpu::Limits {
+            max_storage_buffer_binding_size: u32::MAX as u64,
+            max_buffer_size: u64::MAX,
+            ..wgpu::Limits::default()
+        };
+        let small = wgpu::Limits::default();
+        for (limits, shape) in [(&big, gpu_shape()), (&small, shape_for(true).unwrap())] {
+            let limit = limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size);
+            let mut last = u32::MAX;
+            for lights in [1, 3, 12, 400] {
+                let globals = GpuGlobals {
+                    width: 3840,
+                    height: 2160,
+                    spp: 16,
+                    n_lights: lights,
+                    wavefront: 1,
+                    ..Default::default()
+                };
+                let cut = cut_for(limits, &globals, &shape);
+                assert_eq!(cut.tile_width, cut.tile_rows, "square waves");
+                let fits = |side: u32| {
+                    let paths = u64::from(side * side * cut.pass_samples);
+                    let bytes = wave_buffer_bytes(paths, u64::from(lights));
+                    let groups =
+                        (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
+                    bytes.iter().all(|&b| b <= limit)
+                        && bytes.iter().sum::<u64>() <= shape.wave_bytes
+                        && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
+                };
+                // The square tile the cut would make anyway caps a wave's side too.
+                let squares = Shape {
+                    strips: false,
+                    ..shape
+                };
+                let plain = GpuGlobals {
+                    wavefront: 0,
+                    ..globals
+                };
+                let cap = cut_for(limits, &plain, &squares)
+                    .tile_rows
+                    .min(shape.wave_side);
+                let side = cut.tile_rows;
+                assert!(fits(side), "{lights} lights: side {side}");
+                assert!(
+                    side == cap || !fits(2 * side),
+                    "{lights} lights: side {side} of {cap}"
+                );
+                let paths = wave_paths(&cut);
+                assert!(paths <= last, "{lights} lights: {paths} paths");
+                last = paths;
+            }
+        }
+    }
 
     /// Unset, a hardware adapter reads buffers, a software one textures, and a scene too
     /// large for one buffer textures on any; set, `GPURT_FETCH` decides, even for such a

@@ -90,8 +90,8 @@ fn scenes() -> Vec<(String, Scene, RenderOptions)> {
 }
 
 /// The film the CPU twin of the kernels gives for a whole frame (one tile, every sample,
-/// the room a GPU's wave of its paths has): its sums divided by the samples, as the GPU's host divides them,
-/// and how many pixels had paths cut short.
+/// the room a GPU's wave of its paths has): its sums divided by the samples, as the GPU's
+/// host divides them, and how many pixels had paths cut short.
 fn twin_film(buffers: &SceneBuffers, globals: &GpuGlobals) -> (Film, usize) {
     let b = Bindings::gpu_walk(buffers, globals);
     let (w, h) = (globals.width, globals.height);
