@@ -152,7 +152,7 @@ impl ResumePipelines {
 /// arrays, split into layers as large as the device allows, or read-only storage), the
 /// other scene arrays (read-only storage), the tile's output and its counts (read-write
 /// storage).
-pub(super) fn bind_group_layout(gpu: &Device, fetch: Fetch) -> wgpu::BindGroupLayout {
+fn main_slots(fetch: Fetch) -> [Slot; 10] {
     use Slot::*;
     let tile = UniformRecord {
         size: size_of::<GpuTile>() as u64,
@@ -161,13 +161,20 @@ pub(super) fn bind_group_layout(gpu: &Device, fetch: Fetch) -> wgpu::BindGroupLa
         Fetch::Textures => Texels,
         Fetch::Buffers => ReadOnly,
     };
-    gpu.bind_group_layout(
-        "gpurt",
-        &[
-            ReadOnly, tile, texels, texels, texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite,
-            ReadWrite,
-        ],
-    )
+    [
+        ReadOnly, tile, texels, texels, texels, ReadOnly, ReadOnly, ReadOnly, ReadWrite, ReadWrite,
+    ]
+}
+
+/// Group 0 of every entry point: `main_slots`.
+pub(super) fn bind_group_layout(gpu: &Device, fetch: Fetch) -> wgpu::BindGroupLayout {
+    gpu.bind_group_layout("gpurt", &main_slots(fetch))
+}
+
+/// Storage buffers group 0 binds (a stage's limit counts them with its other groups').
+pub(super) fn storage_buffers(fetch: Fetch) -> u32 {
+    let storage = |s: &&Slot| matches!(s, Slot::ReadOnly | Slot::ReadWrite);
+    main_slots(fetch).iter().filter(storage).count() as u32
 }
 
 /// Group 1 of `resume`: the pixels to resume (read-only), their states and the count of

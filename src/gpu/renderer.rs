@@ -26,7 +26,7 @@ use super::shaders::Fetch;
 use super::specialization::Specialization;
 use super::trace::encode_band;
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
-use super::wavefront::{Wave, WavePipelines, wave_paths};
+use super::wavefront::{Wave, WavePipelines, wave_binds, wave_paths};
 use crate::counters::gpu_node_bytes;
 use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
@@ -51,9 +51,10 @@ pub struct GpuRenderer {
     traversal: u32,
     /// How its shaders read the scene's nodes, primitives and normals.
     fetch: Fetch,
-    /// The wavefront kernels' pipelines, shared with the uploaded scenes, and whether
-    /// colour frames take them (`None`: as `policy::wavefront_for` chooses).
-    wave: Arc<WavePipelines>,
+    /// The wavefront kernels' pipelines, shared with the uploaded scenes, where the
+    /// adapter binds them (`wave_binds`), and whether colour frames take them (`None`: as
+    /// `policy::wavefront_for` chooses).
+    wave: Option<Arc<WavePipelines>>,
     wavefront: Option<bool>,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
@@ -119,9 +120,13 @@ impl GpuRenderer {
                 )
             })?;
         let modules = Arc::new(Modules::new(fetch));
-        let wave = gpu.scoped("compiling the shader", || {
-            WavePipelines::new(gpu, &layout, modules.clone())
-        })?;
+        // Made only where the adapter binds them: a browser's WebGPU does not.
+        let wave = match wave_binds(&gpu.limits(), fetch) {
+            true => Some(gpu.scoped("compiling the shader", || {
+                Arc::new(WavePipelines::new(gpu, &layout, modules.clone()))
+            })?),
+            false => None,
+        };
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
@@ -139,7 +144,7 @@ impl GpuRenderer {
             shape: shape_for(software)?,
             traversal: traversal_from_env()?,
             fetch,
-            wave: Arc::new(wave),
+            wave,
             wavefront: kernels_from_env()?,
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
@@ -163,9 +168,11 @@ impl GpuRenderer {
     }
 
     /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`)
-    /// and its kernels (`policy::wavefront_for`): what its frames of `globals` trace.
+    /// and its kernels (`policy::wavefront_for`, where the adapter binds the wavefront
+    /// kernels): what its frames of `globals` trace.
     pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
-        let wave = wavefront_for(self.wavefront, self.software, scene, globals);
+        let wave =
+            self.wave.is_some() && wavefront_for(self.wavefront, self.software, scene, globals);
         GpuGlobals {
             traversal: scene.traversal_for(self.traversal),
             wavefront: u32::from(wave),
@@ -406,7 +413,10 @@ impl GpuRenderer {
         globals: &GpuGlobals,
     ) -> Result<Option<Wave>> {
         (globals.wavefront != 0)
-            .then(|| Wave::new(gpu, &self.wave, spec, wave_paths(cut), globals))
+            .then(|| {
+                let pipelines = self.wave.as_ref().expect("frames take the kernels it has");
+                Wave::new(gpu, pipelines, spec, wave_paths(cut), globals)
+            })
             .transpose()
     }
 

@@ -9,7 +9,8 @@ use std::sync::{Arc, Mutex};
 
 use super::cut::Cut;
 use super::device::{Device, Slot};
-use super::pipeline::{Modules, compile};
+use super::pipeline::{Modules, compile, storage_buffers};
+use super::shaders::Fetch;
 use super::specialization::Specialization;
 use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, WAVE_COUNT_WORDS, wave_buffer_bytes};
@@ -47,6 +48,17 @@ pub(super) struct Kernels {
     pub(super) finish: wgpu::ComputePipeline,
 }
 
+/// Storage buffers of group 2 (the wave), bound with group 0 to every kernel but the two
+/// that size the dispatches (groups 2 and 3).
+const WAVE_BINDINGS: u32 = 7;
+
+/// Whether an adapter of `limits` binds the kernels' storage buffers, group 0 reading the
+/// scene as `fetch` says: 13 or 16, past the 10 that browsers' WebGPU (and
+/// `wgpu::Limits::default`) grant; frames elsewhere take the one kernel.
+pub(super) fn wave_binds(limits: &wgpu::Limits, fetch: Fetch) -> bool {
+    limits.max_storage_buffers_per_shader_stage >= storage_buffers(fetch) + WAVE_BINDINGS
+}
+
 /// Words of `wave_args`: the dispatch over a round's rays, then over its shadow rays.
 const ARG_WORDS: u64 = 6;
 /// Offset in `wave_args` of the dispatch over a round's shadow rays (read by `waves`,
@@ -75,7 +87,7 @@ impl WavePipelines {
         modules: Arc<Modules>,
     ) -> Self {
         use Slot::ReadWrite;
-        let layout = gpu.bind_group_layout("gpurt wave", &[ReadWrite; 7]);
+        let layout = gpu.bind_group_layout("gpurt wave", &[ReadWrite; WAVE_BINDINGS as usize]);
         let args_layout = gpu.bind_group_layout("gpurt wave dispatches", &[ReadWrite]);
         let pipeline_layout =
             gpu.pipeline_layout("gpurt wave", &[Some(main_layout), None, Some(&layout)]);
@@ -203,5 +215,25 @@ impl Wave {
                 bytes: sizes.iter().sum::<u64>() + counts_bytes + 4 * ARG_WORDS,
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Fetch, wave_binds};
+
+    /// The default of 10 storage buffers a stage (WebGPU's) binds the kernels neither way
+    /// of reading the scene; 13 binds them with the scene in textures only, 16 both ways.
+    #[test]
+    fn the_kernels_bind_where_the_adapter_has_the_storage_buffers() {
+        let limits = |n| wgpu::Limits {
+            max_storage_buffers_per_shader_stage: n,
+            ..wgpu::Limits::default()
+        };
+        for (n, textures, buffers) in [(10, false, false), (13, true, false), (16, true, true)] {
+            assert_eq!(wave_binds(&limits(n), Fetch::Textures), textures, "{n}");
+            assert_eq!(wave_binds(&limits(n), Fetch::Buffers), buffers, "{n}");
+        }
+        assert!(!wave_binds(&wgpu::Limits::default(), Fetch::Textures));
     }
 }
