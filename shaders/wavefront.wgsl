@@ -415,7 +415,10 @@ fn wf_finish(@builtin(global_invocation_id) gid: vec3<u32>) {
     var sum = before.color;
     var rays = before.rays & ~PIXEL_CUT_SHORT;
     var cut = (before.rays & PIXEL_CUT_SHORT) != 0u;
-    var total = counters[slot];
+    var total = PixelCounts();
+    if (COUNTERS) {
+        total = counters[slot];
+    }
     for (var j = 0u; j < tile.sample_count; j++) {
         let path = wave_paths[i * tile.sample_count + j];
         sum += path.colour;
