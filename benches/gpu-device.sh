@@ -9,10 +9,12 @@
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
-# kernel and through the wavefront kernels (GPURT_KERNELS), one after the other, and
-# renders balls-4 at 1080p both ways for `gpurt diff`, then times waves of 4 GiB
-# (GPURT_WAVE_BYTES) on balls-4 and mount-9 at 4K. `images` renders three scenes at 4K with the scene read from textures and
-# from storage buffers (GPURT_FETCH) and compares the PNGs byte for byte. `tests` runs
+# kernel and through the wavefront kernels (GPURT_KERNELS), one after the other (with
+# each wavefront kernel's GPU time a frame, from timestamp queries), renders balls-4 at
+# 1080p both ways for `gpurt diff`, then times waves of 4 GiB (GPURT_WAVE_BYTES) on
+# balls-4 and mount-9 at 4K. `images` renders three scenes at 4K with the scene read
+# from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte for
+# byte. `tests` runs
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
 # than the limit and still says where it was.
@@ -63,6 +65,7 @@ if [[ $what == *wavefront* ]]; then
             --spp 1,16 --frames 3 --backend gpu >"$OUT/wavefront-$k.md" 2>"$OUT/wavefront-$k.log"
         echo "$k: exit $?"
         cat "$OUT/wavefront-$k.md"
+        grep 'wavefront kernels' "$OUT/wavefront-$k.log"
         GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width 1920 \
             --height 1080 --spp 4 --backend gpu 2>&1 | tail -1
     done

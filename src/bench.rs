@@ -17,7 +17,9 @@
 //!
 //! The `full` pass is then traced once more, untimed, counting (`GpuGlobals::counters`):
 //! the BVH nodes fetched per ray of each kind and the bytes they read, on the GPU's walk
-//! (on the CPU's own walk where only the CPU is timed).
+//! (on the CPU's own walk where only the CPU is timed). Where the frame takes the
+//! wavefront kernels and the device has timestamps, once more with each kernel's
+//! dispatches timed on the device, printed to stderr.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -73,6 +75,8 @@ struct GpuRow {
     full: Pass,
     /// The `full` pass's counts.
     counted: Counters,
+    /// GPU seconds of each wavefront kernel in one `full` frame, where it takes them.
+    kernels: Option<Vec<(&'static str, f64)>>,
 }
 
 /// One timed pass: median frame time on the device, median time with the image read
@@ -297,6 +301,15 @@ fn gpu_row(
     let scene = renderer.upload(device, queue, buffers, &counting)?;
     gpu::trace(device, queue, &scene, &|_| {}, &AtomicBool::new(false))?;
     let counted = scene.counters().expect("a counting frame has counts");
+    // One more `full` frame, untimed, with each wavefront kernel timed on the device.
+    let mut kernels = None;
+    if renderer.frame(buffers, globals).wavefront != 0 {
+        let mut scene = renderer.upload(device, queue, buffers, globals)?;
+        if scene.time_kernels(device) {
+            gpu::trace(device, queue, &scene, &|_| {}, &AtomicBool::new(false))?;
+            kernels = scene.kernel_times();
+        }
+    }
     Ok(GpuRow {
         compile,
         upload,
@@ -305,6 +318,7 @@ fn gpu_row(
         direct,
         full,
         counted,
+        kernels,
     })
 }
 
@@ -395,6 +409,18 @@ fn print_row(r: &Row) {
         r.spp,
         rays as f64 / pixels as f64,
     );
+    if let Some(kernels) = r.gpu.as_ref().and_then(|g| g.kernels.as_ref()) {
+        let each: Vec<String> = kernels
+            .iter()
+            .map(|(name, s)| format!("{} {:.2}", name.trim_start_matches("wf_"), s * 1e3))
+            .collect();
+        let total: f64 = kernels.iter().map(|(_, s)| s * 1e3).sum();
+        eprintln!(
+            "  {}: wavefront kernels, GPU ms a frame: {} (sum {total:.2})",
+            r.scene,
+            each.join(", ")
+        );
+    }
     if let Some(c) = &r.cpu {
         let [eye, shadow, secondary] = c.counted.rays;
         eprintln!(

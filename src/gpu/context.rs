@@ -206,6 +206,10 @@ async fn open_adapter_async(adapter: wgpu::Adapter) -> Result<GpuContext> {
     if adapter.features().contains(wgpu::Features::PIPELINE_CACHE) {
         required_features |= wgpu::Features::PIPELINE_CACHE;
     }
+    // For timing the wavefront's kernels (`GpuScene::time_kernels`); unused otherwise.
+    if adapter.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+        required_features |= wgpu::Features::TIMESTAMP_QUERY;
+    }
     let (device, queue) = adapter
         .request_device(&wgpu::DeviceDescriptor {
             label: Some("gpurt"),

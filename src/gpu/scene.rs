@@ -13,7 +13,7 @@ use super::device::Device;
 use super::pipeline::ResumePipelines;
 use super::specialization::Specialization;
 use super::upload::SceneData;
-use super::wavefront::Wave;
+use super::wavefront::{Clock, ENTRIES, Wave};
 use crate::counters::Counters;
 use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuPixelCounts, GpuTile};
@@ -58,6 +58,26 @@ impl GpuScene {
     /// set, the frame's last trace only.
     pub fn counters(&self) -> Option<Counters> {
         *self.counted.lock().expect("counts lock")
+    }
+
+    /// Times each wavefront kernel of the frames traced from now on (timestamp queries
+    /// around every dispatch, read back after each tile: the frames run slower), where
+    /// the frame takes the wavefront kernels and the device has timestamps; `set_frame`
+    /// stops it where it remakes the wave or changes its depth. Returns whether it will.
+    pub fn time_kernels(&mut self, device: &wgpu::Device) -> bool {
+        let Some(wave) = self.wave.as_mut() else {
+            return false;
+        };
+        wave.clock = Clock::new(&Device::new(device), wave.depth);
+        wave.clock.is_some()
+    }
+
+    /// The GPU time each wavefront kernel took, in seconds, by name (`wf_generate`, ...),
+    /// over the frames traced since `time_kernels`; none where they are not timed.
+    pub fn kernel_times(&self) -> Option<Vec<(&'static str, f64)>> {
+        let clock = self.wave.as_ref()?.clock.as_ref()?;
+        let seconds = *clock.seconds.lock().expect("clock lock");
+        Some(ENTRIES.into_iter().zip(seconds).collect())
     }
 
     /// Device memory held by the scene and a band's output and readback buffers, in bytes.

@@ -20,8 +20,8 @@ pub(super) fn wave_paths(cut: &Cut) -> u32 {
     cut.tile_width * cut.tile_rows * cut.pass_samples
 }
 
-/// The kernels, in the order `Kernels` holds their pipelines.
-const ENTRIES: [&str; 9] = [
+/// The kernels, in the order `Kernels` holds their pipelines (and a `Clock` its times).
+pub(crate) const ENTRIES: [&str; 9] = [
     "wf_generate",
     "wf_advance",
     "wf_extend",
@@ -57,6 +57,24 @@ const WAVE_BINDINGS: u32 = 7;
 /// `wgpu::Limits::default`) grant; frames elsewhere take the one kernel.
 pub(super) fn wave_binds(limits: &wgpu::Limits, fetch: Fetch) -> bool {
     limits.max_storage_buffers_per_shader_stage >= storage_buffers(fetch) + WAVE_BINDINGS
+}
+
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
+impl Kernels {
+    /// The pipeline of `ENTRIES[kind]`.
+    pub(super) fn pipeline(&self, kind: usize) -> &wgpu::ComputePipeline {
+        [
+            &self.generate,
+            &self.advance,
+            &self.extend,
+            &self.scan,
+            &self.shade,
+            &self.advance_shadows,
+            &self.shadow,
+            &self.gather,
+            &self.finish,
+        ][kind]
+    }
 }
 
 /// Words of `wave_args`: the dispatch over a round's rays, then over its shadow rays.
@@ -146,6 +164,39 @@ impl WavePipelines {
     }
 }
 
+/// Times a wave's dispatches with timestamp queries (`GpuScene::time_kernels`): a query
+/// before and after each of a tile's `passes` compute passes, resolved and read back
+/// after each tile, and the GPU time of each kernel summed in `seconds` (`ENTRIES`
+/// order) over the tiles traced since.
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
+pub(super) struct Clock {
+    pub(super) queries: wgpu::QuerySet,
+    pub(super) resolve: wgpu::Buffer,
+    pub(super) readback: wgpu::Buffer,
+    pub(super) passes: u32,
+    pub(super) seconds: Mutex<[f64; ENTRIES.len()]>,
+}
+
+impl Clock {
+    /// A clock for waves of `depth` rounds (`2 + 7 x depth` passes a tile), where the
+    /// device has timestamps and a query set holds them.
+    pub(super) fn new(gpu: &Device, depth: u32) -> Option<Clock> {
+        let passes = 2 + 7 * depth.max(1);
+        if 2 * passes > wgpu::QUERY_SET_MAX_QUERIES {
+            return None;
+        }
+        let (queries, resolve) = gpu.timestamps("wave clock", 2 * passes)?;
+        let readback = gpu.readback("wave clock readback", 16 * u64::from(passes));
+        Some(Clock {
+            queries,
+            resolve,
+            readback,
+            passes,
+            seconds: Mutex::new([0.0; ENTRIES.len()]),
+        })
+    }
+}
+
 /// A scene's wave on the device: room for `capacity` paths (pixel samples) of a scene
 /// with `lights` lights, the kernels it runs, and the rounds a wave takes, one per depth
 /// (read by `waves`, native only).
@@ -159,6 +210,8 @@ pub(super) struct Wave {
     pub(super) capacity: u32,
     pub(super) lights: u32,
     pub(super) depth: u32,
+    /// Times the kernels when set (`GpuScene::time_kernels`).
+    pub(super) clock: Option<Clock>,
     /// Device memory the wave holds, in bytes.
     pub(super) bytes: u64,
 }
@@ -212,6 +265,7 @@ impl Wave {
                 capacity,
                 lights,
                 depth: globals.max_depth,
+                clock: None,
                 bytes: sizes.iter().sum::<u64>() + counts_bytes + 4 * ARG_WORDS,
             }
         })

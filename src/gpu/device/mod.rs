@@ -168,6 +168,13 @@ impl<'a> Gpu<'a> {
         self.queue.submit([enc.finish()]);
     }
 
+    /// Nanoseconds a tick of a timestamp query (`Device::timestamps`) lasts (read by the
+    /// wavefront's dispatch loop, native only).
+    #[cfg_attr(not(feature = "native"), allow(dead_code))]
+    pub(crate) fn timestamp_period(&self) -> f32 {
+        self.queue.get_timestamp_period()
+    }
+
     /// Submits the writes queued so far, with no other work.
     pub(crate) fn flush(&self) {
         self.queue.submit([]);

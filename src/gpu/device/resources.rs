@@ -35,6 +35,31 @@ impl Device<'_> {
         buffer
     }
 
+    /// `count` timestamp queries and the buffer they resolve into (to be copied to a
+    /// `readback`), where the device has timestamps (`TIMESTAMP_QUERY`; the context asks
+    /// for them where the adapter has them); else none.
+    pub(crate) fn timestamps(
+        &self,
+        label: &str,
+        count: u32,
+    ) -> Option<(wgpu::QuerySet, wgpu::Buffer)> {
+        use wgpu::BufferUsages as U;
+        if !self
+            .device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            return None;
+        }
+        let set = self.device.create_query_set(&wgpu::QuerySetDescriptor {
+            label: Some(label),
+            ty: wgpu::QueryType::Timestamp,
+            count,
+        });
+        let resolve = self.buffer(label, 8 * u64::from(count), U::QUERY_RESOLVE | U::COPY_SRC);
+        Some((set, resolve))
+    }
+
     fn buffer(&self, label: &str, size: u64, usage: wgpu::BufferUsages) -> wgpu::Buffer {
         self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),

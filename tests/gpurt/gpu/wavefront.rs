@@ -323,3 +323,68 @@ fn paths_that_outgrow_the_wave_are_flagged_and_the_rest_are_traced() {
         sums.len()
     );
 }
+
+/// Timing the kernels (`GpuScene::time_kernels`, what `gpurt bench` prints for a
+/// wavefront frame) changes nothing in the image or the rays; where the device has
+/// timestamps each kernel gets its time, and the kernels that trace rays take some; a
+/// frame of the one kernel has no kernels to time.
+#[test]
+fn timing_the_kernels_changes_nothing_and_times_each() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let [wave, main] = both(g, TRAVERSAL_WIDE);
+    let (name, scene, opts) = scenes().remove(0);
+    let buffers = pack::pack(scene).expect("packs");
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let never = AtomicBool::new(false);
+    let frame = wave
+        .renderer
+        .frame(&buffers, &frame::globals(&buffers, &opts));
+    let mut up = wave
+        .renderer
+        .upload(device, queue, &buffers, &frame)
+        .expect("uploads");
+    let plain = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+    assert!(up.kernel_times().is_none(), "{name}: not timed yet");
+    if !up.time_kernels(device) {
+        println!("{name}: the device has no timestamps; the kernels are not timed");
+        return;
+    }
+    let timed = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+    assert!(timed == plain, "{name}: timing changed the frame");
+    let times = up.kernel_times().expect("timed");
+    let names: Vec<_> = times.iter().map(|(n, _)| *n).collect();
+    assert_eq!(
+        names,
+        [
+            "wf_generate",
+            "wf_advance",
+            "wf_extend",
+            "wf_scan",
+            "wf_shade",
+            "wf_advance_shadows",
+            "wf_shadow",
+            "wf_gather",
+            "wf_finish"
+        ]
+    );
+    for (n, s) in &times {
+        assert!(s.is_finite() && *s >= 0.0, "{name}: {n} {s}");
+    }
+    for traces in ["wf_extend", "wf_shadow"] {
+        let s = times.iter().find(|(n, _)| *n == traces).expect("named").1;
+        assert!(s > 0.0, "{name}: {traces} took no time");
+    }
+    let main_frame = main
+        .renderer
+        .frame(&buffers, &frame::globals(&buffers, &opts));
+    let mut one = main
+        .renderer
+        .upload(device, queue, &buffers, &main_frame)
+        .expect("uploads");
+    assert!(
+        !one.time_kernels(device),
+        "the one kernel has no wave to time"
+    );
+}
