@@ -33,20 +33,23 @@ pub(crate) const ENTRIES: [&str; 9] = [
     "wf_finish",
 ];
 
+/// Indices in `ENTRIES` (and in `Kernels`), by kernel (read by `waves`, native only).
+#[cfg_attr(not(feature = "native"), allow(dead_code))]
+pub(super) mod kernel {
+    pub(in crate::gpu) const GENERATE: usize = 0;
+    pub(in crate::gpu) const ADVANCE: usize = 1;
+    pub(in crate::gpu) const EXTEND: usize = 2;
+    pub(in crate::gpu) const SCAN: usize = 3;
+    pub(in crate::gpu) const SHADE: usize = 4;
+    pub(in crate::gpu) const ADVANCE_SHADOWS: usize = 5;
+    pub(in crate::gpu) const SHADOW: usize = 6;
+    pub(in crate::gpu) const GATHER: usize = 7;
+    pub(in crate::gpu) const FINISH: usize = 8;
+}
+
 /// The pipelines of the kernels, in `ENTRIES` order. Read by `waves`, which runs natively
 /// only.
-#[cfg_attr(not(feature = "native"), allow(dead_code))]
-pub(super) struct Kernels {
-    pub(super) generate: wgpu::ComputePipeline,
-    pub(super) advance: wgpu::ComputePipeline,
-    pub(super) extend: wgpu::ComputePipeline,
-    pub(super) scan: wgpu::ComputePipeline,
-    pub(super) shade: wgpu::ComputePipeline,
-    pub(super) advance_shadows: wgpu::ComputePipeline,
-    pub(super) shadow: wgpu::ComputePipeline,
-    pub(super) gather: wgpu::ComputePipeline,
-    pub(super) finish: wgpu::ComputePipeline,
-}
+pub(super) type Kernels = [wgpu::ComputePipeline; ENTRIES.len()];
 
 /// Storage buffers of group 2 (the wave), bound with group 0 to every kernel but the two
 /// that size the dispatches (groups 2 and 3).
@@ -57,24 +60,6 @@ const WAVE_BINDINGS: u32 = 7;
 /// `wgpu::Limits::default`) grant; frames elsewhere take the one kernel.
 pub(super) fn wave_binds(limits: &wgpu::Limits, fetch: Fetch) -> bool {
     limits.max_storage_buffers_per_shader_stage >= storage_buffers(fetch) + WAVE_BINDINGS
-}
-
-#[cfg_attr(not(feature = "native"), allow(dead_code))]
-impl Kernels {
-    /// The pipeline of `ENTRIES[kind]`.
-    pub(super) fn pipeline(&self, kind: usize) -> &wgpu::ComputePipeline {
-        [
-            &self.generate,
-            &self.advance,
-            &self.extend,
-            &self.scan,
-            &self.shade,
-            &self.advance_shadows,
-            &self.shadow,
-            &self.gather,
-            &self.finish,
-        ][kind]
-    }
 }
 
 /// Words of `wave_args`: the dispatch over a round's rays, then over its shadow rays.
@@ -137,28 +122,10 @@ impl WavePipelines {
             };
             made.push(compile(gpu, layout, &self.modules, entry, spec, None)?);
         }
-        let [
-            generate,
-            advance,
-            extend,
-            scan,
-            shade,
-            advance_shadows,
-            shadow,
-            gather,
-            finish,
-        ] = <[_; 9]>::try_from(made).unwrap_or_else(|_| unreachable!("one pipeline an entry"));
-        let kernels = Arc::new(Kernels {
-            generate,
-            advance,
-            extend,
-            scan,
-            shade,
-            advance_shadows,
-            shadow,
-            gather,
-            finish,
-        });
+        let kernels: Arc<Kernels> = Arc::new(
+            made.try_into()
+                .unwrap_or_else(|_| unreachable!("one pipeline an entry")),
+        );
         compiled.insert(spec, kernels.clone());
         Ok(kernels)
     }
@@ -274,7 +241,27 @@ impl Wave {
 
 #[cfg(test)]
 mod tests {
-    use super::{Fetch, wave_binds};
+    use super::{ENTRIES, Fetch, kernel, wave_binds};
+
+    /// Each kernel's index names its entry point.
+    #[test]
+    fn the_kernel_indices_name_their_entries() {
+        let named = [
+            (kernel::GENERATE, "wf_generate"),
+            (kernel::ADVANCE, "wf_advance"),
+            (kernel::EXTEND, "wf_extend"),
+            (kernel::SCAN, "wf_scan"),
+            (kernel::SHADE, "wf_shade"),
+            (kernel::ADVANCE_SHADOWS, "wf_advance_shadows"),
+            (kernel::SHADOW, "wf_shadow"),
+            (kernel::GATHER, "wf_gather"),
+            (kernel::FINISH, "wf_finish"),
+        ];
+        assert_eq!(named.len(), ENTRIES.len());
+        for (i, name) in named {
+            assert_eq!(ENTRIES[i], name);
+        }
+    }
 
     /// The default of 10 storage buffers a stage (WebGPU's) binds the kernels neither way
     /// of reading the scene; 13 binds them with the scene in textures only, 16 both ways.

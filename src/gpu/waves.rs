@@ -12,6 +12,9 @@ use std::ops::Range;
 use super::cut::Cut;
 use super::device::Gpu;
 use super::scene::{Bound, GpuScene};
+use super::wavefront::kernel::{
+    ADVANCE, ADVANCE_SHADOWS, EXTEND, FINISH, GATHER, GENERATE, SCAN, SHADE, SHADOW,
+};
 use super::wavefront::{Clock, SHADOW_ARGS, Wave};
 use crate::error::Result;
 use crate::gpu_types::{GpuTile, WORKGROUP_INVOCATIONS};
@@ -72,17 +75,6 @@ pub(super) fn submit_band(
     Ok((enc, dispatches))
 }
 
-/// Indices in `wavefront::ENTRIES` (and `Kernels`).
-const GENERATE: usize = 0;
-const ADVANCE: usize = 1;
-const EXTEND: usize = 2;
-const SCAN: usize = 3;
-const SHADE: usize = 4;
-const ADVANCE_SHADOWS: usize = 5;
-const SHADOW: usize = 6;
-const GATHER: usize = 7;
-const FINISH: usize = 8;
-
 /// A tile's compute passes as they are encoded: which kernel each runs, for the clock.
 struct Passes<'a> {
     bound: &'a Bound,
@@ -112,7 +104,7 @@ impl Passes<'_> {
             label: None,
             timestamp_writes,
         });
-        pass.set_pipeline(self.wave.kernels.pipeline(kind));
+        pass.set_pipeline(&self.wave.kernels[kind]);
         pass.set_bind_group(2, &self.wave.group, &[]);
         if matches!(kind, ADVANCE | ADVANCE_SHADOWS) {
             pass.set_bind_group(3, &self.wave.args_group, &[]);
