@@ -212,22 +212,10 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
     );
     if globals.wavefront != 0 {
         // Halve the side (bands stay whole rows of tiles, sides being powers of two),
-        // down to one workgroup's square, until each of the wave's records fits a
-        // storage binding, all of them `shape.wave_bytes`, and a dispatch over a
-        // round's rays the device's workgroups.
-        let limit = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        let fits = |side: u32| {
-            let paths = u64::from(side * side) * u64::from(cut.pass_samples);
-            let bytes = wave_buffer_bytes(paths, u64::from(globals.n_lights));
-            let groups = (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
-            bytes.iter().all(|&b| b <= limit)
-                && bytes.iter().sum::<u64>() <= shape.wave_bytes
-                && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
-        };
+        // down to one workgroup's square, until the wave fits.
+        let paths = |side: u32| u64::from(side * side) * u64::from(cut.pass_samples);
         let mut side = cut.tile_rows.min(shape.wave_side);
-        while side > WORKGROUP_SIDE && !fits(side) {
+        while side > WORKGROUP_SIDE && !wave_fits(limits, shape, paths(side), globals.n_lights) {
             side /= 2;
         }
         (cut.tile_width, cut.tile_rows) = (side, side);
@@ -235,18 +223,30 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
     cut
 }
 
+/// Whether a wave of `paths` paths on a scene of `lights` lights fits: each of its
+/// records a storage binding, all of them `shape.wave_bytes`, and a dispatch over a
+/// round's rays the device's workgroups.
+fn wave_fits(limits: &wgpu::Limits, shape: &Shape, paths: u64, lights: u32) -> bool {
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let bytes = wave_buffer_bytes(paths, u64::from(lights));
+    let groups = (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
+    bytes.iter().all(|&b| b <= limit)
+        && bytes.iter().sum::<u64>() <= shape.wave_bytes
+        && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{Fetch, Shape, cut_for, fetch_by, gpu_shape, shape_for};
+    use super::{Fetch, Shape, cut_for, fetch_by, gpu_shape, shape_for, wave_fits};
     use crate::gpu::wavefront::wave_paths;
-    use crate::gpu_types::{
-        GpuGlobals, WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, wave_buffer_bytes,
-    };
+    use crate::gpu_types::GpuGlobals;
 
-    /// A wavefront frame's waves fit: each record a storage binding, all of them the
-    /// shape's `wave_bytes`, a dispatch over a round's rays the device's workgroups; and
-    /// they are as large as that allows (twice the side would not fit, or the side is the
-    /// cap). More lights make smaller waves.
+    /// A wavefront frame's waves fit (`wave_fits`: each record a storage binding, all of
+    /// them the shape's `wave_bytes`, a dispatch over a round's rays the device's
+    /// workgroups), and they are as large as that allows (twice the side would not fit,
+    /// or the side is the cap). More lights make smaller waves.
     #[test]
     fn a_waves_records_fit_the_budget_and_the_device() {
         let big = wgpu::Limits {
@@ -256,9 +256,6 @@ mod tests {
         };
         let small = wgpu::Limits::default();
         for (limits, shape) in [(&big, gpu_shape()), (&small, shape_for(true).unwrap())] {
-            let limit = limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size);
             let mut last = u32::MAX;
             for lights in [1, 3, 12, 400] {
                 let globals = GpuGlobals {
@@ -273,12 +270,7 @@ mod tests {
                 assert_eq!(cut.tile_width, cut.tile_rows, "square waves");
                 let fits = |side: u32| {
                     let paths = u64::from(side * side * cut.pass_samples);
-                    let bytes = wave_buffer_bytes(paths, u64::from(lights));
-                    let groups =
-                        (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
-                    bytes.iter().all(|&b| b <= limit)
-                        && bytes.iter().sum::<u64>() <= shape.wave_bytes
-                        && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
+                    wave_fits(limits, &shape, paths, lights)
                 };
                 // The square tile the cut would make anyway caps a wave's side too.
                 let squares = Shape {
