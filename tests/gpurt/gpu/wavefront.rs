@@ -214,6 +214,20 @@ fn heavy_pixels_and_many_samples_on_the_wavefront_kernels_match_cpu() {
     ]);
 }
 
+/// The bundled glass scene at 24x20 and depth 16, `spp` samples a pixel: paths of many
+/// rays a round.
+fn deep_glass(spp: u32) -> (Scene, RenderOptions) {
+    let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
+    let opts = RenderOptions {
+        width: 24,
+        height: 20,
+        spp,
+        max_depth: 16,
+        ..RenderOptions::for_camera(&glass.camera)
+    };
+    (glass, opts)
+}
+
 /// Whether two sums of the same light differ by rounding only: within 2^-16 of the larger
 /// channel in each channel.
 fn rounding_apart(a: Vec3, b: Vec3) -> bool {
@@ -230,14 +244,7 @@ fn rounding_apart(a: Vec3, b: Vec3) -> bool {
 #[test]
 fn the_cpu_twin_of_the_kernels_traces_what_the_cpu_traces() {
     let mut cases = scenes();
-    let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
-    let deep = RenderOptions {
-        width: 24,
-        height: 20,
-        spp: 3,
-        max_depth: 16,
-        ..RenderOptions::for_camera(&glass.camera)
-    };
+    let (glass, deep) = deep_glass(3);
     cases.push(("glass at depth 16".to_string(), glass, deep));
     for (name, scene, opts) in cases {
         let buffers = pack::pack(scene).expect("packs");
@@ -284,14 +291,7 @@ fn the_cpu_twin_of_the_kernels_traces_what_the_cpu_traces() {
 /// `resume`, and every other pixel is still the CPU's, rays and counts exactly.
 #[test]
 fn paths_that_outgrow_the_wave_are_flagged_and_the_rest_are_traced() {
-    let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
-    let opts = RenderOptions {
-        width: 24,
-        height: 20,
-        spp: 2,
-        max_depth: 16,
-        ..RenderOptions::for_camera(&glass.camera)
-    };
+    let (glass, opts) = deep_glass(2);
     let buffers = pack::pack(glass).expect("packs");
     let globals = frame::globals(&buffers, &opts);
     let b = Bindings::gpu_walk(&buffers, &globals);
