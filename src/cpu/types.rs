@@ -91,7 +91,7 @@ pub struct Ray {
 /// Closest hit: distance, what was hit, triangle barycentrics, the boxes the walk tested
 /// (the `cost` AOV) and the nodes it fetched (the counters; the shader keeps those in a
 /// private variable).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Hit {
     pub t: f32,
     pub prim: u32,

@@ -39,7 +39,7 @@ struct WaveRay {
 
 /// What `wf_extend` found for the ray of the same index, and the ambient term `wf_shade`
 /// found (`WaveHit`; the walk's node fetches are the CPU hit's `nodes`).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct WaveHit {
     hit: Hit,
     flags: u32,
@@ -413,25 +413,13 @@ pub fn wave_sums(
     let paths = tile.width * tile.height * tile.sample_count;
     let rays = room.max(paths) as usize;
     let slots = rays * b.lights.len().max(1);
-    let hit = WaveHit {
-        hit: Hit {
-            t: NO_HIT,
-            prim: NO_PRIM,
-            u: 0.0,
-            v: 0.0,
-            cost: 0,
-            nodes: 0,
-        },
-        flags: 0,
-        children: 0,
-        ambient: Vec3::ZERO,
-    };
     let mut w = Wave {
         b,
         tile: *tile,
         paths: vec![WavePath::default(); paths as usize],
         rays: vec![WaveRay::default(); 2 * rays],
-        hits: vec![hit; rays],
+        // Written by `wf_extend` before anything reads them.
+        hits: vec![WaveHit::default(); rays],
         shadows: vec![WaveShadow::default(); slots],
         queue: vec![0; slots],
         scan: vec![0; rays.div_ceil(W as usize)],
