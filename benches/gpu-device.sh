@@ -20,11 +20,17 @@
 # than the limit and still says where it was.
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
+# SMOKE=1 runs the `wavefront` and `images` steps at thumbnail sizes, e.g. here on lavapipe
+# (GPURT_ADAPTER=llvmpipe) after packing, to check the script before a device runs it.
 set -uo pipefail
 
 OUT=${OUT:-$PWD/device-out}
 mkdir -p "$OUT"
 what=${*:-wavefront images bench tests}
+sizes=1920x1080,3840x2160 spps=1,16 hd=(1920 1080) uhd=(3840 2160)
+if [[ -n ${SMOKE:-} ]]; then
+    sizes=96x54,192x108 spps=1,2 hd=(96 54) uhd=(192 108)
+fi
 
 for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
 chmod +x .device/gpurt* 2>/dev/null
@@ -61,18 +67,18 @@ done
 if [[ $what == *wavefront* ]]; then
     echo "== wavefront"
     for k in main wavefront; do
-        GPURT_KERNELS=$k ./.device/gpurt bench "${scenes[@]}" --sizes 1920x1080,3840x2160 \
-            --spp 1,16 --frames 3 --backend gpu >"$OUT/wavefront-$k.md" 2>"$OUT/wavefront-$k.log"
+        GPURT_KERNELS=$k ./.device/gpurt bench "${scenes[@]}" --sizes "$sizes" \
+            --spp "$spps" --frames 3 --backend gpu >"$OUT/wavefront-$k.md" 2>"$OUT/wavefront-$k.log"
         echo "$k: exit $?"
         cat "$OUT/wavefront-$k.md"
         grep 'wavefront kernels' "$OUT/wavefront-$k.log"
-        GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width 1920 \
-            --height 1080 --spp 4 --backend gpu 2>&1 | tail -1
+        GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width "${hd[0]}" \
+            --height "${hd[1]}" --spp 4 --backend gpu 2>&1 | tail -1
     done
     ./.device/gpurt diff /tmp/balls-4-main.png /tmp/balls-4-wavefront.png 2>&1 | tee "$OUT/wavefront-diff.log"
     # Waves of 4 GiB of records (a million paths and more) against the default 512 MiB.
     GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) ./.device/gpurt bench "${scenes[0]}" \
-        "${scenes[6]}" --sizes 3840x2160 --spp 1 --frames 3 --backend gpu 2>&1 |
+        "${scenes[6]}" --sizes "${uhd[0]}x${uhd[1]}" --spp 1 --frames 3 --backend gpu 2>&1 |
         tee "$OUT/wavefront-4g.md" | grep '^|'
 fi
 
@@ -81,7 +87,7 @@ if [[ $what == *images* ]]; then
     for s in balls-4 mount-9 teapot-6; do
         for f in textures buffers; do
             GPURT_FETCH=$f ./.device/gpurt "$(ls "$spd/$s".nff* | head -1)" -o "/tmp/$s-$f.png" \
-                --width 3840 --height 2160 --spp 3 --backend gpu 2>&1 | tail -1
+                --width "${uhd[0]}" --height "${uhd[1]}" --spp 3 --backend gpu 2>&1 | tail -1
         done
         if cmp "/tmp/$s-textures.png" "/tmp/$s-buffers.png"; then
             echo "$s: textures and buffers byte-identical"
