@@ -21,7 +21,8 @@
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
 # SMOKE=1 runs the `wavefront` and `images` steps at thumbnail sizes, e.g. here on lavapipe
-# (GPURT_ADAPTER=llvmpipe) after packing, to check the script before a device runs it.
+# after packing (`SMOKE=1 GPURT_ADAPTER=llvmpipe benches/gpu-device.sh wavefront images`),
+# to check the script before a device runs it.
 set -uo pipefail
 
 OUT=${OUT:-$PWD/device-out}
@@ -49,8 +50,11 @@ if [[ $manifest != "$PWD" ]]; then
     mkdir -p "$(dirname "$manifest")"
     ln -sfn "$PWD" "$manifest"
 fi
-rm -rf "$manifest/../shared"
-tar -C "$manifest/.." -xJf .device/shared.tar.xz
+# The scenes beside the checkout, as the tests expect them: unpacked where missing, and
+# never replaced (here, on the machine that packed them, they are the originals).
+if [[ ! -d $manifest/../shared/scenes ]]; then
+    tar -C "$manifest/.." -xJf .device/shared.tar.xz
+fi
 mkdir -p target/debug target/tmp
 cp .device/gpurt-debug target/debug/gpurt
 
