@@ -12,7 +12,8 @@ use std::sync::atomic::AtomicBool;
 use libfuzzer_sys::fuzz_target;
 
 use gpurt::frame::{self, RenderOptions};
-use gpurt::scene::{FileKind, Light, Scene, auto, mesh, nff};
+use gpurt::scene::io::FileKind;
+use gpurt::scene::{Light, Scene, auto, mesh, nff};
 
 /// Inputs and scenes past these are skipped (not failed): they are valid, but would make
 /// one execution cost milliseconds instead of microseconds.
