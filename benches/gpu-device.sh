@@ -12,7 +12,8 @@
 # kernel and through the wavefront kernels (GPURT_KERNELS), one after the other (with
 # each wavefront kernel's GPU time a frame, from timestamp queries), renders balls-4 at
 # 1080p both ways for `gpurt diff`, then times waves of 4 GiB (GPURT_WAVE_BYTES) on
-# balls-4 and mount-9 at 4K. `images` renders three scenes at 4K with the scene read
+# balls-4 and mount-9 at 4K; each of its benches stops after WAVE_TIMEOUT seconds (180 by
+# default), keeping the rows measured by then. `images` renders three scenes at 4K with the scene read
 # from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte for
 # byte. `tests` runs
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
@@ -71,9 +72,12 @@ done
 if [[ $what == *wavefront* ]]; then
     echo "== wavefront"
     for k in main wavefront; do
-        GPURT_KERNELS=$k ./.device/gpurt bench "${scenes[@]}" --sizes "$sizes" \
-            --spp "$spps" --frames 3 --backend gpu >"$OUT/wavefront-$k.md" 2>"$OUT/wavefront-$k.log"
-        echo "$k: exit $?"
+        # Capped (WAVE_TIMEOUT seconds, 180 by default), so that kernels far slower than
+        # hoped leave time for the steps after; the rows measured by then are printed.
+        GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench "${scenes[@]}" \
+            --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu >"$OUT/wavefront-$k.md" \
+            2>"$OUT/wavefront-$k.log"
+        echo "$k: exit $? (124: stopped at ${WAVE_TIMEOUT:-180} s)"
         cat "$OUT/wavefront-$k.md"
         grep 'wavefront kernels' "$OUT/wavefront-$k.log"
         GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width "${hd[0]}" \
@@ -81,7 +85,8 @@ if [[ $what == *wavefront* ]]; then
     done
     ./.device/gpurt diff /tmp/balls-4-main.png /tmp/balls-4-wavefront.png 2>&1 | tee "$OUT/wavefront-diff.log"
     # Waves of 4 GiB of records (a million paths and more) against the default 512 MiB.
-    GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) ./.device/gpurt bench "${scenes[0]}" \
+    GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) timeout "${WAVE_TIMEOUT:-180}" \
+        ./.device/gpurt bench "${scenes[0]}" \
         "${scenes[6]}" --sizes "${uhd[0]}x${uhd[1]}" --spp 1 --frames 3 --backend gpu 2>&1 |
         tee "$OUT/wavefront-4g.md" | grep '^|'
 fi
