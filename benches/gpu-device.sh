@@ -13,7 +13,7 @@
 # each wavefront kernel's GPU time a frame, from timestamp queries), renders balls-4 at
 # 1080p both ways for `gpurt diff`, then times waves of 4 GiB (GPURT_WAVE_BYTES) on
 # balls-4 and mount-9 at 4K; each of its benches stops after WAVE_TIMEOUT seconds (180 by
-# default), keeping the rows measured by then. `images` renders three scenes at 4K with the scene read
+# default; half that for the 4 GiB waves), keeping the rows measured by then. `images` renders three scenes at 4K with the scene read
 # from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte for
 # byte. `tests` runs
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
@@ -77,7 +77,12 @@ if [[ $what == *wavefront* ]]; then
         GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench "${scenes[@]}" \
             --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu >"$OUT/wavefront-$k.md" \
             2>"$OUT/wavefront-$k.log"
-        echo "$k: exit $? (124: stopped at ${WAVE_TIMEOUT:-180} s)"
+        status=$?
+        if [[ $status == 124 ]]; then
+            echo "$k: stopped after ${WAVE_TIMEOUT:-180} s, the rows so far:"
+        else
+            echo "$k: exit $status"
+        fi
         cat "$OUT/wavefront-$k.md"
         grep 'wavefront kernels' "$OUT/wavefront-$k.log"
         GPURT_KERNELS=$k ./.device/gpurt "${scenes[0]}" -o "/tmp/balls-4-$k.png" --width "${hd[0]}" \
@@ -85,7 +90,7 @@ if [[ $what == *wavefront* ]]; then
     done
     ./.device/gpurt diff /tmp/balls-4-main.png /tmp/balls-4-wavefront.png 2>&1 | tee "$OUT/wavefront-diff.log"
     # Waves of 4 GiB of records (a million paths and more) against the default 512 MiB.
-    GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) timeout "${WAVE_TIMEOUT:-180}" \
+    GPURT_KERNELS=wavefront GPURT_WAVE_BYTES=$((4 << 30)) timeout $((${WAVE_TIMEOUT:-180} / 2)) \
         ./.device/gpurt bench "${scenes[0]}" \
         "${scenes[6]}" --sizes "${uhd[0]}x${uhd[1]}" --spp 1 --frames 3 --backend gpu 2>&1 |
         tee "$OUT/wavefront-4g.md" | grep '^|'
