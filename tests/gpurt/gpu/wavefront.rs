@@ -14,7 +14,7 @@ use gpurt::cpu::types::Bindings;
 use gpurt::cpu::wavefront::wave_sums;
 use gpurt::film::Film;
 use gpurt::frame::{self, RenderOptions};
-use gpurt::gpu::GpuRenderer;
+use gpurt::gpu::{GpuRenderer, GpuScene};
 use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Light, Scene};
@@ -33,21 +33,33 @@ fn both(g: &Gpu, traversal: u32) -> [Gpu; 2] {
     })
 }
 
+/// `buffers` on `g`'s device for a frame of `opts` (counting where `counters` is 1), and
+/// the frame.
+fn upload(
+    g: &Gpu,
+    buffers: &SceneBuffers,
+    opts: &RenderOptions,
+    counters: u32,
+) -> (GpuScene, GpuGlobals) {
+    let globals = GpuGlobals {
+        counters,
+        ..g.renderer.frame(buffers, &frame::globals(buffers, opts))
+    };
+    let scene = g
+        .renderer
+        .upload(&g.ctx.device, &g.ctx.queue, buffers, &globals)
+        .expect("uploads");
+    (scene, globals)
+}
+
 /// The image, rays, counts and frame of a counting frame on `g`.
 fn render(
     g: &Gpu,
     buffers: &SceneBuffers,
     opts: &RenderOptions,
 ) -> (Film, u64, Counters, GpuGlobals) {
-    let globals = GpuGlobals {
-        counters: 1,
-        ..g.renderer.frame(buffers, &frame::globals(buffers, opts))
-    };
+    let (scene, globals) = upload(g, buffers, opts, 1);
     let (device, queue) = (&g.ctx.device, &g.ctx.queue);
-    let scene = g
-        .renderer
-        .upload(device, queue, buffers, &globals)
-        .expect("uploads");
     let never = AtomicBool::new(false);
     let (film, rays) = gpurt::gpu::trace(device, queue, &scene, &|_| {}, &never).expect("traces");
     let counted = scene.counters().expect("counts");
@@ -338,13 +350,7 @@ fn timing_the_kernels_changes_nothing_and_times_each() {
     let buffers = pack::pack(scene).expect("packs");
     let (device, queue) = (&g.ctx.device, &g.ctx.queue);
     let never = AtomicBool::new(false);
-    let frame = wave
-        .renderer
-        .frame(&buffers, &frame::globals(&buffers, &opts));
-    let mut up = wave
-        .renderer
-        .upload(device, queue, &buffers, &frame)
-        .expect("uploads");
+    let (mut up, _) = upload(&wave, &buffers, &opts, 0);
     let plain = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
     assert!(up.kernel_times().is_none(), "{name}: not timed yet");
     if !up.time_kernels(device) {
@@ -376,13 +382,7 @@ fn timing_the_kernels_changes_nothing_and_times_each() {
         let s = times.iter().find(|(n, _)| *n == traces).expect("named").1;
         assert!(s > 0.0, "{name}: {traces} took no time");
     }
-    let main_frame = main
-        .renderer
-        .frame(&buffers, &frame::globals(&buffers, &opts));
-    let mut one = main
-        .renderer
-        .upload(device, queue, &buffers, &main_frame)
-        .expect("uploads");
+    let (mut one, _) = upload(&main, &buffers, &opts, 0);
     assert!(
         !one.time_kernels(device),
         "the one kernel has no wave to time"
