@@ -68,7 +68,7 @@ impl GpuScene {
         let Some(wave) = self.wave.as_mut() else {
             return false;
         };
-        wave.clock = Clock::new(&Device::new(device), wave.depth);
+        wave.clock = Clock::new(&Device::new(device), wave.rounds());
         wave.clock.is_some()
     }
 

@@ -47,6 +47,12 @@ pub(super) mod kernel {
     pub(in crate::gpu) const FINISH: usize = 8;
 }
 
+/// Compute passes a tile's wave of `rounds` rounds takes, one dispatch each: `wf_generate`,
+/// every kernel between it and `wf_finish` once a round, then `wf_finish`.
+pub(super) fn wave_passes(rounds: u32) -> u32 {
+    2 + (ENTRIES.len() as u32 - 2) * rounds
+}
+
 /// The pipelines of the kernels, in `ENTRIES` order. Read by `waves`, which runs natively
 /// only.
 pub(super) type Kernels = [wgpu::ComputePipeline; ENTRIES.len()];
@@ -145,10 +151,10 @@ pub(super) struct Clock {
 }
 
 impl Clock {
-    /// A clock for waves of `depth` rounds (`2 + 7 x depth` passes a tile), where the
-    /// device has timestamps and a query set holds them.
-    pub(super) fn new(gpu: &Device, depth: u32) -> Option<Clock> {
-        let passes = 2 + 7 * depth.max(1);
+    /// A clock for waves of `rounds` rounds (`wave_passes` a tile), where the device has
+    /// timestamps and a query set holds them.
+    pub(super) fn new(gpu: &Device, rounds: u32) -> Option<Clock> {
+        let passes = wave_passes(rounds);
         if 2 * passes > wgpu::QUERY_SET_MAX_QUERIES {
             return None;
         }
@@ -184,6 +190,11 @@ pub(super) struct Wave {
 }
 
 impl Wave {
+    /// The rounds a tile's wave takes: one a depth, at least one.
+    pub(super) fn rounds(&self) -> u32 {
+        self.depth.max(1)
+    }
+
     /// A wave of `capacity` paths for the kernels of `spec`, for frames of `globals`.
     pub(super) fn new(
         gpu: &Device,

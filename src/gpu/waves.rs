@@ -15,7 +15,7 @@ use super::scene::{Bound, GpuScene};
 use super::wavefront::kernel::{
     ADVANCE, ADVANCE_SHADOWS, EXTEND, FINISH, GATHER, GENERATE, SCAN, SHADE, SHADOW,
 };
-use super::wavefront::{Clock, SHADOW_ARGS, Wave};
+use super::wavefront::{Clock, SHADOW_ARGS, Wave, wave_passes};
 use crate::error::Result;
 use crate::gpu_types::{GpuTile, WORKGROUP_INVOCATIONS};
 
@@ -40,8 +40,9 @@ pub(super) fn submit_band(
     if clear {
         bound.clear(&mut enc, u64::from(cut.width) * u64::from(rows));
     }
-    let depth = wave.depth.max(1);
-    let clock = wave.clock.as_ref().filter(|c| c.passes == 2 + 7 * depth);
+    let rounds = wave.rounds();
+    let per_tile = wave_passes(rounds);
+    let clock = wave.clock.as_ref().filter(|c| c.passes == per_tile);
     let mut dispatches = 0;
     let mut tiles = cut.tiles(y0, rows, samples).into_iter().peekable();
     while let Some(tile) = tiles.next() {
@@ -59,11 +60,11 @@ pub(super) fn submit_band(
             kinds: Vec::new(),
         };
         passes.direct(&mut enc, GENERATE, pixels * tile.sample_count);
-        for _ in 0..depth {
+        for _ in 0..rounds {
             passes.round(&mut enc);
         }
         passes.direct(&mut enc, FINISH, pixels);
-        dispatches += 2 + 7 * depth;
+        dispatches += per_tile;
         if let Some(c) = clock {
             passes.read_clock(gpu, enc, c)?;
             enc = gpu.encoder();
