@@ -224,14 +224,16 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
 }
 
 /// Whether a wave of `paths` paths on a scene of `lights` lights fits: each of its
-/// records a storage binding, all of them `shape.wave_bytes`, and a dispatch over a
-/// round's rays the device's workgroups.
+/// records a storage binding, all of them `shape.wave_bytes`, and the dispatches over a
+/// round's rays and over its shadow rays (a slot per ray and light, all of them queued at
+/// most) the device's workgroups: past that, a dispatch sized on the device does nothing.
 fn wave_fits(limits: &wgpu::Limits, shape: &Shape, paths: u64, lights: u32) -> bool {
     let limit = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
     let bytes = wave_buffer_bytes(paths, u64::from(lights));
-    let groups = (paths * WAVE_RAYS_PER_PATH).div_ceil(WORKGROUP_INVOCATIONS.into());
+    let slots = paths * WAVE_RAYS_PER_PATH * u64::from(lights.max(1));
+    let groups = slots.div_ceil(WORKGROUP_INVOCATIONS.into());
     bytes.iter().all(|&b| b <= limit)
         && bytes.iter().sum::<u64>() <= shape.wave_bytes
         && groups <= u64::from(limits.max_compute_workgroups_per_dimension)
@@ -241,11 +243,11 @@ fn wave_fits(limits: &wgpu::Limits, shape: &Shape, paths: u64, lights: u32) -> b
 mod tests {
     use super::{Fetch, Shape, cut_for, fetch_by, gpu_shape, shape_for, wave_fits};
     use crate::gpu::wavefront::wave_paths;
-    use crate::gpu_types::GpuGlobals;
+    use crate::gpu_types::{GpuGlobals, WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS};
 
     /// A wavefront frame's waves fit (`wave_fits`: each record a storage binding, all of
-    /// them the shape's `wave_bytes`, a dispatch over a round's rays the device's
-    /// workgroups), and they are as large as that allows (twice the side would not fit,
+    /// them the shape's `wave_bytes`, the dispatches over a round's rays and its shadow
+    /// slots the device's workgroups), and they are as large as that allows (twice the side would not fit,
     /// or the side is the cap). More lights make smaller waves.
     #[test]
     fn a_waves_records_fit_the_budget_and_the_device() {
@@ -257,7 +259,7 @@ mod tests {
         let small = wgpu::Limits::default();
         for (limits, shape) in [(&big, gpu_shape()), (&small, shape_for(true).unwrap())] {
             let mut last = u32::MAX;
-            for lights in [1, 3, 12, 400] {
+            for lights in [1, 3, 5, 12, 400] {
                 let globals = GpuGlobals {
                     width: 3840,
                     height: 2160,
@@ -291,6 +293,13 @@ mod tests {
                     "{lights} lights: side {side} of {cap}"
                 );
                 let paths = wave_paths(&cut);
+                // The dispatches over a round's rays and over its shadow slots.
+                let slots = u64::from(paths) * WAVE_RAYS_PER_PATH * u64::from(lights);
+                let groups = slots.div_ceil(WORKGROUP_INVOCATIONS.into());
+                assert!(
+                    groups <= u64::from(limits.max_compute_workgroups_per_dimension),
+                    "{lights} lights: {groups} workgroups over the shadow slots"
+                );
                 assert!(paths <= last, "{lights} lights: {paths} paths");
                 last = paths;
             }
