@@ -254,14 +254,15 @@ fn two_scenes_are_refused_with_a_clear_message() {
     assert!(!d.join("a.png").exists() && !d.join("b.png").exists());
 }
 
-/// Runs `gpurt SCENE --backend gpu -o out.png ARGS` in `d` with `GPURT_FAULT=fault`: it
-/// must exit 2 and leave nothing in `d` but the scene (no output file, partial or
-/// temporary), and the same command without the fault must write its image. Returns the
-/// faulty run's error output.
+/// Runs `gpurt SCENE --backend gpu -o out.png ARGS` in `d` with `GPURT_FAULT=fault` and
+/// the environment `envs`: it must exit 2 and leave nothing in `d` but the scene (no
+/// output file, partial or temporary), and the same command without the fault must write
+/// its image. Returns the faulty run's error output.
 fn a_gpu_fault_exits_2_without_an_output_file(
     d: &Path,
     scene: &str,
     args: &[&str],
+    envs: &[(&str, &str)],
     fault: &str,
 ) -> String {
     let run = |fault: &str| {
@@ -269,6 +270,7 @@ fn a_gpu_fault_exits_2_without_an_output_file(
             .args([scene, "--backend", "gpu", "-o", "out.png"])
             .args(args)
             .current_dir(d)
+            .envs(envs.iter().copied())
             .env("GPURT_CACHE_DIR", "")
             .env("GPURT_FAULT", fault)
             .output()
@@ -289,18 +291,34 @@ fn a_gpu_fault_exits_2_without_an_output_file(
 
 /// A GPU lost mid-render (`GPURT_FAULT=lose-device` destroys the device once the first
 /// band is in) ends the command with an error naming the step, a non-zero exit and no
-/// output file, partial or temporary.
+/// output file, partial or temporary. On software adapters only, as its in-process twin
+/// (`a_device_lost_half_way_is_an_error_not_an_image`): on an H200 the command alone, and
+/// beside another render on the GPU, exits 2 with this error in a second, but the suite
+/// run with it stopped making progress twice in two runs, sixteen GPU tests waiting
+/// (docs/gpu.md, "An open hang"). `GPURT_TEST_LOSS_ON_HARDWARE=1` runs it there too.
 #[test]
 fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
     let Some(ctx) = crate::common::gpu_context() else {
         return;
     };
+    let anywhere = std::env::var("GPURT_TEST_LOSS_ON_HARDWARE").is_ok_and(|v| v == "1");
+    if !gpurt::gpu::is_software(&ctx.info) && !anywhere {
+        crate::common::skip(&format!(
+            "{}: runs on software adapters only (see its comment)",
+            ctx.info.name
+        ));
+        return;
+    }
     drop(ctx);
     let d = workdir("device-lost");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
-    // Four bands on a software adapter (2^18 samples a band), several on any other.
+    // Several bands on every adapter: a software adapter's take 2^18 samples, and
+    // GPURT_BAND_BYTES caps a GPU's at 512 rows (of 512 pixels of 16 bytes), where its
+    // own bands (256 MiB) would hold the whole image, read back before the fault.
     let size = ["--width", "512", "--height", "2048", "--spp", "4"];
-    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "ball.nff", &size, "lose-device");
+    let bands = [("GPURT_BAND_BYTES", "4194304")];
+    let err =
+        a_gpu_fault_exits_2_without_an_output_file(&d, "ball.nff", &size, &bands, "lose-device");
     assert!(err.contains("GPU error: reading back"), "{err}");
 }
 
@@ -317,6 +335,15 @@ fn an_out_of_memory_on_upload_exits_non_zero_without_an_output_file() {
     let Some(ctx) = crate::common::gpu_context() else {
         return;
     };
+    if !gpurt::gpu::is_software(&ctx.info) {
+        // A GPU's memory is its own: the address-space cap meets only wgpu's host side,
+        // and the upload succeeds (`fault::Fault::OutOfMemory`).
+        crate::common::skip(&format!(
+            "{}: the out-of-memory fault runs out of memory only on a software adapter",
+            ctx.info.name
+        ));
+        return;
+    }
     drop(ctx);
     let d = workdir("out-of-memory");
     let mut scene = String::from(SCENE);
@@ -324,7 +351,7 @@ fn an_out_of_memory_on_upload_exits_non_zero_without_an_output_file() {
         scene += &format!("s {} {} -900 0.4\n", i % 1000 - 500, i / 1000 - 500);
     }
     std::fs::write(d.join("many.nff"), scene).unwrap();
-    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "many.nff", &[], "out-of-memory");
+    let err = a_gpu_fault_exits_2_without_an_output_file(&d, "many.nff", &[], &[], "out-of-memory");
     assert!(
         err.contains("GPU error: uploading the scene: Out of Memory")
             && (err.contains("create_texture") || err.contains("create_buffer")),
