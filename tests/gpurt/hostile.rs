@@ -199,21 +199,30 @@ fn a_hundred_thousand_coincident_triangles_build_and_render() {
     );
 }
 
-/// The peak memory `gpurt SCENE --stats` reports (MiB).
-fn reported_peak_mib(args: &[&str], dir: &Path) -> f64 {
+/// The peak memory `gpurt SCENE --stats` reports (MiB), and the threads it rendered on.
+fn reported_peak_mib(args: &[&str], dir: &Path) -> (f64, u32) {
     let out = crate::common::gpurt(args, dir);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{args:?}: {stderr}");
-    stderr
-        .lines()
-        .find_map(|l| l.strip_prefix("peak memory "))
-        .and_then(|l| l.trim_end_matches(" MiB").trim().parse().ok())
-        .unwrap_or_else(|| panic!("{args:?}: no peak memory line in {stderr}"))
+    let line = |key: &str| {
+        stderr
+            .lines()
+            .find_map(|l| l.strip_prefix(key))
+            .unwrap_or_else(|| panic!("{args:?}: no {key} line in {stderr}"))
+            .trim()
+    };
+    let peak = line("peak memory ").trim_end_matches(" MiB").parse();
+    let threads = line("threads ").split_whitespace().next().map(str::parse);
+    match (peak, threads) {
+        (Ok(peak), Some(Ok(threads))) => (peak, threads),
+        _ => panic!("{args:?}: unreadable peak memory or threads in {stderr}"),
+    }
 }
 
 /// The process's peak memory stays within the bound docs/farm.md documents:
-/// 32 MiB + 110 bytes a bounded primitive + 32 bytes a pixel, on the largest shared
-/// scenes (CPU backend; `--stats` prints the peak), whatever the size of their files.
+/// 32 MiB + 110 bytes a bounded primitive + 32 bytes a pixel + 256 KiB a render thread,
+/// on the largest shared scenes (CPU backend; `--stats` prints the peak), whatever the
+/// size of their files. (mount-9 peaks at 87.7 MiB on 2 threads and 89.4 on 16.)
 #[test]
 fn peak_memory_stays_within_its_documented_bound() {
     let Some(root) = crate::common::shared_scenes() else {
@@ -225,7 +234,7 @@ fn peak_memory_stays_within_its_documented_bound() {
         let [s, t, c, b] = scene::summary(&path).expect("reads").counts();
         let prims = (s + t + c + b) as f64;
         let (w, h) = (320, 240);
-        let peak_mib = reported_peak_mib(
+        let (peak_mib, threads) = reported_peak_mib(
             &[
                 path.to_str().unwrap(),
                 "--backend",
@@ -241,8 +250,12 @@ fn peak_memory_stays_within_its_documented_bound() {
             &dir,
         );
         let mib = (1u64 << 20) as f64;
-        let bound = 32.0 + (110.0 * prims + 32.0 * f64::from(w * h)) / mib;
-        println!("{name}: {prims} primitives, peak {peak_mib:.1} MiB, bound {bound:.1} MiB");
+        let bound =
+            32.0 + (110.0 * prims + 32.0 * f64::from(w * h)) / mib + 0.25 * f64::from(threads);
+        println!(
+            "{name}: {prims} primitives, {threads} threads, peak {peak_mib:.1} MiB, \
+             bound {bound:.1} MiB"
+        );
         assert!(
             peak_mib <= bound,
             "{name}: peak {peak_mib} MiB over {bound:.1} MiB"
@@ -280,7 +293,8 @@ fn a_large_file_of_comments_renders_in_the_memory_of_its_scene() {
     assert!(std::fs::metadata(&plain).unwrap().len() > 160 << 20);
     for name in ["comments.nff", "comments.nff.gz"] {
         let args = [name, "--backend", "cpu", "--width", "64", "--height", "64"];
-        let peak = reported_peak_mib(&[&args[..], &["-o", "out.png", "--stats"]].concat(), &dir);
+        let (peak, _) =
+            reported_peak_mib(&[&args[..], &["-o", "out.png", "--stats"]].concat(), &dir);
         println!("{name}: peak {peak:.1} MiB");
         assert!(peak < 32.0, "{name}: peak {peak} MiB");
         assert!(dir.join("out.png").exists());
