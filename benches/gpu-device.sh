@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [images] [bench] [quick] [tests] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -19,6 +19,8 @@
 # the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
 # than the limit and still says where it was.
+# `loss` looks for what stalls the GPU when a device is destroyed with work in flight
+# (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
 # SMOKE=1 runs the `wavefront` and `images` steps at thumbnail sizes, e.g. here on lavapipe
@@ -155,6 +157,40 @@ if [[ $what == *tests* ]]; then
         grep -oE '^test [^ ]+' "$OUT/tests.log" | cut -d' ' -f2 | sort | comm -23 /tmp/all-tests - | head -40
     fi
     [[ -d target/gpu-vs-cpu ]] && tar -C target -czf "$OUT/gpu-vs-cpu.tar.gz" gpu-vs-cpu
+fi
+
+if [[ $what == *loss* ]]; then
+    # Whether a device destroyed with work in flight stalls other processes' devices on
+    # the same GPU (docs/gpu.md, "An open hang"): fifteen renders of balls-4 start, then
+    # a render that destroys its device once its first band is in; each is given 60 s.
+    echo "== loss"
+    tmp=$(mktemp -d)
+    for i in $(seq 15); do
+        timeout 60 ./.device/gpurt "${scenes[0]}" --backend gpu -o "$tmp/busy-$i.png" \
+            --width "${hd[0]}" --height "${hd[1]}" --spp 256 >"$tmp/busy-$i.log" 2>&1 &
+    done
+    sleep 2
+    SECONDS=0
+    GPURT_FAULT=lose-device GPURT_BAND_BYTES=4194304 timeout 60 ./.device/gpurt \
+        "$manifest/scenes/spheres.nff" --backend gpu -o "$tmp/lost.png" --width 512 \
+        --height 2048 --spp 4 2>&1 | tail -1
+    echo "lost: exit ${PIPESTATUS[0]} after $SECONDS s"
+    wait
+    finished=0
+    for i in $(seq 15); do
+        if [[ -s $tmp/busy-$i.png ]]; then
+            finished=$((finished + 1))
+        else
+            echo "busy $i: no image: $(tail -1 "$tmp/busy-$i.log")"
+        fi
+    done
+    echo "busy renders finished: $finished of 15"
+    echo "lost in the suite (GPURT_TEST_LOSS_ON_HARDWARE=1), beside the GPU tests:"
+    GPURT_TEST_LOSS_ON_HARDWARE=1 timeout 120 ./.device/gpurt-tests --test-threads "$(nproc)" \
+        gpu:: cli::errors::a_device_lost >"$OUT/loss-tests.log" 2>&1
+    echo "exit $? (124: stalled)"
+    grep -E '^test result|running for over' "$OUT/loss-tests.log"
+    rm -rf "$tmp"
 fi
 
 if [[ $what == *huge* ]]; then
