@@ -265,10 +265,11 @@ fn a_lost_device_is_an_error_not_an_image() {
 /// A device lost while it renders (destroyed once the first band has been read back) ends
 /// the render with an error naming the step, never a partial image. On software adapters
 /// only: on the H100 this test passed alone, but the whole suite hung in the run that
-/// first had it, with this test among those that never finished (a device destroyed
-/// while other tests' devices on the same GPU were busy is the suspect; not yet
-/// understood, see docs/gpu.md). `GPURT_TEST_LOSS_ON_HARDWARE=1` runs it there too, to
-/// look into that.
+/// first had it, with this test among those that never finished, and on an H200 the
+/// command-line twin (`a_device_lost_mid_render_exits_non_zero_without_an_output_file`)
+/// stalled the suite twice in two runs: a device destroyed while other devices on the
+/// same GPU are busy (docs/gpu.md, "An open hang"). `GPURT_TEST_LOSS_ON_HARDWARE=1`
+/// runs it there too, to look into that (`benches/gpu-device.sh loss`).
 #[test]
 fn a_device_lost_half_way_is_an_error_not_an_image() {
     let Some(g) = gpu() else {
