@@ -11,6 +11,15 @@ use crate::gpu_types::{
 /// The kinds of ray counted apart: eye rays, shadow rays, and reflected and refracted rays.
 pub const KINDS: [&str; 3] = ["eye", "shadow", "secondary"];
 
+/// The pixels, across and down, that one 32-lane warp of a GPU traces: a workgroup's 64
+/// invocations cover 8x8 pixels in 4x2 blocks (`main` in shaders/main.wgsl), so its
+/// invocations 0 to 31 trace the top 8x4 pixels and 32 to 63 the bottom ones. Tiles and
+/// bands start on multiples of 8 pixels, so a frame's warps tile it from its corner.
+pub const WARP_PIXELS: [usize; 2] = [8, 4];
+
+/// Lanes of a warp (`WARP_PIXELS`): NVIDIA's warp.
+const WARP_LANES: u64 = 32;
+
 /// Rays and node fetches of a frame (or part of one), by kind (`KINDS`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Counters {
@@ -18,6 +27,12 @@ pub struct Counters {
     pub nodes: [u64; 3],
     /// Bytes one node fetch reads: the size of the node the walk reads.
     pub node_bytes: u64,
+    /// Over the GPU's warps (`WARP_PIXELS`), kind by kind: the node fetches of the warp's
+    /// pixels, and 32 times those of its pixel that fetched the most. A warp walks for as
+    /// long as its busiest lane does, so their ratio bounds the share of its lanes that
+    /// have a node to fetch (`lanes_busy`). Counted from the GPU's pixels only.
+    pub warp_nodes: [u64; 3],
+    pub warp_room: [u64; 3],
 }
 
 impl Counters {
@@ -39,12 +54,55 @@ impl Counters {
         }
     }
 
+    /// Adds a band of the GPU's pixels, `width` to a row, whose first row is a multiple
+    /// of 8, but for those whose index is in `skip` (sorted; they are counted elsewhere):
+    /// each pixel, and each warp of them (`warp_nodes`).
+    pub fn add_band(&mut self, px: &[GpuPixelCounts], width: usize, skip: &[usize]) {
+        let [across, down] = WARP_PIXELS;
+        let kept = |i: usize| skip.binary_search(&i).is_err();
+        for (_, p) in px.iter().enumerate().filter(|&(i, _)| kept(i)) {
+            self.add_pixel(p);
+        }
+        let rows = px.len() / width.max(1);
+        for y0 in (0..rows).step_by(down) {
+            for x0 in (0..width).step_by(across) {
+                let (mut sum, mut most) = ([0u64; 3], [0u64; 3]);
+                for y in y0..(y0 + down).min(rows) {
+                    for i in (x0..(x0 + across).min(width)).map(|x| y * width + x) {
+                        if !kept(i) {
+                            continue;
+                        }
+                        let p = &px[i];
+                        let nodes = [p.eye_nodes, p.shadow_nodes, p.secondary_nodes];
+                        for k in 0..3 {
+                            sum[k] += u64::from(nodes[k]);
+                            most[k] = most[k].max(u64::from(nodes[k]));
+                        }
+                    }
+                }
+                for k in 0..3 {
+                    self.warp_nodes[k] += sum[k];
+                    self.warp_room[k] += WARP_LANES * most[k];
+                }
+            }
+        }
+    }
+
     /// Adds counts of the same walk.
     pub fn add(&mut self, o: &Counters) {
         for k in 0..3 {
             self.rays[k] += o.rays[k];
             self.nodes[k] += o.nodes[k];
+            self.warp_nodes[k] += o.warp_nodes[k];
+            self.warp_room[k] += o.warp_room[k];
         }
+    }
+
+    /// At most what share of a warp's lanes have a node to fetch while it walks rays of
+    /// kind `k`, were its lanes to walk in step (`warp_nodes`; `None` where nothing was
+    /// counted by warps: the CPU's counts, or no node fetched).
+    pub fn lanes_busy(&self, k: usize) -> Option<f64> {
+        (self.warp_room[k] > 0).then(|| self.warp_nodes[k] as f64 / self.warp_room[k] as f64)
     }
 
     /// Every ray counted.
@@ -68,8 +126,11 @@ impl Counters {
         (0..3)
             .filter(|&k| self.rays[k] > 0)
             .map(|k| {
+                let busy = self.lanes_busy(k).map_or(String::new(), |b| {
+                    format!(", at most {:.0}% of a warp's lanes busy", 100.0 * b)
+                });
                 format!(
-                    "{:<11} {} rays, {:.1} nodes/ray, {:.0} node bytes/ray ({} B a node)",
+                    "{:<11} {} rays, {:.1} nodes/ray, {:.0} node bytes/ray ({} B a node){busy}",
                     format!("{who} {}", KINDS[k]),
                     self.rays[k],
                     self.nodes_per_ray(k),
@@ -118,5 +179,43 @@ mod tests {
         assert_eq!(lines.len(), 2, "{lines:?}");
         assert!(lines[0].starts_with("gpu eye "), "{lines:?}");
         assert!(lines[0].contains("15.0 nodes/ray") && lines[0].contains("1200 node bytes/ray"));
+        assert!(
+            !lines[0].contains("warp"),
+            "the CPU's counts have no warps: {lines:?}"
+        );
+    }
+
+    /// A band of 16x8 pixels is four warps of 8x4: one eye node everywhere, in the
+    /// top-left warp one pixel of 8 secondary nodes and one skipped (counted elsewhere),
+    /// in the bottom-right one a pixel of 50 eye nodes.
+    #[test]
+    fn a_band_is_counted_by_pixel_and_by_warp() {
+        let eye = GpuPixelCounts {
+            eye_rays: 1,
+            eye_nodes: 1,
+            ..Default::default()
+        };
+        let mut px = vec![eye; 16 * 8];
+        px[16 + 3].secondary_rays = 1;
+        px[16 + 3].secondary_nodes = 8;
+        px[5 * 16 + 12].eye_nodes = 50; // in warp (1, 1)
+        let mut c = Counters::new(112);
+        c.add_band(&px, 16, &[3 * 16 + 4]); // in warp (0, 0)
+        assert_eq!(c.rays, [127, 0, 1]);
+        assert_eq!(c.nodes, [127 + 49, 0, 8]);
+        // Warp (0, 0) has 31 pixels of one eye node: 31 of room 32. The others 32 of 32,
+        // but the one whose pixel fetched 50: 81 of room 32 x 50.
+        assert_eq!(c.warp_nodes, [31 + 32 + 32 + 81, 0, 8]);
+        assert_eq!(c.warp_room, [32 * 3 + 32 * 50, 0, 32 * 8]);
+        assert_eq!(c.lanes_busy(2), Some(1.0 / 32.0));
+        assert_eq!(c.lanes_busy(1), None);
+        let lines = c.report("gpu");
+        assert!(
+            lines[1].ends_with("at most 3% of a warp's lanes busy"),
+            "{lines:?}"
+        );
+        let mut twice = c;
+        twice.add(&c);
+        assert_eq!(twice.warp_room, c.warp_room.map(|r| 2 * r));
     }
 }

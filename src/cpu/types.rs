@@ -161,6 +161,7 @@ impl RayCounts {
             rays: [self.eye, self.shadow, self.reflected + self.refracted],
             nodes: [self.eye_nodes, self.shadow_nodes, self.secondary_nodes],
             node_bytes,
+            ..Counters::default()
         }
     }
 }

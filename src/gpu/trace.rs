@@ -385,11 +385,7 @@ async fn read_counts(
     skip.sort_unstable();
     gpu.read_async(&scene.bound.counts_back, pixels * COUNT_BYTES, |view| {
         let px: &[GpuPixelCounts] = bytemuck::cast_slice(view);
-        for (i, p) in px.iter().enumerate() {
-            if skip.binary_search(&i).is_err() {
-                counted.add_pixel(p);
-            }
-        }
+        counted.add_band(px, width as usize, &skip);
     })
     .await
 }

@@ -1,7 +1,8 @@
 //! The counters (`GpuGlobals::counters`, for `--stats` and `gpurt bench`): the rays and BVH
 //! node fetches the GPU counts by kind of ray, on every walk, against what the CPU twin of
-//! that walk counts on the same frame; a walk's counts do not pass for another walk's;
-//! counting changes no pixel; and pixels continued across dispatches are counted too.
+//! that walk counts on the same frame, in all and warp by warp; a walk's counts do not
+//! pass for another walk's; counting changes no pixel; and pixels continued across
+//! dispatches are counted too.
 
 use std::sync::atomic::AtomicBool;
 
@@ -20,16 +21,37 @@ use gpurt::scene::{self, Scene};
 use crate::common::versus::{Gpu, features_scene, gpu};
 use crate::common::{own_scenes, shared_scenes};
 
-/// What the CPU twin of the GPU's walk `globals.traversal` counts on the frame.
+/// What the CPU twin of the GPU's walk `globals.traversal` counts on the frame, its
+/// pixels grouped into the GPU's warps as the host groups the GPU's (`add_band`).
 fn twin(buffers: &SceneBuffers, globals: &GpuGlobals) -> Counters {
     let b = Bindings::gpu_walk(buffers, globals);
     let mut counts = RayCounts::default();
+    let mut pixels = Vec::new();
     for y in 0..globals.height {
         for x in 0..globals.width {
-            sample_sum(&b, x, y, 0..globals.spp, Vec3::ZERO, &mut counts);
+            let mut pixel = RayCounts::default();
+            sample_sum(&b, x, y, 0..globals.spp, Vec3::ZERO, &mut pixel);
+            counts.add(&pixel);
+            let k = pixel.counters(0);
+            let n = |v: u64| u32::try_from(v).expect("a pixel's count fits");
+            pixels.push(GpuPixelCounts {
+                eye_rays: n(k.rays[0]),
+                eye_nodes: n(k.nodes[0]),
+                shadow_rays: n(k.rays[1]),
+                shadow_nodes: n(k.nodes[1]),
+                secondary_rays: n(k.rays[2]),
+                secondary_nodes: n(k.nodes[2]),
+                _pad: [0; 2],
+            });
         }
     }
-    counts.counters(gpu_node_bytes(globals.traversal))
+    let mut warps = Counters::default();
+    warps.add_band(&pixels, globals.width as usize, &[]);
+    Counters {
+        warp_nodes: warps.warp_nodes,
+        warp_room: warps.warp_room,
+        ..counts.counters(gpu_node_bytes(globals.traversal))
+    }
 }
 
 /// The GPU's image, rays and counts of the frame, on `renderer`.
@@ -50,7 +72,9 @@ fn on_gpu(
 
 /// Counts equal kind by kind within one in 10^4 for rays (the drift of lights grazing a
 /// surface, as in `dispatch.rs`) and one in 10^3 for node fetches (a ray that moves by an
-/// ulp may take another path), with the same node size.
+/// ulp may take another path), in all and by warps (so the GPU's pixels are grouped
+/// where they are in the frame; a warp's room is 32 times its busiest pixel's fetches),
+/// with the same node size.
 fn agree(gpu: &Counters, cpu: &Counters) -> Result<(), String> {
     let near = |a: u64, b: u64, tol: f64| a.abs_diff(b) as f64 <= tol * a.max(b).max(1) as f64;
     for (k, kind) in KINDS.iter().enumerate() {
@@ -58,6 +82,17 @@ fn agree(gpu: &Counters, cpu: &Counters) -> Result<(), String> {
             return Err(format!(
                 "{kind} rays: the GPU counted {} rays and {} nodes, the CPU twin {} and {}",
                 gpu.rays[k], gpu.nodes[k], cpu.rays[k], cpu.nodes[k]
+            ));
+        }
+        // A pixel's node fetch more or less moves its warp's room by up to 32 (the lanes).
+        let room = 32.0 * 1e-3 * gpu.warp_nodes[k].max(cpu.warp_nodes[k]).max(1) as f64;
+        if !near(gpu.warp_nodes[k], cpu.warp_nodes[k], 1e-3)
+            || gpu.warp_room[k].abs_diff(cpu.warp_room[k]) as f64 > room
+        {
+            return Err(format!(
+                "{kind} rays by warps: the GPU counted {} of room for {} nodes, the CPU \
+                 twin {} for {}",
+                gpu.warp_room[k], gpu.warp_nodes[k], cpu.warp_room[k], cpu.warp_nodes[k]
             ));
         }
     }
@@ -145,6 +180,12 @@ fn the_gpu_counts_what_the_cpu_twin_of_its_walk_counts() {
                 let mut more = cpu;
                 more.nodes[k] += more.nodes[k] / 500 + 1;
                 assert!(agree(&counted, &more).is_err(), "{label}: {more:?} passes");
+                let mut roomier = cpu;
+                roomier.warp_room[k] += 32 * (roomier.warp_nodes[k] / 500 + 1);
+                assert!(
+                    agree(&counted, &roomier).is_err(),
+                    "{label}: {roomier:?} passes"
+                );
             }
             println!("{label}: {}", counted.report("gpu").join("; "));
             twins.push((t, counted, cpu));
@@ -215,5 +256,13 @@ fn pixels_continued_across_dispatches_are_counted() {
     let (_, rays, counted) = on_gpu(g, &g.renderer, &buffers, &globals);
     let counted = counted.expect("counts");
     assert_eq!(counted.total_rays(), rays, "every ray is counted by kind");
-    agree(&counted, &twin(&buffers, &globals)).unwrap_or_else(|why| panic!("glass: {why}"));
+    // Pixels `resume` finishes are counted in all but not by warps (`Counters::add_band`).
+    let in_all = |c: Counters| Counters {
+        warp_nodes: [0; 3],
+        warp_room: [0; 3],
+        ..c
+    };
+    assert!((0..3).all(|k| counted.warp_nodes[k] <= counted.nodes[k]));
+    agree(&in_all(counted), &in_all(twin(&buffers, &globals)))
+        .unwrap_or_else(|why| panic!("glass: {why}"));
 }
