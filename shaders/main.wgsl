@@ -57,6 +57,19 @@ fn aov(ray: Ray) -> vec3<f32> {
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
 }
 
+// The pixel of the tile that invocation `q` of the workgroup tracing block `b` (of
+// `groups_x` across) traces. Consecutive invocations cover 4x2 pixel blocks rather than
+// rows of 8: the lanes a SIMD unit runs together then trace neighbouring, more coherent
+// rays (and a 32-lane warp 8x4 pixels, `counters::WARP_PIXELS`).
+fn block_pixel(b: u32, q: u32, groups_x: u32) -> vec2<u32> {
+    let block = q / 8u;
+    let lane = q % 8u;
+    return vec2<u32>(
+        (b % groups_x) * WORKGROUP_SIDE + (block % 2u) * 4u + lane % 4u,
+        (b / groups_x) * WORKGROUP_SIDE + (block / 2u) * 2u + lane / 4u,
+    );
+}
+
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn main(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -68,14 +81,7 @@ fn main(
     // spreads each software thread's run of workgroups over the whole tile).
     let n = groups.x * groups.y;
     let b = (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
-    // Consecutive invocations cover 4x2 pixel blocks rather than rows of 8: the lanes
-    // a SIMD unit runs together then trace neighbouring, more coherent rays.
-    let block = local_index / 8u;
-    let lane = local_index % 8u;
-    let id = vec2<u32>(
-        (b % groups.x) * WORKGROUP_SIDE + (block % 2u) * 4u + lane % 4u,
-        (b / groups.x) * WORKGROUP_SIDE + (block / 2u) * 2u + lane / 4u,
-    );
+    let id = block_pixel(b, local_index, groups.x);
     if (id.x >= tile.width || id.y >= tile.height) {
         return;
     }
@@ -113,6 +119,171 @@ fn main(
     output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
     if (COUNTERS) {
         counters[slot] = counts;
+    }
+}
+
+// The pass's samples of a workgroup's pixels, shared out among its lanes (`pooled`): a
+// lane whose sample is done takes the next one of any pixel from `pool_next`, and every
+// lane traces one ray a loop iteration, so that a warp's lanes are not left idle while
+// its mirror pixels reflect (docs/gpu.md, "Counters"). Each sample's colour waits in
+// `pool_colour` until the barrier, then each pixel's invocation adds its samples in
+// sample order, as `main` does, so the image is `main`'s to the bit; rays, counts and
+// cut-short flags are integers and add up in any order.
+var<workgroup> pool_next: atomic<u32>;
+var<workgroup> pool_colour: array<vec3<f32>, WORKGROUP_INVOCATIONS * POOL_SAMPLES>;
+var<workgroup> pool_rays: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
+var<workgroup> pool_done: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
+var<workgroup> pool_cut: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
+var<workgroup> pool_counts: array<array<atomic<u32>, 6>, WORKGROUP_INVOCATIONS>;
+
+// `main` for colour frames, its samples shared out among the workgroup's lanes (above).
+// Item i of the pool is sample tile.sample_start + i / 64 of the pixel of invocation
+// i % 64, so each lane starts on its own pixel's first sample, as in `main`.
+@compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
+fn pooled(
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+) {
+    stack_base = local_index;
+    let n = groups.x * groups.y;
+    let b = (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
+    let g = globals;
+    let samples = min(tile.sample_count, POOL_SAMPLES);
+    let items = WORKGROUP_INVOCATIONS * samples;
+    if (local_index == 0u) {
+        atomicStore(&pool_next, WORKGROUP_INVOCATIONS);
+    }
+    atomicStore(&pool_rays[local_index], 0u);
+    atomicStore(&pool_done[local_index], 0u);
+    atomicStore(&pool_cut[local_index], 0u);
+    for (var k = 0u; k < 6u; k++) {
+        atomicStore(&pool_counts[local_index][k], 0u);
+    }
+    workgroupBarrier();
+
+    var stack: array<Pending, TRACE_STACK>;
+    var sp = 0u;
+    var colour = vec3<f32>(0.0);
+    var rng = 0u;
+    var rays = 0u;
+    // The item under way (`items` when none), and whether the lane's first item, its own
+    // pixel's first sample, is still to start.
+    var item = items;
+    var first = true;
+    loop {
+        if (sp == 0u) {
+            if (item < items) {
+                // Its sample is done: keep its colour and add up what it cost.
+                let q = item % WORKGROUP_INVOCATIONS;
+                pool_colour[item] = colour;
+                atomicAdd(&pool_rays[q], rays);
+                atomicAdd(&pool_done[q], 1u);
+                if (cut_short) {
+                    atomicOr(&pool_cut[q], 1u);
+                }
+                if (COUNTERS) {
+                    atomicAdd(&pool_counts[q][0], counts.eye_rays);
+                    atomicAdd(&pool_counts[q][1], counts.eye_nodes);
+                    atomicAdd(&pool_counts[q][2], counts.shadow_rays);
+                    atomicAdd(&pool_counts[q][3], counts.shadow_nodes);
+                    atomicAdd(&pool_counts[q][4], counts.secondary_rays);
+                    atomicAdd(&pool_counts[q][5], counts.secondary_nodes);
+                }
+                item = items;
+            }
+            var taken = local_index;
+            if (!first) {
+                taken = atomicAdd(&pool_next, 1u);
+            }
+            first = false;
+            if (taken >= items) {
+                break;
+            }
+            let id = block_pixel(b, taken % WORKGROUP_INVOCATIONS, groups.x);
+            if (id.x >= tile.width || id.y >= tile.height) {
+                continue;
+            }
+            item = taken;
+            let px = tile.x + id.x;
+            let py = tile.y + id.y;
+            let s = tile.sample_start + item / WORKGROUP_INVOCATIONS;
+            cut_short = false;
+            counts = PixelCounts();
+            rng = rng_seed(py * g.width + px, s, g.seed);
+            let off = sample_offset(s, g.spp, &rng);
+            let eye = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+            rays = 1u;
+            if (COUNTERS) {
+                counts.eye_rays += 1u;
+            }
+            stack[0] = Pending(eye.origin, eye.dir, 1.0, 1u, g.hither);
+            sp = 1u;
+            colour = vec3<f32>(0.0);
+        }
+        // One ray of the sample, as `trace` takes it.
+        sp -= 1u;
+        let ray_in = stack[sp];
+        let ray = Ray(ray_in.origin, ray_in.dir);
+        let fetched_before = fetched;
+        let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+        if (COUNTERS) {
+            count_nodes(ray_in.depth, fetched - fetched_before);
+        }
+        if (hit.prim == NO_PRIM) {
+            colour += ray_in.weight * g.background;
+            continue;
+        }
+        let s = surface(ray, hit);
+        colour += ray_in.weight * direct(s, ray.dir, &rng, &rays);
+        if (ray_in.depth >= g.max_depth) {
+            continue;
+        }
+        let m = materials[s.material];
+        if (REFLECTION && m.ks > 0.0) {
+            rays += 1u;
+            if (COUNTERS) {
+                counts.secondary_rays += 1u;
+            }
+            stack[sp] = secondary(s, reflect_dir(ray.dir, s.ns), ray_in, m.ks);
+            sp += 1u;
+        }
+        if (REFRACTION && m.t > 0.0) {
+            rays += 1u;
+            if (COUNTERS) {
+                counts.secondary_rays += 1u;
+            }
+            stack[sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
+            sp += 1u;
+        }
+    }
+    workgroupBarrier();
+
+    let id = block_pixel(b, local_index, groups.x);
+    if (id.x >= tile.width || id.y >= tile.height) {
+        return;
+    }
+    let slot = tile.out_base + id.y * tile.out_stride + id.x;
+    let before = output[slot];
+    var sum = before.color;
+    for (var k = 0u; k < samples; k++) {
+        sum += pool_colour[k * WORKGROUP_INVOCATIONS + local_index];
+    }
+    // A sample not finished (the driver ended the loop) or not in the pool cuts the pixel
+    // short: `resume` traces it again, never a darker image.
+    let cut = (before.rays & PIXEL_CUT_SHORT) != 0u || atomicLoad(&pool_cut[local_index]) != 0u
+        || atomicLoad(&pool_done[local_index]) < tile.sample_count;
+    let rays_in = (before.rays & ~PIXEL_CUT_SHORT) + atomicLoad(&pool_rays[local_index]);
+    output[slot] = PixelOut(sum, rays_in | select(0u, PIXEL_CUT_SHORT, cut));
+    if (COUNTERS) {
+        var c = counters[slot];
+        c.eye_rays += atomicLoad(&pool_counts[local_index][0]);
+        c.eye_nodes += atomicLoad(&pool_counts[local_index][1]);
+        c.shadow_rays += atomicLoad(&pool_counts[local_index][2]);
+        c.shadow_nodes += atomicLoad(&pool_counts[local_index][3]);
+        c.secondary_rays += atomicLoad(&pool_counts[local_index][4]);
+        c.secondary_nodes += atomicLoad(&pool_counts[local_index][5]);
+        counters[slot] = c;
     }
 }
 

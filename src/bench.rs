@@ -206,6 +206,10 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                 };
                 let opts = with_camera(&prepared.buffers.camera);
                 let globals = frame::globals(&prepared.buffers, &opts);
+                if let Some(r) = &renderer {
+                    let kernels = r.kernels(&prepared.buffers, &globals);
+                    eprintln!("  {name}: {width}x{height}, {spp} spp, kernels: {kernels}");
+                }
                 let gpu = match (&ctx, &renderer) {
                     (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
                     _ => None,

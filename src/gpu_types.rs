@@ -318,6 +318,10 @@ impl GpuTile {
 pub const WORKGROUP_SIDE: u32 = 8;
 pub const WORKGROUP_INVOCATIONS: u32 = WORKGROUP_SIDE * WORKGROUP_SIDE;
 
+/// Samples a pixel a pass of the `pooled` entry point shares out among a workgroup's
+/// lanes at most (its pool holds this many colours a pixel in workgroup memory).
+pub const POOL_SAMPLES: u32 = 4;
+
 /// Fixed sizes of the per-pixel stacks in both renderers.
 /// The BVH builder guarantees a depth below `TRAVERSAL_STACK` (it falls back to a
 /// median split otherwise); the CLI refuses a `--depth` above `MAX_DEPTH`, and a Whitted
@@ -407,6 +411,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
         ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
+        ("POOL_SAMPLES", U32(POOL_SAMPLES)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
         ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
         ("RAY_STACK", U32(RAY_STACK as u32)),

@@ -130,6 +130,11 @@ pub(super) struct ResumePipelines {
 
 impl ResumePipelines {
     pub(super) fn get(&self, gpu: &Device, spec: Specialization) -> Result<wgpu::ComputePipeline> {
+        // One `resume` whichever entry point traced the frame.
+        let spec = Specialization {
+            pooled: false,
+            ..spec
+        };
         let mut compiled = self.compiled.lock().expect("not poisoned");
         if let Some(p) = compiled.get(&spec) {
             return Ok(p.clone());

@@ -1,5 +1,5 @@
 //! What a frame takes on this adapter: which walk of the BVH and which kernels (the one
-//! `main` kernel or the wavefront ones), each chosen per adapter and per scene by what
+//! `main` kernel, its `pooled` form or the wavefront ones), each chosen per adapter and per scene by what
 //! was measured, and overridable from the environment for measuring them side by side;
 //! and how the frame is cut into work.
 
@@ -7,8 +7,8 @@ use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::gpu_types::{
-    AOV_COLOR, GpuGlobals, LIGHT_AREA, TRAVERSAL_NAMES, TRAVERSAL_WIDE, WAVE_RAYS_PER_PATH,
-    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
+    AOV_COLOR, GpuGlobals, LIGHT_AREA, POOL_SAMPLES, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
+    WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
 };
 use crate::pack::SceneBuffers;
 
@@ -62,17 +62,38 @@ fn fetch_by(var: Option<&str>, software: bool, buffers_fit: bool) -> Result<Fetc
     }
 }
 
-/// `GPURT_KERNELS`: `main` (the one kernel) or `wavefront` forces the kernels of every
-/// colour frame; unset or empty, `wavefront_for` chooses.
-pub(super) fn kernels_from_env() -> Result<Option<bool>> {
+/// The kernels that trace a colour frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Kernels {
+    /// The one kernel, `main`.
+    Main,
+    /// The wavefront kernels (`shaders/wavefront.wgsl`).
+    Wavefront,
+    /// The one kernel with a workgroup's samples shared out among its lanes (`pooled`).
+    Pooled,
+}
+
+/// `GPURT_KERNELS`: `main` (the one kernel), `wavefront` or `pooled` forces the kernels of
+/// every colour frame; unset or empty, `wavefront_for` and `pooled_for` choose.
+pub(super) fn kernels_from_env() -> Result<Option<Kernels>> {
     match std::env::var("GPURT_KERNELS").as_deref() {
         Err(_) | Ok("") => Ok(None),
-        Ok("main") => Ok(Some(false)),
-        Ok("wavefront") => Ok(Some(true)),
+        Ok("main") => Ok(Some(Kernels::Main)),
+        Ok("wavefront") => Ok(Some(Kernels::Wavefront)),
+        Ok("pooled") => Ok(Some(Kernels::Pooled)),
         Ok(v) => Err(Error::Render(format!(
-            "GPURT_KERNELS={v}: expected main or wavefront"
+            "GPURT_KERNELS={v}: expected main, wavefront or pooled"
         ))),
     }
+}
+
+/// Whether a frame traced by the one kernel takes its `pooled` entry point: where forced
+/// (`GPURT_KERNELS=pooled`, `GpuRenderer::with_pooled`), for colour frames whose passes
+/// hold at most `POOL_SAMPLES` samples a pixel (the pool's room), else `main`. Not
+/// measured on a GPU yet, so nowhere by default; on lavapipe, one sample a pass, a
+/// workgroup's pool holds no more samples than it has lanes and has nothing to share.
+pub(super) fn pooled_for(forced: bool, shape: &Shape, globals: &GpuGlobals) -> bool {
+    forced && globals.aov == AOV_COLOR && shape.pass_samples <= POOL_SAMPLES
 }
 
 /// Whether a frame of `scene` traces through the wavefront kernels: as `forced` says

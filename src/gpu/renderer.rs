@@ -19,7 +19,8 @@ use super::pipeline::{
     resume_group_layout,
 };
 use super::policy::{
-    cut_for, fetch_for, kernels_from_env, shape_for, traversal_from_env, wavefront_for,
+    Kernels, cut_for, fetch_for, kernels_from_env, pooled_for, shape_for, traversal_from_env,
+    wavefront_for,
 };
 use super::scene::{GpuScene, bind};
 use super::shaders::Fetch;
@@ -56,6 +57,9 @@ pub struct GpuRenderer {
     /// `policy::wavefront_for` chooses).
     wave: Option<Arc<WavePipelines>>,
     wavefront: Option<bool>,
+    /// Whether the one kernel's colour frames take its `pooled` entry point where they
+    /// can (`policy::pooled_for`).
+    pooled: bool,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
     /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
@@ -127,6 +131,7 @@ impl GpuRenderer {
             })?),
             false => None,
         };
+        let kernels = kernels_from_env()?;
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
@@ -145,7 +150,8 @@ impl GpuRenderer {
             traversal: traversal_from_env()?,
             fetch,
             wave,
-            wavefront: kernels_from_env()?,
+            wavefront: kernels.map(|k| k == Kernels::Wavefront),
+            pooled: kernels == Some(Kernels::Pooled),
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
             texture_margin: None,
@@ -156,6 +162,7 @@ impl GpuRenderer {
     fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
         Specialization {
             layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
+            pooled: pooled_for(self.pooled, &self.shape, globals),
             ..Specialization::of(scene, globals)
         }
     }
@@ -177,6 +184,19 @@ impl GpuRenderer {
             traversal: scene.traversal_for(self.traversal),
             wavefront: u32::from(wave),
             ..*globals
+        }
+    }
+
+    /// The kernels a frame of `scene` as `globals` says traces through on this renderer:
+    /// `main`, `pooled` or `wavefront`.
+    pub fn kernels(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> &'static str {
+        let globals = &self.frame(scene, globals);
+        if globals.wavefront != 0 {
+            "wavefront"
+        } else if self.spec(scene, globals).pooled {
+            "pooled"
+        } else {
+            "main"
         }
     }
 
@@ -237,7 +257,7 @@ impl GpuRenderer {
             gpu,
             &self.pipeline_layout,
             &self.modules,
-            "main",
+            if spec.pooled { "pooled" } else { "main" },
             spec,
             self.cache.as_ref().map(DiskCache::cache),
         )?;

@@ -193,6 +193,7 @@ mod tests {
             .collect();
         let entries = [
             "main",
+            "pooled",
             "resume",
             "wf_generate",
             "wf_advance_rays",

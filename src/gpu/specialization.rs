@@ -45,6 +45,9 @@ pub struct Specialization {
     /// log2 of the texels in a layer of the node and primitive textures (set by the
     /// renderer from its device's limits).
     pub layer_shift: u32,
+    /// The one kernel's entry point: `pooled` rather than `main` (set by the renderer,
+    /// `policy::pooled_for`). Not an override either.
+    pub pooled: bool,
 }
 
 impl Specialization {
@@ -78,6 +81,7 @@ impl Specialization {
             stack: scene.stack_entries(g.traversal).next_multiple_of(8),
             trace_stack: scene.trace_stack(g.max_depth),
             layer_shift: 0,
+            pooled: false,
         }
     }
 
@@ -146,6 +150,7 @@ mod tests {
             stack: 64,
             trace_stack: 16,
             layer_shift: 25,
+            pooled: true,
         };
         let mut host: Vec<String> = spec
             .constants()

@@ -223,6 +223,7 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
         ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
+        ("POOL_SAMPLES", U32(POOL_SAMPLES)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
         ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
         ("RAY_STACK", U32(RAY_STACK as u32)),
@@ -404,7 +405,15 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     ("max_element", "glam's Vec3::max_element"),
     ("min_element", "glam's Vec3::min_element"),
     ("sign_of", "f32::signum"),
+    (
+        "block_pixel",
+        "the pixel of a GPU invocation; the CPU loops over pixels",
+    ),
     ("main", "the entry point; the CPU's is sample_sum"),
+    (
+        "pooled",
+        "GPU only: main's samples shared out among a workgroup's lanes",
+    ),
     (
         "resume",
         "GPU only: continues pixels cut short by a driver's loop limit",

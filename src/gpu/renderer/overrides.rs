@@ -70,4 +70,10 @@ impl GpuRenderer {
             ..self
         }
     }
+
+    /// This renderer's one kernel tracing colour frames through its `pooled` entry point
+    /// where their passes allow (`policy::pooled_for`), or through `main`.
+    pub fn with_pooled(self, pooled: bool) -> Self {
+        GpuRenderer { pooled, ..self }
+    }
 }
