@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [pooled] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -13,17 +13,18 @@
 # each wavefront kernel's GPU time a frame, from timestamp queries), renders balls-4 at
 # 1080p both ways for `gpurt diff`, then times waves of 4 GiB (GPURT_WAVE_BYTES) on
 # balls-4 and mount-9 at 4K; each of its benches stops after WAVE_TIMEOUT seconds (180 by
-# default; half that for the 4 GiB waves), keeping the rows measured by then. `images` renders three scenes at 4K with the scene read
-# from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte for
-# byte. `tests` runs
-# the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
+# default; half that for the 4 GiB waves), keeping the rows measured by then. `pooled`
+# times the seven scenes through the one kernel's `main` and `pooled` entry points
+# (GPURT_KERNELS) at 4 and 16 spp. `images` renders three scenes at 4K with the scene
+# read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
+# for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
 # than the limit and still says where it was.
 # `loss` looks for what stalls the GPU when a device is destroyed with work in flight
 # (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
-# SMOKE=1 runs the `wavefront` and `images` steps at thumbnail sizes, e.g. here on lavapipe
+# SMOKE=1 runs the `wavefront`, `pooled` and `images` steps at thumbnail sizes, e.g. here on lavapipe
 # after packing (`SMOKE=1 GPURT_ADAPTER=llvmpipe benches/gpu-device.sh wavefront images`),
 # to check the script before a device runs it.
 set -uo pipefail
@@ -31,9 +32,9 @@ set -uo pipefail
 OUT=${OUT:-$PWD/device-out}
 mkdir -p "$OUT"
 what=${*:-wavefront images bench tests}
-sizes=1920x1080,3840x2160 spps=1,16 hd=(1920 1080) uhd=(3840 2160)
+sizes=1920x1080,3840x2160 spps=1,16 pspps=4,16 hd=(1920 1080) uhd=(3840 2160)
 if [[ -n ${SMOKE:-} ]]; then
-    sizes=96x54,192x108 spps=1,2 hd=(96 54) uhd=(192 108)
+    sizes=96x54,192x108 spps=1,2 pspps=4,8 hd=(96 54) uhd=(192 108)
 fi
 
 for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
@@ -96,6 +97,21 @@ if [[ $what == *wavefront* ]]; then
         ./.device/gpurt bench "${scenes[0]}" \
         "${scenes[6]}" --sizes "${uhd[0]}x${uhd[1]}" --spp 1 --frames 3 --backend gpu 2>&1 |
         tee "$OUT/wavefront-4g.md" | grep '^|'
+fi
+
+if [[ $what == *pooled* ]]; then
+    # The one kernel through `main` and through `pooled` (each pass's four samples a pixel
+    # shared out among a workgroup's lanes), one after the other, at 4 and 16 spp (at 1
+    # spp a pool holds one sample a lane and has nothing to share).
+    echo "== pooled"
+    for k in main pooled; do
+        GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench "${scenes[@]}" \
+            --sizes "$sizes" --spp "$pspps" --frames 3 --backend gpu >"$OUT/pooled-$k.md" \
+            2>"$OUT/pooled-$k.log"
+        echo "$k: exit $?"
+        cat "$OUT/pooled-$k.md"
+        grep -m1 'kernels:' "$OUT/pooled-$k.log"
+    done
 fi
 
 if [[ $what == *images* ]]; then
