@@ -59,20 +59,19 @@ impl Counters {
     /// each pixel, and each warp of them (`warp_nodes`).
     pub fn add_band(&mut self, px: &[GpuPixelCounts], width: usize, skip: &[usize]) {
         let [across, down] = WARP_PIXELS;
-        let kept = |i: usize| skip.binary_search(&i).is_err();
-        for (_, p) in px.iter().enumerate().filter(|&(i, _)| kept(i)) {
-            self.add_pixel(p);
-        }
-        let rows = px.len() / width.max(1);
+        let width = width.max(1);
+        debug_assert_eq!(px.len() % width, 0, "a band is whole rows");
+        let rows = px.len() / width;
         for y0 in (0..rows).step_by(down) {
             for x0 in (0..width).step_by(across) {
                 let (mut sum, mut most) = ([0u64; 3], [0u64; 3]);
                 for y in y0..(y0 + down).min(rows) {
                     for i in (x0..(x0 + across).min(width)).map(|x| y * width + x) {
-                        if !kept(i) {
+                        if skip.binary_search(&i).is_ok() {
                             continue;
                         }
                         let p = &px[i];
+                        self.add_pixel(p);
                         let nodes = [p.eye_nodes, p.shadow_nodes, p.secondary_nodes];
                         for k in 0..3 {
                             sum[k] += u64::from(nodes[k]);
