@@ -58,6 +58,14 @@ fn aov(ray: Ray) -> vec3<f32> {
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
 }
 
+// The block of 8x8 pixels of the tile the workgroup `group` traces: workgroup i traces
+// block i * scatter mod n (the host's `cut::scatter` spreads each software thread's run
+// of workgroups over the whole tile).
+fn workgroup_block(group: vec3<u32>, groups: vec3<u32>) -> u32 {
+    let n = groups.x * groups.y;
+    return (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
+}
+
 // The pixel of the tile that invocation `q` of the workgroup tracing block `b` (of
 // `groups_x` across) traces. Consecutive invocations cover 4x2 pixel blocks rather than
 // rows of 8: the lanes a SIMD unit runs together then trace neighbouring, more coherent
@@ -78,10 +86,7 @@ fn main(
     @builtin(local_invocation_index) local_index: u32,
 ) {
     stack_base = local_index;
-    // Workgroup i traces block i * scatter mod n of the tile (the host's `cut::scatter`
-    // spreads each software thread's run of workgroups over the whole tile).
-    let n = groups.x * groups.y;
-    let b = (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
+    let b = workgroup_block(group, groups);
     let id = block_pixel(b, local_index, groups.x);
     if (id.x >= tile.width || id.y >= tile.height) {
         return;
@@ -147,8 +152,7 @@ fn pooled(
     @builtin(local_invocation_index) local_index: u32,
 ) {
     stack_base = local_index;
-    let n = groups.x * groups.y;
-    let b = (group.y * groups.x + group.x) * max(tile.scatter, 1u) % n;
+    let b = workgroup_block(group, groups);
     let g = globals;
     let samples = min(tile.sample_count, POOL_SAMPLES);
     let items = WORKGROUP_INVOCATIONS * samples;

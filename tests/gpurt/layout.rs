@@ -406,6 +406,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     ("min_element", "glam's Vec3::min_element"),
     ("sign_of", "f32::signum"),
     (
+        "workgroup_block",
+        "the block of a GPU workgroup; the CPU loops over pixels",
+    ),
+    (
         "block_pixel",
         "the pixel of a GPU invocation; the CPU loops over pixels",
     ),
