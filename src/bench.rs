@@ -159,6 +159,11 @@ pub fn run(config: &BenchConfig) -> Result<()> {
             r.fetch().name()
         );
     }
+    let bvh = match std::env::var("GPURT_BVH").as_deref() {
+        Ok(q @ ("medium" | "high")) => q.to_string(),
+        _ => "as a render of each row's samples gets it".to_string(),
+    };
+    eprintln!("bvh         {bvh} (GPURT_BVH=medium|high to choose)");
     if time_cpu {
         eprintln!("cpu         {} threads", rayon::current_num_threads());
     }
@@ -189,7 +194,8 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&overrides);
                 let wanted = |b: &run::Prepared| {
                     let samples = with_camera(&b.buffers.camera).samples();
-                    b.buffers.bvh_quality == bvh::Quality::for_work(b.buffers.prims.len(), samples)
+                    bvh::Quality::chosen(b.buffers.prims.len(), samples)
+                        .is_ok_and(|q| q == b.buffers.bvh_quality)
                 };
                 let prepared = match builds.iter().position(wanted) {
                     Some(i) => &builds[i],

@@ -76,7 +76,7 @@ pub fn pack(scene: Scene) -> Result<SceneBuffers> {
 }
 
 /// Flattens a scene, consuming it, with the BVH a render of `samples` camera samples
-/// should get (`bvh::Quality::for_work`): its primitives are moved into records kind by
+/// should get (`bvh::Quality::chosen`): its primitives are moved into records kind by
 /// kind (`FlatScene::from_scene`), then packed as `pack_flat` packs a scene read straight
 /// into records. Fails only on scenes beyond the layout's limits.
 pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
@@ -134,7 +134,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         .collect();
     let lights = pack_lights(&scene.lights);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
-    let quality = bvh::Quality::for_work(records.len(), samples);
+    let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
     let FlatBvh {
         nodes,
         order,

@@ -73,6 +73,18 @@ impl Quality {
             Quality::Medium
         }
     }
+
+    /// The build a render of `samples` camera samples over `prims` primitives gets:
+    /// `GPURT_BVH` (`medium` or `high`) where set, for measuring a tracer on either tree
+    /// whatever the render's length; else `for_work`.
+    pub fn chosen(prims: usize, samples: u64) -> Result<Quality, String> {
+        match std::env::var("GPURT_BVH").as_deref() {
+            Err(_) | Ok("") => Ok(Quality::for_work(prims, samples)),
+            Ok("medium") => Ok(Quality::Medium),
+            Ok("high") => Ok(Quality::High),
+            Ok(v) => Err(format!("GPURT_BVH={v}: expected medium or high")),
+        }
+    }
 }
 
 /// Samples per primitive from which `Quality::High` pays for itself. Measured on two cores

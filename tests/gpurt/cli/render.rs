@@ -343,3 +343,59 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
         stderr(&o)
     );
 }
+
+/// `GPURT_BVH` builds every tree at the quality it names, whatever the render's length
+/// (`--stats` says which on its `build` line): a short render of a scene above
+/// `THOROUGH_BUILD_MAX_PRIMS` gets the medium tree unless `high` is asked for, a small
+/// scene the high one unless `medium` is; the same image either way (the trees differ,
+/// the hits do not), and a value it does not know is refused before anything is written.
+#[test]
+fn gpurt_bvh_forces_the_trees_quality_for_measuring() {
+    let d = workdir("bvh-quality");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let n = gpurt::bvh::THOROUGH_BUILD_MAX_PRIMS + 1;
+    let mut many = String::from(
+        "v\nfrom 0 0 -40\nat 0 0 0\nup 0 1 0\nangle 40\nhither 1\nresolution 16 16\nl 0 0 -40\nf 1 1 1 1 0 0 0 0\n",
+    );
+    for i in 0..n {
+        let (x, y) = ((i % 150) as f32 - 75.0, (i / 150) as f32 - 75.0);
+        many += &format!("s {} {} 0 0.4\n", x * 0.2, y * 0.2);
+    }
+    std::fs::write(d.join("many.nff"), many).unwrap();
+    let build = |scene: &str, bvh: &str, out: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args([scene, "--backend", "cpu", "--stats", "-o", out])
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_BVH", bvh)
+            .output()
+            .expect("gpurt runs");
+        assert!(o.status.success(), "{bvh}: {}", stderr(&o));
+        let err = stderr(&o);
+        let line = err
+            .lines()
+            .find(|l| l.starts_with("build "))
+            .unwrap_or_default();
+        line.to_string()
+    };
+    assert!(build("many.nff", "", "a.png").contains("medium quality"));
+    assert!(build("many.nff", "high", "b.png").contains("high quality"));
+    assert!(build("ball.nff", "", "c.png").contains("high quality"));
+    assert!(build("ball.nff", "medium", "d.png").contains("medium quality"));
+    let same = gpurt(&["diff", "a.png", "b.png", "--max-bad", "0"], &d);
+    assert!(same.status.success(), "{}", stderr(&same));
+
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["ball.nff", "--backend", "cpu", "-o", "bad.png"])
+        .current_dir(&d)
+        .env("GPURT_BVH", "mid")
+        .output()
+        .expect("gpurt runs");
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("GPURT_BVH=mid: expected medium or high"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("bad.png").exists());
+}
