@@ -15,7 +15,9 @@
 # balls-4 and mount-9 at 4K; each of its benches stops after WAVE_TIMEOUT seconds (180 by
 # default; half that for the 4 GiB waves), keeping the rows measured by then. `pooled`
 # times the seven scenes through the one kernel's `main` and `pooled` entry points
-# (GPURT_KERNELS) at 4 and 16 spp. `images` renders three scenes at 4K with the scene
+# (GPURT_KERNELS; pooled squares of 16 and 32 pixels, GPURT_POOL_SIDE) at 1 and 16 spp,
+# then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
+# through `main` and `pooled`. `images` renders three scenes at 4K with the scene
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
 # for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
@@ -32,9 +34,9 @@ set -uo pipefail
 OUT=${OUT:-$PWD/device-out}
 mkdir -p "$OUT"
 what=${*:-wavefront images bench tests}
-sizes=1920x1080,3840x2160 spps=1,16 pspps=4,16 hd=(1920 1080) uhd=(3840 2160)
+sizes=1920x1080,3840x2160 spps=1,16 hd=(1920 1080) uhd=(3840 2160)
 if [[ -n ${SMOKE:-} ]]; then
-    sizes=96x54,192x108 spps=1,2 pspps=4,8 hd=(96 54) uhd=(192 108)
+    sizes=96x54,192x108 spps=1,2 hd=(96 54) uhd=(192 108)
 fi
 
 for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
@@ -100,17 +102,29 @@ if [[ $what == *wavefront* ]]; then
 fi
 
 if [[ $what == *pooled* ]]; then
-    # The one kernel through `main` and through `pooled` (each pass's four samples a pixel
-    # shared out among a workgroup's lanes), one after the other, at 4 and 16 spp (at 1
-    # spp a pool holds one sample a lane and has nothing to share).
+    # The one kernel through `main` and through `pooled` (a workgroup's square of pixels
+    # shared out among its lanes), one after the other, at 1 and 16 spp.
     echo "== pooled"
-    for k in main pooled; do
-        GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench "${scenes[@]}" \
-            --sizes "$sizes" --spp "$pspps" --frames 3 --backend gpu >"$OUT/pooled-$k.md" \
-            2>"$OUT/pooled-$k.log"
+    for k in main pooled-16 pooled-32; do
+        side=16
+        [[ $k == *-* ]] && side=${k#*-}
+        GPURT_KERNELS=${k%-*} GPURT_POOL_SIDE=$side timeout "${WAVE_TIMEOUT:-180}" \
+            ./.device/gpurt bench "${scenes[@]}" --sizes "$sizes" --spp "$spps" --frames 3 \
+            --backend gpu >"$OUT/pooled-$k.md" 2>"$OUT/pooled-$k.log"
         echo "$k: exit $?"
         cat "$OUT/pooled-$k.md"
         grep -m1 'kernels:' "$OUT/pooled-$k.log"
+    done
+    # The eye-ray goal at 4K and 1 spp on the two large scenes, whose one-frame renders
+    # get the medium-quality tree, on the high-quality one.
+    big=()
+    for s in balls-6 mount-9; do big+=("$(ls "$spd/$s".nff* | head -1)"); done
+    for k in main pooled; do
+        GPURT_BVH=high GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench \
+            "${big[@]}" --sizes "${uhd[0]}x${uhd[1]}" --spp 1 --frames 3 --backend gpu \
+            >"$OUT/pooled-high-$k.md" 2>"$OUT/pooled-high-$k.log"
+        echo "high, $k: exit $?"
+        cat "$OUT/pooled-high-$k.md"
     done
 fi
 

@@ -2,8 +2,9 @@
 // (workgroups of 8x8 pixels; the host dispatches one bounded tile at a time, a band of
 // tiles per submission): camera rays (stratified, jittered samples and the thin lens,
 // from the shared hash), traced and averaged, or an AOV (CPU twin: src/cpu/main.rs).
-// `pooled` computes the same colours with a workgroup's samples shared out among its
-// lanes, and `resume` finishes pixels a driver's loop limit cut short (both GPU only).
+// `pooled` computes the same colours with a larger square of pixels a workgroup, shared
+// out among its lanes, and `resume` finishes pixels a driver's loop limit cut short (both
+// GPU only).
 
 fn camera_ray(x: f32, y: f32, rng: ptr<function, u32>) -> Ray {
     let g = globals;
@@ -128,23 +129,31 @@ fn main(
     }
 }
 
-// The pass's samples of a workgroup's pixels, shared out among its lanes (`pooled`): a
-// lane whose sample is done takes the next one of any pixel from `pool_next`, and every
-// lane traces one ray a loop iteration, so that a warp's lanes are not left idle while
-// its mirror pixels reflect (docs/gpu.md, "Counters"). Each sample's colour waits in
-// `pool_colour` until the barrier, then each pixel's invocation adds its samples in
-// sample order, as `main` does, so the image is `main`'s to the bit; rays, counts and
-// cut-short flags are integers and add up in any order.
-var<workgroup> pool_next: atomic<u32>;
-var<workgroup> pool_colour: array<vec3<f32>, WORKGROUP_INVOCATIONS * POOL_SAMPLES>;
-var<workgroup> pool_rays: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
-var<workgroup> pool_done: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
-var<workgroup> pool_cut: array<atomic<u32>, WORKGROUP_INVOCATIONS>;
-var<workgroup> pool_counts: array<array<atomic<u32>, 6>, WORKGROUP_INVOCATIONS>;
+// The pixel of the tile that pixel `p` of the square traced by workgroup `b` (of
+// `groups_x` across, `blocks` 8x8 blocks a side) is under `pooled`: the square's blocks
+// in row order, each laid out as `block_pixel` lays out a workgroup of `main`, so that
+// pixels 0 to 63, each lane's first, are one block.
+fn pool_pixel(b: u32, p: u32, groups_x: u32, blocks: u32) -> vec2<u32> {
+    let sub = p / WORKGROUP_INVOCATIONS;
+    let across = groups_x * blocks;
+    let row = (b / groups_x) * blocks + sub / blocks;
+    let block = row * across + (b % groups_x) * blocks + sub % blocks;
+    return block_pixel(block, p % WORKGROUP_INVOCATIONS, across);
+}
 
-// `main` for colour frames, its samples shared out among the workgroup's lanes (above).
-// Item i of the pool is sample tile.sample_start + i / 64 of the pixel of invocation
-// i % 64, so each lane starts on its own pixel's first sample, as in `main`.
+// The next pixel of a `pooled` workgroup's square to hand out (lanes take pixels in
+// order, each its own first, 0 to 63, the rest from here), and a bit for each pixel that
+// an earlier pass cut short.
+var<workgroup> pool_next: atomic<u32>;
+var<workgroup> pool_cut: array<atomic<u32>, POOL_MAX_SIDE * POOL_MAX_SIDE / 32u>;
+
+// `main` for colour frames with a workgroup's pixels shared out among its lanes: a
+// workgroup traces a square of `tile.group_side` pixels a side (`POOL_SIDE`, 4 pixels a
+// lane), and a lane whose pixel is done takes the square's next one, so that a warp's
+// lanes are not left idle while its mirror pixels reflect or a few of its hits cast
+// shadow rays (docs/gpu.md, "Counters"). Every lane traces one ray a loop iteration. A
+// pixel's samples are traced by one lane in sample order, and its sum and counts kept as
+// `main` keeps them, so films, rays and counts are `main`'s to the bit.
 @compute @workgroup_size(WORKGROUP_INVOCATIONS, 1, 1)
 fn pooled(
     @builtin(workgroup_id) group: vec3<u32>,
@@ -154,16 +163,30 @@ fn pooled(
     stack_base = local_index;
     let b = workgroup_block(group, groups);
     let g = globals;
-    let samples = min(tile.sample_count, POOL_SAMPLES);
-    let items = WORKGROUP_INVOCATIONS * samples;
+    let blocks = max(tile.group_side, WORKGROUP_SIDE) / WORKGROUP_SIDE;
+    let pixels = WORKGROUP_INVOCATIONS * blocks * blocks;
+    let end = tile.sample_start + tile.sample_count;
     if (local_index == 0u) {
         atomicStore(&pool_next, WORKGROUP_INVOCATIONS);
     }
-    atomicStore(&pool_rays[local_index], 0u);
-    atomicStore(&pool_done[local_index], 0u);
-    atomicStore(&pool_cut[local_index], 0u);
-    for (var k = 0u; k < 6u; k++) {
-        atomicStore(&pool_counts[local_index][k], 0u);
+    for (var w = local_index; w < pixels / 32u; w += WORKGROUP_INVOCATIONS) {
+        atomicStore(&pool_cut[w], 0u);
+    }
+    workgroupBarrier();
+    // Every pixel of the square is cut short until a lane finishes it, so that one the
+    // driver's loop limit (lavapipe's) leaves unfinished or never handed out is traced
+    // again by `resume`, never left darker. Marked here, before any lane can have run
+    // into the limit, which ends every later loop of the invocation.
+    for (var p = local_index; p < pixels; p += WORKGROUP_INVOCATIONS) {
+        let id = pool_pixel(b, p, groups.x, blocks);
+        if (id.x < tile.width && id.y < tile.height) {
+            let slot = tile.out_base + id.y * tile.out_stride + id.x;
+            let r = output[slot].rays;
+            if ((r & PIXEL_CUT_SHORT) != 0u) {
+                atomicOr(&pool_cut[p / 32u], 1u << (p % 32u));
+            }
+            output[slot].rays = r | PIXEL_CUT_SHORT;
+        }
     }
     workgroupBarrier();
 
@@ -171,54 +194,57 @@ fn pooled(
     var sp = 0u;
     var colour = vec3<f32>(0.0);
     var rng = 0u;
+    // The pixel under way (`pixels` when none), where its sum goes, the sample being
+    // traced, and the pixel's sum and rays as `main` keeps them.
+    var pixel = pixels;
+    var slot = 0u;
+    var s = 0u;
+    var px = 0u;
+    var py = 0u;
+    var sum = vec3<f32>(0.0);
     var rays = 0u;
-    // The item under way (`items` when none), and whether the lane's first item, its own
-    // pixel's first sample, is still to start.
-    var item = items;
-    var first = true;
+    var taken = local_index;
     loop {
         if (sp == 0u) {
-            if (item < items) {
-                // Its sample is done: keep its colour and add up what it cost.
-                let q = item % WORKGROUP_INVOCATIONS;
-                pool_colour[item] = colour;
-                atomicAdd(&pool_rays[q], rays);
-                atomicAdd(&pool_done[q], 1u);
-                if (cut_short) {
-                    atomicOr(&pool_cut[q], 1u);
+            if (pixel < pixels) {
+                // A sample done.
+                sum += colour;
+                s++;
+                if (s >= end) {
+                    output[slot] = PixelOut(sum, rays | select(0u, PIXEL_CUT_SHORT, cut_short));
+                    if (COUNTERS) {
+                        counters[slot] = counts;
+                    }
+                    pixel = pixels;
+                    taken = atomicAdd(&pool_next, 1u);
                 }
+            }
+            if (pixel == pixels) {
+                if (taken >= pixels) {
+                    break;
+                }
+                let id = pool_pixel(b, taken, groups.x, blocks);
+                if (id.x >= tile.width || id.y >= tile.height) {
+                    taken = atomicAdd(&pool_next, 1u);
+                    continue;
+                }
+                pixel = taken;
+                px = tile.x + id.x;
+                py = tile.y + id.y;
+                slot = tile.out_base + id.y * tile.out_stride + id.x;
+                let before = output[slot];
+                sum = before.color;
+                rays = before.rays & ~PIXEL_CUT_SHORT;
+                cut_short = ((atomicLoad(&pool_cut[pixel / 32u]) >> (pixel % 32u)) & 1u) != 0u;
                 if (COUNTERS) {
-                    atomicAdd(&pool_counts[q][0], counts.eye_rays);
-                    atomicAdd(&pool_counts[q][1], counts.eye_nodes);
-                    atomicAdd(&pool_counts[q][2], counts.shadow_rays);
-                    atomicAdd(&pool_counts[q][3], counts.shadow_nodes);
-                    atomicAdd(&pool_counts[q][4], counts.secondary_rays);
-                    atomicAdd(&pool_counts[q][5], counts.secondary_nodes);
+                    counts = counters[slot];
                 }
-                item = items;
+                s = tile.sample_start;
             }
-            var taken = local_index;
-            if (!first) {
-                taken = atomicAdd(&pool_next, 1u);
-            }
-            first = false;
-            if (taken >= items) {
-                break;
-            }
-            let id = block_pixel(b, taken % WORKGROUP_INVOCATIONS, groups.x);
-            if (id.x >= tile.width || id.y >= tile.height) {
-                continue;
-            }
-            item = taken;
-            let px = tile.x + id.x;
-            let py = tile.y + id.y;
-            let s = tile.sample_start + item / WORKGROUP_INVOCATIONS;
-            cut_short = false;
-            counts = PixelCounts();
             rng = rng_seed(py * g.width + px, s, g.seed);
             let off = sample_offset(s, g.spp, &rng);
             let eye = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
-            rays = 1u;
+            rays += 1u;
             if (COUNTERS) {
                 counts.eye_rays += 1u;
             }
@@ -239,18 +265,18 @@ fn pooled(
             colour += ray_in.weight * g.background;
             continue;
         }
-        let s = surface(ray, hit);
-        colour += ray_in.weight * direct(s, ray.dir, &rng, &rays);
+        let surf = surface(ray, hit);
+        colour += ray_in.weight * direct(surf, ray.dir, &rng, &rays);
         if (ray_in.depth >= g.max_depth) {
             continue;
         }
-        let m = materials[s.material];
+        let m = materials[surf.material];
         if (REFLECTION && m.ks > 0.0) {
             rays += 1u;
             if (COUNTERS) {
                 counts.secondary_rays += 1u;
             }
-            stack[sp] = secondary(s, reflect_dir(ray.dir, s.ns), ray_in, m.ks);
+            stack[sp] = secondary(surf, reflect_dir(ray.dir, surf.ns), ray_in, m.ks);
             sp += 1u;
         }
         if (REFRACTION && m.t > 0.0) {
@@ -258,37 +284,9 @@ fn pooled(
             if (COUNTERS) {
                 counts.secondary_rays += 1u;
             }
-            stack[sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
+            stack[sp] = secondary(surf, refracted_dir(surf, m, ray.dir), ray_in, m.t);
             sp += 1u;
         }
-    }
-    workgroupBarrier();
-
-    let id = block_pixel(b, local_index, groups.x);
-    if (id.x >= tile.width || id.y >= tile.height) {
-        return;
-    }
-    let slot = tile.out_base + id.y * tile.out_stride + id.x;
-    let before = output[slot];
-    var sum = before.color;
-    for (var k = 0u; k < samples; k++) {
-        sum += pool_colour[k * WORKGROUP_INVOCATIONS + local_index];
-    }
-    // A sample not finished (the driver ended the loop) or not in the pool cuts the pixel
-    // short: `resume` traces it again, never a darker image.
-    let cut = (before.rays & PIXEL_CUT_SHORT) != 0u || atomicLoad(&pool_cut[local_index]) != 0u
-        || atomicLoad(&pool_done[local_index]) < tile.sample_count;
-    let rays_in = (before.rays & ~PIXEL_CUT_SHORT) + atomicLoad(&pool_rays[local_index]);
-    output[slot] = PixelOut(sum, rays_in | select(0u, PIXEL_CUT_SHORT, cut));
-    if (COUNTERS) {
-        var c = counters[slot];
-        c.eye_rays += atomicLoad(&pool_counts[local_index][0]);
-        c.eye_nodes += atomicLoad(&pool_counts[local_index][1]);
-        c.shadow_rays += atomicLoad(&pool_counts[local_index][2]);
-        c.shadow_nodes += atomicLoad(&pool_counts[local_index][3]);
-        c.secondary_rays += atomicLoad(&pool_counts[local_index][4]);
-        c.secondary_nodes += atomicLoad(&pool_counts[local_index][5]);
-        counters[slot] = c;
     }
 }
 

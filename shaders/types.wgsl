@@ -119,6 +119,8 @@ struct Tile {
     sample_start: u32,
     sample_count: u32,
     scatter: u32,
+    // Pixels a side of the square one workgroup traces (`pooled`; `main` covers 8x8).
+    group_side: u32,
 }
 
 // What one pixel's rays cost, by kind (COUNTERS): rays traced and BVH nodes fetched

@@ -304,12 +304,17 @@ pub struct GpuTile {
     /// (row-major) traces block `i * scatter mod n` of the `n` (row-major), `scatter`
     /// coprime with `n`; 0 or 1 keeps workgroup `i` on block `i`. See `cut::scatter`.
     pub scatter: u32,
+    /// Pixels a side of the square one workgroup traces: `WORKGROUP_SIDE` (or 0) for
+    /// `main`, a multiple of it for `pooled` (`POOL_SIDE`), whose lanes share out the
+    /// square's pixels.
+    pub group_side: u32,
 }
 
 impl GpuTile {
     /// The workgroups a dispatch of this tile runs, across and down.
     pub fn workgroups(&self) -> [u32; 2] {
-        [self.width, self.height].map(|n| n.div_ceil(WORKGROUP_SIDE).max(1))
+        let side = self.group_side.max(WORKGROUP_SIDE);
+        [self.width, self.height].map(|n| n.div_ceil(side).max(1))
     }
 }
 
@@ -318,9 +323,13 @@ impl GpuTile {
 pub const WORKGROUP_SIDE: u32 = 8;
 pub const WORKGROUP_INVOCATIONS: u32 = WORKGROUP_SIDE * WORKGROUP_SIDE;
 
-/// Samples a pixel a pass of the `pooled` entry point shares out among a workgroup's
-/// lanes at most (its pool holds this many colours a pixel in workgroup memory).
-pub const POOL_SAMPLES: u32 = 4;
+/// Pixels a side of the square a workgroup of the `pooled` entry point traces: 4 pixels a
+/// lane, taken one at a time from the square's pool (`GPURT_POOL_SIDE` overrides it).
+pub const POOL_SIDE: u32 = 2 * WORKGROUP_SIDE;
+
+/// The largest square a workgroup of `pooled` traces, 64 pixels a lane: it sizes the
+/// workgroup's record of which pixels are done.
+pub const POOL_MAX_SIDE: u32 = 8 * WORKGROUP_SIDE;
 
 /// Fixed sizes of the per-pixel stacks in both renderers.
 /// The BVH builder guarantees a depth below `TRAVERSAL_STACK` (it falls back to a
@@ -411,7 +420,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
         ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
-        ("POOL_SAMPLES", U32(POOL_SAMPLES)),
+        ("POOL_MAX_SIDE", U32(POOL_MAX_SIDE)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
         ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
         ("RAY_STACK", U32(RAY_STACK as u32)),
@@ -432,6 +441,6 @@ const _: () = {
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 144);
-    assert!(size_of::<GpuTile>() == 36);
+    assert!(size_of::<GpuTile>() == 40);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

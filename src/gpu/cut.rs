@@ -6,7 +6,7 @@
 use std::ops::Range;
 use std::time::Duration;
 
-use crate::gpu_types::GpuTile;
+use crate::gpu_types::{GpuTile, WORKGROUP_SIDE};
 
 /// Bytes per traced pixel: `PixelOut` (rgb + ray count).
 pub(super) const PIXEL_BYTES: u64 = 16;
@@ -47,6 +47,8 @@ pub(super) struct Shape {
     /// Bytes of output a band holds at most (the device's storage binding limit may hold
     /// it to less).
     pub(super) band_bytes: u64,
+    /// Pixels a side of the square a workgroup of `pooled` traces (`POOL_SIDE`).
+    pub(super) pool_side: u32,
 }
 
 /// How a frame is cut into work. Each tile is traced in passes of `pass_samples` samples
@@ -70,6 +72,8 @@ pub(super) struct Cut {
     pub(super) submit_samples: u32,
     /// Whether each dispatch scatters its workgroups over its tile (`Shape::spread`).
     pub(super) spread: bool,
+    /// Pixels a side of the square one workgroup traces (`GpuTile::group_side`).
+    pub(super) group_side: u32,
 }
 
 impl Cut {
@@ -109,6 +113,7 @@ impl Cut {
             band_rows,
             submit_samples: passes.saturating_mul(pass_samples).min(spp.max(1)),
             spread: shape.spread && !shape.strips && tile_width <= MAX_SPREAD_SIDE,
+            group_side: WORKGROUP_SIDE,
         }
     }
 
@@ -190,6 +195,7 @@ impl Cut {
                         sample_start,
                         sample_count: self.pass_samples.min(samples.end - sample_start),
                         scatter: 1,
+                        group_side: self.group_side,
                     };
                     if self.spread {
                         let [gx, gy] = tile.workgroups();
@@ -276,6 +282,7 @@ mod tests {
             spread: false,
             strips: false,
             band_bytes: BAND_BYTES,
+            pool_side: crate::gpu_types::POOL_SIDE,
         }
     }
 

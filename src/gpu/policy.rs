@@ -7,7 +7,7 @@ use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::gpu_types::{
-    AOV_COLOR, GpuGlobals, LIGHT_AREA, POOL_SAMPLES, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
+    AOV_COLOR, GpuGlobals, LIGHT_AREA, POOL_MAX_SIDE, POOL_SIDE, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
     WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
 };
 use crate::pack::SceneBuffers;
@@ -88,12 +88,12 @@ pub(super) fn kernels_from_env() -> Result<Option<Kernels>> {
 }
 
 /// Whether a frame traced by the one kernel takes its `pooled` entry point: where forced
-/// (`GPURT_KERNELS=pooled`, `GpuRenderer::with_pooled`), for colour frames whose passes
-/// hold at most `POOL_SAMPLES` samples a pixel (the pool's room), else `main`. Not
-/// measured on a GPU yet, so nowhere by default; on lavapipe, one sample a pass, a
-/// workgroup's pool holds no more samples than it has lanes and has nothing to share.
-pub(super) fn pooled_for(forced: bool, shape: &Shape, globals: &GpuGlobals) -> bool {
-    forced && globals.aov == AOV_COLOR && shape.pass_samples <= POOL_SAMPLES
+/// (`GPURT_KERNELS=pooled`, `GpuRenderer::with_pooled`), for colour frames (an AOV
+/// traces one ray a sample, which leaves no lane idle for long), else `main`. Not
+/// measured on a GPU yet, so nowhere by default; on lavapipe, which runs every lane
+/// through every branch, it has nothing to gain.
+pub(super) fn pooled_for(forced: bool, globals: &GpuGlobals) -> bool {
+    forced && globals.aov == AOV_COLOR
 }
 
 /// Whether a frame of `scene` traces through the wavefront kernels: as `forced` says
@@ -145,6 +145,7 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
             spread: true,
             strips: false,
             band_bytes: BAND_BYTES,
+            pool_side: POOL_SIDE,
         }
     } else {
         gpu_shape()
@@ -165,6 +166,11 @@ pub(super) fn shape_for(software: bool) -> Result<Shape> {
     if let Some(n) = count_from_env("GPURT_WAVE_BYTES")? {
         shape.wave_bytes = n;
     }
+    if let Some(n) = count_from_env("GPURT_POOL_SIDE")? {
+        // Whole 8x8 blocks, at most 64 pixels a lane.
+        let side = u32::try_from(n).unwrap_or(u32::MAX).clamp(1, POOL_MAX_SIDE);
+        shape.pool_side = side.next_multiple_of(WORKGROUP_SIDE);
+    }
     Ok(shape)
 }
 
@@ -179,6 +185,7 @@ pub(super) fn gpu_shape() -> Shape {
         spread: false,
         strips: true,
         band_bytes: GPU_BAND_BYTES,
+        pool_side: POOL_SIDE,
     }
 }
 
@@ -215,8 +222,14 @@ fn count_from_env(name: &str) -> Result<Option<u64>> {
 
 /// How a frame of `globals`' size and samples is cut on this device, with `shape`'s
 /// work a dispatch and a submission. The wavefront path's tiles are its waves: squares,
-/// at most `shape.wave_side` a side.
-pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape) -> Cut {
+/// at most `shape.wave_side` a side. Where the one kernel takes its `pooled` entry
+/// point, a workgroup traces a square of `shape.pool_side` pixels a side.
+pub(super) fn cut_for(
+    limits: &wgpu::Limits,
+    globals: &GpuGlobals,
+    shape: &Shape,
+    pooled: bool,
+) -> Cut {
     let shape = &Shape {
         strips: shape.strips && globals.wavefront == 0,
         ..*shape
@@ -239,6 +252,8 @@ pub(super) fn cut_for(limits: &wgpu::Limits, globals: &GpuGlobals, shape: &Shape
             side /= 2;
         }
         (cut.tile_width, cut.tile_rows) = (side, side);
+    } else if pooled {
+        cut.group_side = shape.pool_side;
     }
     cut
 }
@@ -288,7 +303,7 @@ mod tests {
                     wavefront: 1,
                     ..Default::default()
                 };
-                let cut = cut_for(limits, &globals, &shape);
+                let cut = cut_for(limits, &globals, &shape, false);
                 assert_eq!(cut.tile_width, cut.tile_rows, "square waves");
                 let fits = |side: u32| {
                     let paths = u64::from(side * side * cut.pass_samples);
@@ -303,7 +318,7 @@ mod tests {
                     wavefront: 0,
                     ..globals
                 };
-                let cap = cut_for(limits, &plain, &squares)
+                let cap = cut_for(limits, &plain, &squares, false)
                     .tile_rows
                     .min(shape.wave_side);
                 let side = cut.tile_rows;

@@ -162,7 +162,7 @@ impl GpuRenderer {
     fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
         Specialization {
             layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
-            pooled: pooled_for(self.pooled, &self.shape, globals),
+            pooled: pooled_for(self.pooled, globals),
             ..Specialization::of(scene, globals)
         }
     }
@@ -303,7 +303,12 @@ impl GpuRenderer {
 
     /// How a frame of `globals` is cut on this device (`policy::cut_for`).
     fn cut(&self, limits: &wgpu::Limits, globals: &GpuGlobals) -> Cut {
-        cut_for(limits, globals, &self.shape)
+        cut_for(
+            limits,
+            globals,
+            &self.shape,
+            pooled_for(self.pooled, globals),
+        )
     }
 
     /// Uploads a scene for the frame described by `globals` and gets its pipeline ready.

@@ -104,7 +104,8 @@ fn rust_layouts() -> Vec<Layout> {
                 out_stride,
                 sample_start,
                 sample_count,
-                scatter
+                scatter,
+                group_side
             ]
         ),
     ]
@@ -223,7 +224,7 @@ fn shared_constants() -> Vec<(&'static str, WgslValue)> {
         ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
         ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
         ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
-        ("POOL_SAMPLES", U32(POOL_SAMPLES)),
+        ("POOL_MAX_SIDE", U32(POOL_MAX_SIDE)),
         ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
         ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
         ("RAY_STACK", U32(RAY_STACK as u32)),
@@ -412,6 +413,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
     (
         "block_pixel",
         "the pixel of a GPU invocation; the CPU loops over pixels",
+    ),
+    (
+        "pool_pixel",
+        "the pixel of a pooled workgroup's square; the CPU loops over pixels",
     ),
     ("main", "the entry point; the CPU's is sample_sum"),
     (

@@ -8,6 +8,7 @@ use std::time::Duration;
 use super::GpuRenderer;
 use crate::gpu::cut::Shape;
 use crate::gpu::policy::gpu_shape;
+use crate::gpu_types::{POOL_MAX_SIDE, WORKGROUP_SIDE};
 
 impl GpuRenderer {
     /// This renderer splitting the node and primitive textures into layers of `rows`
@@ -72,8 +73,21 @@ impl GpuRenderer {
     }
 
     /// This renderer's one kernel tracing colour frames through its `pooled` entry point
-    /// where their passes allow (`policy::pooled_for`), or through `main`.
+    /// (`policy::pooled_for`), or through `main`.
     pub fn with_pooled(self, pooled: bool) -> Self {
         GpuRenderer { pooled, ..self }
+    }
+
+    /// This renderer's `pooled` workgroups each tracing a square of `side` pixels a side,
+    /// a multiple of `WORKGROUP_SIDE` up to `POOL_MAX_SIDE` (`GPURT_POOL_SIDE`).
+    pub fn with_pool_side(self, side: u32) -> Self {
+        assert!(side.is_multiple_of(WORKGROUP_SIDE) && (1..=POOL_MAX_SIDE).contains(&side));
+        GpuRenderer {
+            shape: Shape {
+                pool_side: side,
+                ..self.shape
+            },
+            ..self
+        }
     }
 }

@@ -245,9 +245,10 @@ fn dispatches_over_the_budget_are_cut_finer_and_change_nothing() {
 /// (scattered squares, one sample a pass) to the bit: here with strips of 16 to 40 rows
 /// and a short last one, on an odd-sized frame of every feature whose samples do not divide
 /// into passes, an AOV frame, and glass at depth 16, whose heavy pixels lavapipe's loop
-/// limit cuts short and `resume` finishes. So does the same cut through the `pooled`
-/// entry point (each pass's samples shared out among a workgroup's lanes), whose pool
-/// then holds four samples a pixel; an AOV frame keeps `main`.
+/// limit cuts short and `resume` finishes. So does the `pooled` entry point (a larger
+/// square of pixels a workgroup, shared out among its lanes) in both cuts, with squares
+/// of 8, 16 and 24 pixels a side (the software cut's scattered as many as it has); an
+/// AOV frame keeps `main`.
 #[test]
 fn a_gpus_strips_trace_the_frame_of_a_software_adapters_squares() {
     let Some(g) = gpu() else {
@@ -304,20 +305,29 @@ fn a_gpus_strips_trace_the_frame_of_a_software_adapters_squares() {
         assert_eq!(r, rays, "{label}: the rays");
         assert!(c == counts, "{label}: the counts");
         assert!(f == film, "{label}: the image");
-        // The same cut with the pass's samples shared out among each workgroup's lanes.
-        let pooled = new().with_gpu_shape(strip).with_pooled(true);
-        let kernels = pooled.kernels(&buffers, &pooled.frame(&buffers, &globals));
-        let want = if aov == AOV_COLOR { "pooled" } else { "main" };
-        assert_eq!(kernels, want, "{label}: an AOV frame keeps main");
-        let (f, r, c, _) = render(pooled);
-        assert_eq!(r, rays, "{label}: the pooled kernel's rays");
-        // Rays and node fetches by kind; not the warps' figures, which leave out the
-        // pixels `resume` finishes, and a lane of the pool runs longer than one of `main`
-        // (lavapipe's loop limit cuts other pixels short).
-        assert!(
-            (c.rays, c.nodes) == (counts.rays, counts.nodes),
-            "{label}: the pooled kernel's counts"
-        );
-        assert!(f == film, "{label}: the pooled kernel's image");
+        // Each cut with each workgroup's square of pixels shared out among its lanes.
+        let pooled = [
+            (new().with_gpu_shape(strip), 16),
+            (new().with_gpu_shape(strip), 8),
+            (new(), 16),
+            (new(), 24),
+        ];
+        for (r, side) in pooled {
+            let pooled = r.with_pooled(true).with_pool_side(side);
+            let kernels = pooled.kernels(&buffers, &pooled.frame(&buffers, &globals));
+            let want = if aov == AOV_COLOR { "pooled" } else { "main" };
+            assert_eq!(kernels, want, "{label}: an AOV frame keeps main");
+            let (f, r, c, _) = render(pooled);
+            let label = format!("{label}, pooled squares of {side}");
+            assert_eq!(r, rays, "{label}: the rays");
+            // Rays and node fetches by kind; not the warps' figures, which leave out the
+            // pixels `resume` finishes, and a lane of the pool runs longer than one of
+            // `main` (lavapipe's loop limit cuts other pixels short).
+            assert!(
+                (c.rays, c.nodes) == (counts.rays, counts.nodes),
+                "{label}: the counts"
+            );
+            assert!(f == film, "{label}: the image");
+        }
     }
 }

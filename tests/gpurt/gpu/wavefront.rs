@@ -272,6 +272,7 @@ fn the_cpu_twin_of_the_kernels_traces_what_the_cpu_traces() {
             sample_start,
             sample_count: opts.spp - 1,
             scatter: 0,
+            group_side: 0,
         };
         let t = tile(1);
         let pixels = (t.width * t.height) as usize;
