@@ -4,8 +4,12 @@
 //! (`GpuPixelCounts`, the `COUNTERS` specialisation) and the host adds the pixels up; the
 //! CPU counts the same things on its own walk (`cpu::RayCounts`).
 
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
 use crate::gpu_types::{
-    GpuCwideNode, GpuNode, GpuPixelCounts, GpuWideNode, TRAVERSAL_CWIDE, TRAVERSAL_WIDE,
+    GpuCwideNode, GpuNode, GpuPixelCounts, GpuWideNode, POOL_SIDE, TRAVERSAL_CWIDE, TRAVERSAL_WIDE,
+    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
 };
 
 /// The kinds of ray counted apart: eye rays, shadow rays, and reflected and refracted rays.
@@ -33,6 +37,51 @@ pub struct Counters {
     /// have a node to fetch (`lanes_busy`). Counted from the GPU's pixels only.
     pub warp_nodes: [u64; 3],
     pub warp_room: [u64; 3],
+    /// Over the same warps, rays of every kind together: 32 times the node fetches of
+    /// the warp's busiest lane, one pixel a lane as `main` traces them (`warp_room_all`),
+    /// and with each `POOL_SIDE` square's pixels handed out to a workgroup's lanes as
+    /// `pooled` hands them out (`pool_room`, `pooled_lanes`). A model: a warp's lanes
+    /// taken to walk in step, its time that of its lane that fetches the most.
+    pub warp_room_all: u64,
+    pub pool_room: u64,
+}
+
+/// Where pixel `p` of a pooled workgroup's square of `side` pixels lies in it, as
+/// `pool_pixel` in shaders/main.wgsl lays it out: 8x8 blocks in row order, each in 4x2
+/// runs of lanes.
+fn pool_offset(p: usize, side: usize) -> (usize, usize) {
+    let blocks = side / WORKGROUP_SIDE as usize;
+    let (sub, q) = (p / 64, p % 64);
+    let (run, lane) = (q / 8, q % 8);
+    (
+        (sub % blocks) * 8 + (run % 2) * 4 + lane % 4,
+        (sub / blocks) * 8 + (run / 2) * 2 + lane / 4,
+    )
+}
+
+/// Node fetches of each lane of a `pooled` workgroup handed `costs` (its square's
+/// pixels' fetches, in the pool's order; `None` for a pixel it does not trace): each lane
+/// its own pixel first, then each next pixel to the lane that is free first (the lowest
+/// numbered of those free at once), as lanes take them from the counter.
+fn pooled_lanes(costs: impl Iterator<Item = Option<u64>>) -> [u64; 64] {
+    const LANES: usize = WORKGROUP_INVOCATIONS as usize;
+    let mut lanes = [0u64; LANES];
+    let mut free = BinaryHeap::new();
+    for (p, cost) in costs.enumerate() {
+        let Some(cost) = cost else { continue };
+        let lane = if p < LANES {
+            p
+        } else {
+            if free.is_empty() {
+                free.extend((0..LANES).map(|l| Reverse((lanes[l], l))));
+            }
+            let Reverse((_, l)) = free.pop().expect("64 lanes");
+            free.push(Reverse((lanes[l] + cost, l)));
+            l
+        };
+        lanes[lane] += cost;
+    }
+    lanes
 }
 
 impl Counters {
@@ -64,7 +113,7 @@ impl Counters {
         let rows = px.len() / width;
         for y0 in (0..rows).step_by(down) {
             for x0 in (0..width).step_by(across) {
-                let (mut sum, mut most) = ([0u64; 3], [0u64; 3]);
+                let (mut sum, mut most, mut most_all) = ([0u64; 3], [0u64; 3], 0);
                 for y in y0..(y0 + down).min(rows) {
                     for i in (x0..(x0 + across).min(width)).map(|x| y * width + x) {
                         if skip.binary_search(&i).is_ok() {
@@ -77,12 +126,31 @@ impl Counters {
                             sum[k] += u64::from(nodes[k]);
                             most[k] = most[k].max(u64::from(nodes[k]));
                         }
+                        most_all = most_all.max(pixel_nodes(p));
                     }
                 }
                 for k in 0..3 {
                     self.warp_nodes[k] += sum[k];
                     self.warp_room[k] += WARP_LANES * most[k];
                 }
+                self.warp_room_all += WARP_LANES * most_all;
+            }
+        }
+        // The same pixels in `pooled`'s squares, from the band's corner.
+        let side = POOL_SIDE as usize;
+        for y0 in (0..rows).step_by(side) {
+            for x0 in (0..width).step_by(side) {
+                let costs = (0..side * side).map(|p| {
+                    let (x, y) = pool_offset(p, side);
+                    let (x, y) = (x0 + x, y0 + y);
+                    let i = y * width + x;
+                    (x < width && y < rows && skip.binary_search(&i).is_err())
+                        .then(|| pixel_nodes(&px[i]))
+                });
+                let lanes = pooled_lanes(costs);
+                let warps = lanes.chunks(WARP_LANES as usize);
+                self.pool_room +=
+                    WARP_LANES * warps.map(|w| w.iter().max().unwrap_or(&0)).sum::<u64>();
             }
         }
     }
@@ -95,6 +163,8 @@ impl Counters {
             self.warp_nodes[k] += o.warp_nodes[k];
             self.warp_room[k] += o.warp_room[k];
         }
+        self.warp_room_all += o.warp_room_all;
+        self.pool_room += o.pool_room;
     }
 
     /// At most what share of a warp's lanes have a node to fetch while it walks rays of
@@ -102,6 +172,20 @@ impl Counters {
     /// counted by warps: the CPU's counts, or no node fetched).
     pub fn lanes_busy(&self, k: usize) -> Option<f64> {
         (self.warp_room[k] > 0).then(|| self.warp_nodes[k] as f64 / self.warp_room[k] as f64)
+    }
+
+    /// At most what share of a warp's lanes have a node to fetch over a frame's rays of
+    /// every kind, one pixel a lane (`main`) and with pixels pooled (`pooled`), were its
+    /// lanes to walk in step (`warp_room_all`, `pool_room`; `None` where nothing was
+    /// counted by warps).
+    pub fn lanes_busy_all(&self) -> Option<(f64, f64)> {
+        let nodes: u64 = self.warp_nodes.iter().sum();
+        (self.warp_room_all > 0 && self.pool_room > 0).then(|| {
+            (
+                nodes as f64 / self.warp_room_all as f64,
+                nodes as f64 / self.pool_room as f64,
+            )
+        })
     }
 
     /// Every ray counted.
@@ -122,6 +206,15 @@ impl Counters {
     /// One line per kind that has rays, for `--stats`, each headed by `who` (the
     /// backend) and the kind: rays, nodes and node bytes per ray.
     pub fn report(&self, who: &str) -> Vec<String> {
+        let all = self.lanes_busy_all().map(|(main, pooled)| {
+            format!(
+                "{:<11} at most {:.0}% of a warp's lanes busy, {:.0}% with {POOL_SIDE}x{POOL_SIDE} \
+                 pixels a workgroup shared out (GPURT_KERNELS=pooled)",
+                format!("{who} all"),
+                100.0 * main,
+                100.0 * pooled
+            )
+        });
         (0..3)
             .filter(|&k| self.rays[k] > 0)
             .map(|k| {
@@ -137,8 +230,17 @@ impl Counters {
                     self.node_bytes
                 )
             })
+            .chain(all)
             .collect()
     }
+}
+
+/// A GPU pixel's node fetches, every kind of ray together.
+fn pixel_nodes(p: &GpuPixelCounts) -> u64 {
+    [p.eye_nodes, p.shadow_nodes, p.secondary_nodes]
+        .map(u64::from)
+        .iter()
+        .sum()
 }
 
 /// Bytes one node fetch of the GPU's walk `traversal` reads: a binary node for the
@@ -216,5 +318,66 @@ mod tests {
         let mut twice = c;
         twice.add(&c);
         assert_eq!(twice.warp_room, c.warp_room.map(|r| 2 * r));
+    }
+
+    /// A pooled square's pixels: each once, the first 32 (a warp's first pixels) the
+    /// 8x4 of `WARP_PIXELS`, the first 64 one 8x8 block.
+    #[test]
+    fn a_pooled_square_is_laid_out_as_the_shader_lays_it_out() {
+        for side in [8, 16, 24] {
+            let mut seen = vec![0; side * side];
+            for p in 0..side * side {
+                let (x, y) = pool_offset(p, side);
+                seen[y * side + x] += 1;
+                if p < 32 {
+                    assert!(x < WARP_PIXELS[0] && y < WARP_PIXELS[1], "{p}: {x}, {y}");
+                } else if p < 64 {
+                    assert!(x < 8 && (4..8).contains(&y), "{p}: {x}, {y}");
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "side {side}");
+        }
+        assert_eq!(pool_offset(8, 16), (4, 0));
+        assert_eq!(pool_offset(64, 16), (8, 0));
+        assert_eq!(pool_offset(128, 16), (0, 8));
+    }
+
+    /// A band of 16x16 pixels of one node each but one of 100 (at the corner) and one of
+    /// 40 (the last pixel handed out). `main`: eight warps, the corner's room 32 x 100,
+    /// the last's 32 x 40, the others 32 each. `pooled`: lane 0 keeps the corner's pixel;
+    /// lanes 1 to 63 take the square's other pixels as they come free, so the last (the
+    /// 255th) goes to lane 3 after three more rounds: lanes 1 and 2 end at 5, lane 3 at
+    /// 44, lanes 4 to 63 at 4. The first warp's room is 32 x 100 (lane 3's 44 within
+    /// it), the second's 32 x 4.
+    #[test]
+    fn a_pooled_square_hands_its_pixels_to_the_lanes_free_first() {
+        let one = GpuPixelCounts {
+            eye_rays: 1,
+            eye_nodes: 1,
+            ..Default::default()
+        };
+        let mut px = vec![one; 16 * 16];
+        px[0].eye_nodes = 100;
+        let (x, y) = pool_offset(255, 16);
+        px[y * 16 + x].shadow_rays = 1;
+        px[y * 16 + x].shadow_nodes = 39;
+        let mut c = Counters::new(112);
+        c.add_band(&px, 16, &[]);
+        let nodes = 254 + 100 + 40;
+        assert_eq!(c.warp_nodes.iter().sum::<u64>(), nodes);
+        assert_eq!(c.warp_room_all, 32 * (100 + 40 + 6));
+        assert_eq!(c.pool_room, 32 * (100 + 4));
+        let (main, pooled) = c.lanes_busy_all().expect("counted by warps");
+        assert_eq!(main, nodes as f64 / (32.0 * 146.0));
+        assert_eq!(pooled, nodes as f64 / (32.0 * 104.0));
+        let lines = c.report("gpu");
+        assert!(
+            lines.last().unwrap().starts_with("gpu all")
+                && lines
+                    .last()
+                    .unwrap()
+                    .contains("8% of a warp's lanes busy, 12% with 16x16"),
+            "{lines:?}"
+        );
     }
 }

@@ -50,6 +50,8 @@ fn twin(buffers: &SceneBuffers, globals: &GpuGlobals) -> Counters {
     Counters {
         warp_nodes: warps.warp_nodes,
         warp_room: warps.warp_room,
+        warp_room_all: warps.warp_room_all,
+        pool_room: warps.pool_room,
         ..counts.counters(gpu_node_bytes(globals.traversal))
     }
 }
@@ -93,6 +95,23 @@ fn agree(gpu: &Counters, cpu: &Counters) -> Result<(), String> {
                 "{kind} rays by warps: the GPU counted {} of room for {} nodes, the CPU \
                  twin {} for {}",
                 gpu.warp_room[k], gpu.warp_nodes[k], cpu.warp_room[k], cpu.warp_nodes[k]
+            ));
+        }
+    }
+    // Every kind together, one pixel a lane and pooled: likewise.
+    let nodes = gpu
+        .warp_nodes
+        .iter()
+        .sum::<u64>()
+        .max(cpu.warp_nodes.iter().sum());
+    let room = 32.0 * 1e-3 * nodes.max(1) as f64;
+    for (what, g, c) in [
+        ("a pixel a lane", gpu.warp_room_all, cpu.warp_room_all),
+        ("pooled", gpu.pool_room, cpu.pool_room),
+    ] {
+        if g.abs_diff(c) as f64 > room {
+            return Err(format!(
+                "every ray by warps, {what}: the GPU counted {g} of room, the CPU twin {c}"
             ));
         }
     }
@@ -176,6 +195,16 @@ fn the_gpu_counts_what_the_cpu_twin_of_its_walk_counts() {
             if let Err(why) = agree(&counted, &cpu) {
                 failures.push(format!("{label}: {why}"));
             }
+            assert!(
+                counted.warp_room_all > 0 && counted.pool_room > 0,
+                "{label}: every ray by warps: {counted:?}"
+            );
+            let mut pooled = cpu;
+            pooled.pool_room += 32 * (pooled.warp_nodes.iter().sum::<u64>() / 500 + 1);
+            assert!(
+                agree(&counted, &pooled).is_err(),
+                "{label}: {pooled:?} passes"
+            );
             for k in 0..3 {
                 let mut more = cpu;
                 more.nodes[k] += more.nodes[k] / 500 + 1;
@@ -260,6 +289,8 @@ fn pixels_continued_across_dispatches_are_counted() {
     let in_all = |c: Counters| Counters {
         warp_nodes: [0; 3],
         warp_room: [0; 3],
+        warp_room_all: 0,
+        pool_room: 0,
         ..c
     };
     assert!((0..3).all(|k| counted.warp_nodes[k] <= counted.nodes[k]));
