@@ -400,6 +400,8 @@ fn resume(
                     if (c.w > 0.0) {
                         st.rays += 1u;
                         st.lit += c.xyz;
+                    } else if (!SHADOW_RAYS) {
+                        st.lit += c.xyz;
                     }
                     st.light_sample += 1u;
                 }

@@ -140,11 +140,14 @@ fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light
 // Sample k of `light` at surface `s` (material m, incoming direction dir, mirror
 // direction r): Lambert and the highlight scaled by the shadow ray's transmission in xyz;
 // w is 1 when the light is above the surface and a shadow ray was traced, else 0 (and xyz
-// is 0).
+// is 0, but for SHADOW_RAYS off, where the light is taken as unblocked).
 fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
     let lr = light_ray(s, m, dir, r, light, k, rng);
     if (lr.traced == 0u) {
         return vec4<f32>(0.0);
+    }
+    if (!SHADOW_RAYS) {
+        return vec4<f32>(lr.intensity * lr.term, 0.0);
     }
     let fetched_before = fetched;
     let shadow = transmission(Ray(lr.origin, lr.dir), lr.dist);
@@ -168,6 +171,8 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
             let c = light_sample(s, m, dir, r, light, k, rng);
             if (c.w > 0.0) {
                 *rays += 1u;
+                colour += c.xyz;
+            } else if (!SHADOW_RAYS) {
                 colour += c.xyz;
             }
         }

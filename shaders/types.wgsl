@@ -226,6 +226,9 @@ override CWIDE: bool = false;
 override STACK: u32 = TRAVERSAL_STACK;
 // globals.counters != 0, as a constant: count rays and node fetches by kind (`counters`).
 override COUNTERS: bool = false;
+// false: lights reach every surface that faces them and no shadow ray is traced (`gpurt
+// bench`'s `shaded` pass, which times the shading of hits apart from their shadow rays).
+override SHADOW_RAYS: bool = true;
 // log2 of the texels in a layer of node_texels and prim_texels (the device's limits).
 override LAYER_SHIFT: u32 = 25u;
 

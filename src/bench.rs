@@ -6,12 +6,17 @@
 //! a second of warm-up frames and its median time kept, once reading the image back into a film and once on the
 //! device alone (the time the rates are computed from):
 //! - `eye`: the depth AOV, which traces the eye rays and nothing else;
-//! - `direct`: colour with depth 1, eye rays plus their shadow rays;
+//! - `shaded`: colour with depth 1 and no shadow rays (every light reaching every surface
+//!   facing it: `GpuRenderer::with_shadow_rays`), the eye rays with their hits shaded;
+//! - `direct`: colour with depth 1, adding the eye rays' shadow rays;
 //! - `full`: colour with the requested depth, adding reflected and refracted rays and
 //!   their shadow rays.
 //!
-//! The differences between passes give each kind's rate: shadow rays take
-//! `direct - eye`, secondary rays (with their own shadow rays) `full - direct`. The CPU
+//! The differences between passes give each kind's rate: the shading of the eye rays'
+//! hits takes `shaded - eye`, shadow rays `direct - shaded`, secondary rays (with their
+//! hits' shading and their own shadow rays) `full - direct`. (A frame on the wavefront
+//! kernels, which trace every shadow ray, has no `shaded` pass: its shadow rays take
+//! `direct - eye`, shading included.) The CPU
 //! renders the `full` pass once per setting, with its own count of rays by kind, which
 //! should equal the GPU's total: a mismatch is reported as a warning.
 //!
@@ -71,6 +76,8 @@ struct GpuRow {
     upload: Duration,
     device_bytes: u64,
     eye: Pass,
+    /// `None` where the frame takes the wavefront kernels.
+    shaded: Option<Pass>,
     direct: Pass,
     full: Pass,
     /// The `full` pass's counts.
@@ -257,53 +264,65 @@ fn gpu_row(
     config: &BenchConfig,
 ) -> Result<GpuRow> {
     let (device, queue) = (&ctx.device, &ctx.queue);
-    let pass = |globals: &GpuGlobals| -> Result<(Pass, Duration, Duration, u64)> {
-        let before = renderer.compile_time();
-        renderer.prepare(device, queue, buffers, globals)?;
-        let compile = renderer.compile_time() - before;
-        let t = Instant::now();
-        let scene = renderer.upload(device, queue, buffers, globals)?;
-        let upload = t.elapsed();
-        let never = AtomicBool::new(false);
-        let (_, rays) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
-        // A GPU idle for a while (the CPU rows run in between) clocks down: keep it busy
-        // for a quarter of a second before timing.
-        let warm = Instant::now();
-        while warm.elapsed() < Duration::from_millis(250) {
-            gpu::trace_on_device(device, queue, &scene)?;
-        }
-        let frames = 0..config.frames.max(1);
-        let with_readback = frames
-            .clone()
-            .map(|_| {
-                let t = Instant::now();
-                gpu::trace(device, queue, &scene, &|_| {}, &never).map(|_| t.elapsed())
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let on_device = frames
-            .map(|_| {
-                let t = Instant::now();
-                gpu::trace_on_device(device, queue, &scene).map(|()| t.elapsed())
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let pass = Pass {
-            time: median(on_device),
-            with_readback: median(with_readback),
-            rays,
+    let pass =
+        |renderer: &GpuRenderer, globals: &GpuGlobals| -> Result<(Pass, Duration, Duration, u64)> {
+            let before = renderer.compile_time();
+            renderer.prepare(device, queue, buffers, globals)?;
+            let compile = renderer.compile_time() - before;
+            let t = Instant::now();
+            let scene = renderer.upload(device, queue, buffers, globals)?;
+            let upload = t.elapsed();
+            let never = AtomicBool::new(false);
+            let (_, rays) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
+            // A GPU idle for a while (the CPU rows run in between) clocks down: keep it busy
+            // for a quarter of a second before timing.
+            let warm = Instant::now();
+            while warm.elapsed() < Duration::from_millis(250) {
+                gpu::trace_on_device(device, queue, &scene)?;
+            }
+            let frames = 0..config.frames.max(1);
+            let with_readback = frames
+                .clone()
+                .map(|_| {
+                    let t = Instant::now();
+                    gpu::trace(device, queue, &scene, &|_| {}, &never).map(|_| t.elapsed())
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let on_device = frames
+                .map(|_| {
+                    let t = Instant::now();
+                    gpu::trace_on_device(device, queue, &scene).map(|()| t.elapsed())
+                })
+                .collect::<Result<Vec<_>>>()?;
+            let pass = Pass {
+                time: median(on_device),
+                with_readback: median(with_readback),
+                rays,
+            };
+            Ok((pass, compile, upload, scene.device_bytes()))
         };
-        Ok((pass, compile, upload, scene.device_bytes()))
-    };
     // The full pass first, so that its compile time is its own.
-    let (full, compile, upload, device_bytes) = pass(globals)?;
-    let (eye, ..) = pass(&GpuGlobals {
-        aov: AOV_DEPTH,
-        ..*globals
-    })?;
-    let (direct, ..) = pass(&GpuGlobals {
+    let (full, compile, upload, device_bytes) = pass(renderer, globals)?;
+    let (eye, ..) = pass(
+        renderer,
+        &GpuGlobals {
+            aov: AOV_DEPTH,
+            ..*globals
+        },
+    )?;
+    let depth_1 = GpuGlobals {
         aov: AOV_COLOR,
         max_depth: 1,
         ..*globals
-    })?;
+    };
+    let (direct, ..) = pass(renderer, &depth_1)?;
+    let shaded = match renderer.kernels(buffers, &depth_1) {
+        "wavefront" => None,
+        _ => {
+            let unshadowed = GpuRenderer::new(device, None)?.with_shadow_rays(false);
+            Some(pass(&unshadowed, &depth_1)?.0)
+        }
+    };
     let counting = GpuGlobals {
         counters: 1,
         ..renderer.frame(buffers, globals)
@@ -325,6 +344,7 @@ fn gpu_row(
         upload,
         device_bytes,
         eye,
+        shaded,
         direct,
         full,
         counted,
@@ -353,10 +373,10 @@ fn per_ray(c: &Counters) -> [String; 3] {
 
 fn print_header() {
     outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
+        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shading ms | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
     );
     outln!(
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
     );
 }
 
@@ -369,30 +389,36 @@ fn print_row(r: &Row) {
         .or(r.cpu.as_ref().map(|c| c.rays))
         .unwrap_or(0);
     let dash = || "-".to_string();
-    let (frame, readback, rate, eye, shadow, secondary, upload, compile, mib) = match &r.gpu {
-        Some(g) => (
-            ms(g.full.time),
-            ms(g.full.with_readback),
-            rate(mrays(g.full.rays, g.full.time)),
-            rate(mrays(g.eye.rays, g.eye.time)),
-            rate_between(g.direct, g.eye),
-            rate_between(g.full, g.direct),
-            ms(g.upload),
-            ms(g.compile),
-            format!("{:.1}", g.device_bytes as f64 / (1 << 20) as f64),
-        ),
-        None => (
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-            dash(),
-        ),
-    };
+    let (frame, readback, rate, eye, shading, shadow, secondary, upload, compile, mib) =
+        match &r.gpu {
+            Some(g) => (
+                ms(g.full.time),
+                ms(g.full.with_readback),
+                rate(mrays(g.full.rays, g.full.time)),
+                rate(mrays(g.eye.rays, g.eye.time)),
+                g.shaded
+                    .map_or_else(dash, |s| ms(s.time.saturating_sub(g.eye.time))),
+                // The shaded pass traces the eye rays alone: the direct pass's rays over its
+                // are the shadow rays.
+                rate_between(g.direct, g.shaded.unwrap_or(g.eye)),
+                rate_between(g.full, g.direct),
+                ms(g.upload),
+                ms(g.compile),
+                format!("{:.1}", g.device_bytes as f64 / (1 << 20) as f64),
+            ),
+            None => (
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+                dash(),
+            ),
+        };
     let (cpu_frame, cpu_rate) = match &r.cpu {
         Some(c) => (ms(c.time), format!("{:.1}", mrays(c.rays, c.time))),
         None => (dash(), dash()),
@@ -411,7 +437,7 @@ fn print_row(r: &Row) {
         .as_ref()
         .map_or_else(|| [dash(), dash(), dash()], per_ray);
     outln!(
-        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} | {eye_nodes} | {shadow_nodes} | {secondary_nodes} |",
+        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shading} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} | {eye_nodes} | {shadow_nodes} | {secondary_nodes} |",
         r.scene,
         r.prims,
         r.width,

@@ -60,6 +60,8 @@ pub struct GpuRenderer {
     /// Whether the one kernel's colour frames take its `pooled` entry point where they
     /// can (`policy::pooled_for`).
     pooled: bool,
+    /// Whether colour frames trace shadow rays (`Specialization::shadow_rays`).
+    shadow_rays: bool,
     /// Rows of a layer of the node and primitive textures (`upload::layer_rows`).
     layer_rows: u32,
     /// Longest a dispatch should take (`DISPATCH_BUDGET`); `None` on software adapters,
@@ -152,6 +154,7 @@ impl GpuRenderer {
             wave,
             wavefront: kernels.map(|k| k == Kernels::Wavefront),
             pooled: kernels == Some(Kernels::Pooled),
+            shadow_rays: true,
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
             texture_margin: None,
@@ -163,6 +166,7 @@ impl GpuRenderer {
         Specialization {
             layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
             pooled: pooled_for(self.pooled, globals),
+            shadow_rays: self.shadow_rays,
             ..Specialization::of(scene, globals)
         }
     }
@@ -178,8 +182,10 @@ impl GpuRenderer {
     /// and its kernels (`policy::wavefront_for`, where the adapter binds the wavefront
     /// kernels): what its frames of `globals` trace.
     pub fn frame(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> GpuGlobals {
-        let wave =
-            self.wave.is_some() && wavefront_for(self.wavefront, self.software, scene, globals);
+        // The wavefront kernels trace every shadow ray.
+        let wave = self.wave.is_some()
+            && self.shadow_rays
+            && wavefront_for(self.wavefront, self.software, scene, globals);
         GpuGlobals {
             traversal: scene.traversal_for(self.traversal),
             wavefront: u32::from(wave),

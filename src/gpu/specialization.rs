@@ -33,6 +33,9 @@ pub struct Specialization {
     pub cwide: bool,
     /// Count rays and node fetches by kind (`GpuGlobals::counters`).
     pub counters: bool,
+    /// Trace shadow rays; off, every light reaches every surface facing it (set by the
+    /// renderer, `GpuRenderer::with_shadow_rays`, for `gpurt bench`'s `shaded` pass).
+    pub shadow_rays: bool,
     /// Entries of each invocation's traversal stack in workgroup memory: what the walk
     /// needs on this scene (`SceneBuffers::stack_entries`), rounded up to a multiple of 8
     /// so that few sizes are compiled. A smaller stack lets more workgroups share a
@@ -78,6 +81,7 @@ impl Specialization {
             wide: g.traversal == TRAVERSAL_WIDE,
             cwide: g.traversal == TRAVERSAL_CWIDE,
             counters: g.counters != 0,
+            shadow_rays: true,
             stack: scene.stack_entries(g.traversal).next_multiple_of(8),
             trace_stack: scene.trace_stack(g.max_depth),
             layer_shift: 0,
@@ -107,6 +111,7 @@ impl Specialization {
             ("WIDE", b(self.wide)),
             ("CWIDE", b(self.cwide)),
             ("COUNTERS", b(self.counters)),
+            ("SHADOW_RAYS", b(self.shadow_rays)),
             ("STACK", f64::from(self.stack)),
             ("LAYER_SHIFT", f64::from(self.layer_shift)),
         ]
@@ -147,6 +152,7 @@ mod tests {
             wide: true,
             cwide: true,
             counters: true,
+            shadow_rays: false,
             stack: 64,
             trace_stack: 16,
             layer_shift: 25,

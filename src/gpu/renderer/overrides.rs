@@ -78,6 +78,17 @@ impl GpuRenderer {
         GpuRenderer { pooled, ..self }
     }
 
+    /// This renderer tracing shadow rays (`true`, as every renderer does) or none, every
+    /// light reaching every surface that faces it (`false`): `gpurt bench` times the
+    /// shading of a frame's hits apart from their shadow rays so. Colour frames then take
+    /// the one kernel.
+    pub fn with_shadow_rays(self, shadow_rays: bool) -> Self {
+        GpuRenderer {
+            shadow_rays,
+            ..self
+        }
+    }
+
     /// This renderer's `pooled` workgroups each tracing a square of `side` pixels a side,
     /// a multiple of `WORKGROUP_SIDE` up to `POOL_MAX_SIDE` (`GPURT_POOL_SIDE`).
     pub fn with_pool_side(self, side: u32) -> Self {

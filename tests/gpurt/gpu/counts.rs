@@ -297,3 +297,78 @@ fn pixels_continued_across_dispatches_are_counted() {
     agree(&in_all(counted), &in_all(twin(&buffers, &globals)))
         .unwrap_or_else(|why| panic!("glass: {why}"));
 }
+
+/// With shadow rays off (`GpuRenderer::with_shadow_rays`, `gpurt bench`'s `shaded`
+/// pass), every light reaches every surface facing it and no shadow ray is traced: on the
+/// bundled spheres (two lights, a floor the spheres shadow, glass and a mirror, at depth
+/// 5) every pixel is at least as bright as with shadows, those in shadow brighter, and
+/// the frame traces the same eye and secondary rays and no shadow ray, through `main` and
+/// through `pooled`; on a lone ball, which nothing shadows, the image is the same to the
+/// bit.
+#[test]
+fn shadow_rays_off_light_every_surface_facing_a_light() {
+    let Some(g) = gpu() else {
+        return;
+    };
+    let spheres = scene::load(&own_scenes().join("spheres.nff")).expect("loads");
+    let ball = gpurt::scene::nff::parse(
+        crate::common::inputs::SCENE.as_bytes(),
+        "ball.nff",
+        std::path::Path::new("."),
+    )
+    .expect("parses");
+    for (name, scene, shadowed) in [("spheres", spheres, true), ("ball", ball, false)] {
+        let buffers = pack::pack(scene.clone()).expect("packs");
+        let opts = RenderOptions {
+            width: 48,
+            height: 40,
+            spp: 2,
+            max_depth: 5,
+            ..RenderOptions::for_camera(&scene.camera)
+        };
+        let globals = GpuGlobals {
+            counters: 1,
+            ..frame::globals(&buffers, &opts)
+        };
+        let new = || GpuRenderer::new(&g.ctx.device, None).expect("shader module");
+        let (lit, lit_rays, lit_counts) = on_gpu(g, &new(), &buffers, &globals);
+        let lit_counts = lit_counts.expect("counts");
+        for pooled in [false, true] {
+            let label = format!("{name}, pooled {pooled}");
+            let r = new().with_shadow_rays(false).with_pooled(pooled);
+            let globals = r.frame(&buffers, &globals);
+            assert_eq!(globals.wavefront, 0, "{label}: the one kernel");
+            let (film, rays, counts) = on_gpu(g, &r, &buffers, &globals);
+            let counts = counts.expect("counts");
+            assert_eq!(counts.rays[1], 0, "{label}: no shadow ray");
+            assert_eq!(
+                (counts.rays[0], counts.rays[2]),
+                (lit_counts.rays[0], lit_counts.rays[2]),
+                "{label}: the same eye and secondary rays"
+            );
+            assert_eq!(
+                rays,
+                lit_rays - lit_counts.rays[1],
+                "{label}: the rays traced"
+            );
+            let diff = |(a, b): (&[f32; 3], &[f32; 3])| [0, 1, 2].map(|c| a[c] - b[c]);
+            let brighter: Vec<_> = film.pixels.iter().zip(&lit.pixels).map(diff).collect();
+            assert!(
+                brighter.iter().flatten().all(|&d| d >= 0.0),
+                "{label}: a pixel darker"
+            );
+            let shadows = brighter
+                .iter()
+                .filter(|d| d.iter().any(|&d| d > 0.05))
+                .count();
+            if shadowed {
+                assert!(
+                    shadows > film.pixels.len() / 50,
+                    "{label}: {shadows} pixels in shadow"
+                );
+            } else {
+                assert!(film == lit, "{label}: a lone ball's image changed");
+            }
+        }
+    }
+}
