@@ -253,40 +253,7 @@ fn pooled(
             colour = vec3<f32>(0.0);
         }
         // One ray of the sample, as `trace` takes it.
-        sp -= 1u;
-        let ray_in = stack[sp];
-        let ray = Ray(ray_in.origin, ray_in.dir);
-        let fetched_before = fetched;
-        let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
-        if (COUNTERS) {
-            count_nodes(ray_in.depth, fetched - fetched_before);
-        }
-        if (hit.prim == NO_PRIM) {
-            colour += ray_in.weight * g.background;
-            continue;
-        }
-        let surf = surface(ray, hit);
-        colour += ray_in.weight * direct(surf, ray.dir, &rng, &rays);
-        if (ray_in.depth >= g.max_depth) {
-            continue;
-        }
-        let m = materials[surf.material];
-        if (REFLECTION && m.ks > 0.0) {
-            rays += 1u;
-            if (COUNTERS) {
-                counts.secondary_rays += 1u;
-            }
-            stack[sp] = secondary(surf, reflect_dir(ray.dir, surf.ns), ray_in, m.ks);
-            sp += 1u;
-        }
-        if (REFRACTION && m.t > 0.0) {
-            rays += 1u;
-            if (COUNTERS) {
-                counts.secondary_rays += 1u;
-            }
-            stack[sp] = secondary(surf, refracted_dir(surf, m, ray.dir), ray_in, m.t);
-            sp += 1u;
-        }
+        colour += trace_ray(&stack, &sp, &rng, &rays);
     }
 }
 

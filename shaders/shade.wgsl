@@ -204,6 +204,47 @@ fn count_nodes(depth: u32, nodes: u32) {
     }
 }
 
+// One ray of a camera sample's tree, the top of `stack` (`sp` rays waiting): traced, its
+// hit shaded, its reflected and refracted rays pushed; returns the light it brings. (Its
+// loop is `trace`'s, and `pooled` takes one ray a loop iteration from any sample.)
+fn trace_ray(stack: ptr<function, array<Pending, TRACE_STACK>>, sp: ptr<function, u32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
+    *sp -= 1u;
+    let ray_in = (*stack)[*sp];
+    let ray = Ray(ray_in.origin, ray_in.dir);
+    let fetched_before = fetched;
+    let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
+    if (COUNTERS) {
+        count_nodes(ray_in.depth, fetched - fetched_before);
+    }
+    if (hit.prim == NO_PRIM) {
+        return ray_in.weight * globals.background;
+    }
+    let s = surface(ray, hit);
+    let colour = ray_in.weight * direct(s, ray.dir, rng, rays);
+    if (ray_in.depth >= globals.max_depth) {
+        return colour;
+    }
+    let m = materials[s.material];
+    if (REFLECTION && m.ks > 0.0) {
+        let dir = reflect_dir(ray.dir, s.ns);
+        *rays += 1u;
+        if (COUNTERS) {
+            counts.secondary_rays += 1u;
+        }
+        (*stack)[*sp] = secondary(s, dir, ray_in, m.ks);
+        *sp += 1u;
+    }
+    if (REFRACTION && m.t > 0.0) {
+        *rays += 1u;
+        if (COUNTERS) {
+            counts.secondary_rays += 1u;
+        }
+        (*stack)[*sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
+        *sp += 1u;
+    }
+    return colour;
+}
+
 // The stack holds at most TRACE_STACK rays on the scene in hand (the host writes that
 // constant into the source: `SceneBuffers::trace_stack`), which keeps lavapipe's compile
 // short where few rays wait.
@@ -213,41 +254,7 @@ fn trace(eye: Ray, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f3
     var sp = 1u;
     var colour = vec3<f32>(0.0);
     while (sp > 0u) {
-        sp -= 1u;
-        let ray_in = stack[sp];
-        let ray = Ray(ray_in.origin, ray_in.dir);
-        let fetched_before = fetched;
-        let hit = closest_hit(ray, ray_in.tmin, NO_HIT);
-        if (COUNTERS) {
-            count_nodes(ray_in.depth, fetched - fetched_before);
-        }
-        if (hit.prim == NO_PRIM) {
-            colour += ray_in.weight * globals.background;
-            continue;
-        }
-        let s = surface(ray, hit);
-        colour += ray_in.weight * direct(s, ray.dir, rng, rays);
-        if (ray_in.depth >= globals.max_depth) {
-            continue;
-        }
-        let m = materials[s.material];
-        if (REFLECTION && m.ks > 0.0) {
-            let dir = reflect_dir(ray.dir, s.ns);
-            *rays += 1u;
-            if (COUNTERS) {
-                counts.secondary_rays += 1u;
-            }
-            stack[sp] = secondary(s, dir, ray_in, m.ks);
-            sp += 1u;
-        }
-        if (REFRACTION && m.t > 0.0) {
-            *rays += 1u;
-            if (COUNTERS) {
-                counts.secondary_rays += 1u;
-            }
-            stack[sp] = secondary(s, refracted_dir(s, m, ray.dir), ray_in, m.t);
-            sp += 1u;
-        }
+        colour += trace_ray(&stack, &sp, rng, rays);
     }
     cut_short = cut_short || sp > 0u;
     return colour;

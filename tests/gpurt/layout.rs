@@ -418,6 +418,10 @@ const WGSL_ONLY: &[(&str, &str)] = &[
         "pool_pixel",
         "the pixel of a pooled workgroup's square; the CPU loops over pixels",
     ),
+    (
+        "trace_ray",
+        "one ray of trace's loop, which pooled shares; the CPU's trace keeps its loop whole",
+    ),
     ("main", "the entry point; the CPU's is sample_sum"),
     (
         "pooled",
