@@ -275,6 +275,9 @@ fn bench_times_the_shading_model_it_is_given() {
     // Every row has a cell for each column, the shading of the eye rays' hits among them.
     let cells = |l: &str| l.matches('|').count();
     let header = table.lines().next().unwrap_or_default();
-    assert!(header.contains("| shading ms | shadow Mrays/s |"), "{table}");
+    assert!(
+        header.contains("| shading ms | shadow Mrays/s |"),
+        "{table}"
+    );
     assert!(table.lines().all(|l| cells(l) == cells(header)), "{table}");
 }
