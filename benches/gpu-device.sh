@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [pooled] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [pooled] [qwide] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -17,7 +17,9 @@
 # times the seven scenes through the one kernel's `main` and `pooled` entry points
 # (GPURT_KERNELS; pooled squares of 16 and 32 pixels, GPURT_POOL_SIDE) at 1 and 16 spp,
 # then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
-# through `main` and `pooled`. `images` renders three scenes at 4K with the scene
+# through `main` and `pooled`. `qwide` times the seven scenes on the quantised four-wide
+# walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
+# `pooled` step's rows on the wide walk. `images` renders three scenes at 4K with the scene
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
 # for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
@@ -125,6 +127,19 @@ if [[ $what == *pooled* ]]; then
             >"$OUT/pooled-high-$k.md" 2>"$OUT/pooled-high-$k.log"
         echo "high, $k: exit $?"
         cat "$OUT/pooled-high-$k.md"
+    done
+fi
+
+if [[ $what == *qwide* ]]; then
+    # The wide walk on nodes of 64 bytes instead of 112, through both entry points.
+    echo "== qwide"
+    for k in main pooled; do
+        GPURT_TRAVERSAL=qwide GPURT_KERNELS=$k timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt \
+            bench "${scenes[@]}" --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu \
+            >"$OUT/qwide-$k.md" 2>"$OUT/qwide-$k.log"
+        echo "qwide, $k: exit $?"
+        cat "$OUT/qwide-$k.md"
+        grep -m1 '^traversal' "$OUT/qwide-$k.log"
     done
 fi
 

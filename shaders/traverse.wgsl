@@ -141,6 +141,35 @@ fn nearer_first(a: ptr<function, vec2<u32>>, b: ptr<function, vec2<u32>>) {
     *a = near;
 }
 
+// Wide node `i` of the quantised tree (TRAVERSAL_QWIDE: four texels, src/gpu_types.rs:
+// GpuQwideNode): the grid's origin and exponents, then each child's box a byte a lane and
+// axis, low then high, then the entries; each grid line `origin + q * scale`, exact but for
+// the add's rounding, so a fused multiply-add decodes the same.
+fn qwide_node(i: u32) -> WideNode {
+    let b = 4u * i;
+    let head = node_texel(b);
+    let q0 = node_texel(b + 1u);
+    let q1 = node_texel(b + 2u);
+    let o = bitcast<vec3<f32>>(head.xyz);
+    let step = bitcast<vec3<f32>>(((vec3<u32>(head.w) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(255u)) << vec3<u32>(23u));
+    // No loop over the axes: lavapipe counts every loop iteration against its limit.
+    let s = vec4<u32>(0u, 8u, 16u, 24u);
+    let m = vec4<u32>(255u);
+    return WideNode(
+        array<vec4<f32>, 3>(
+            vec4<f32>(o.x) + vec4<f32>((vec4<u32>(q0.x) >> s) & m) * step.x,
+            vec4<f32>(o.y) + vec4<f32>((vec4<u32>(q0.y) >> s) & m) * step.y,
+            vec4<f32>(o.z) + vec4<f32>((vec4<u32>(q0.z) >> s) & m) * step.z,
+        ),
+        array<vec4<f32>, 3>(
+            vec4<f32>(o.x) + vec4<f32>((vec4<u32>(q0.w) >> s) & m) * step.x,
+            vec4<f32>(o.y) + vec4<f32>((vec4<u32>(q1.x) >> s) & m) * step.y,
+            vec4<f32>(o.z) + vec4<f32>((vec4<u32>(q1.y) >> s) & m) * step.z,
+        ),
+        node_texel(b + 3u),
+    );
+}
+
 // `next_leaf` for TRAVERSAL_WIDE, over the four-wide tree (node_texels holds WideNodes):
 // `walk.node` is a stack entry (WideNode::entry). A node's four boxes are tested
 // together, the children reached are sorted by entry distance (a sorting network), the
@@ -164,7 +193,12 @@ fn next_leaf_wide(
         if ((e & WIDE_LEAF) != 0u) {
             return vec2<u32>((e & ~WIDE_LEAF) >> WIDE_FIRST_SHIFT, (e & WIDE_COUNT_MASK) + 1u);
         }
-        let n = load_wide_node(e);
+        var n: WideNode;
+        if (QWIDE) {
+            n = qwide_node(e);
+        } else {
+            n = load_wide_node(e);
+        }
         *cost += 4u;
         work += 1u;
         if (COUNTERS) {

@@ -216,8 +216,10 @@ override AOV: u32 = AOV_COLOR;
 override SHADING: u32 = SHADING_PHONG;
 // globals.traversal == TRAVERSAL_PAIRS, as a constant.
 override PAIRS: bool = false;
-// globals.traversal == TRAVERSAL_WIDE, as a constant: node_texels then holds WideNodes.
+// globals.traversal == TRAVERSAL_WIDE or TRAVERSAL_QWIDE, as a constant: node_texels
+// then holds WideNodes, or with QWIDE the same nodes quantised (`qwide_node`).
 override WIDE: bool = false;
+override QWIDE: bool = false;
 // globals.traversal == TRAVERSAL_CWIDE, as a constant: node_texels then holds CwideNodes
 // and prim_texels the primitives in their order.
 override CWIDE: bool = false;

@@ -35,7 +35,9 @@ use crate::counters::Counters;
 use crate::error::Result;
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
-use crate::gpu_types::{AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_WIDE};
+use crate::gpu_types::{
+    AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE,
+};
 use crate::outln;
 use crate::pack;
 use crate::run;
@@ -151,7 +153,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     };
     if let Some(r) = &renderer {
         let t = r.traversal();
-        let fallback = if t == TRAVERSAL_WIDE {
+        let fallback = if t == TRAVERSAL_WIDE || t == TRAVERSAL_QWIDE {
             " (pairs where a scene's wide tree does not fit the stack)"
         } else {
             ""

@@ -8,8 +8,8 @@ use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use crate::gpu_types::{
-    GpuCwideNode, GpuNode, GpuPixelCounts, GpuWideNode, POOL_SIDE, TRAVERSAL_CWIDE, TRAVERSAL_WIDE,
-    WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
+    GpuCwideNode, GpuNode, GpuPixelCounts, GpuQwideNode, GpuWideNode, POOL_SIDE, TRAVERSAL_CWIDE,
+    TRAVERSAL_QWIDE, TRAVERSAL_WIDE, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE,
 };
 
 /// The kinds of ray counted apart: eye rays, shadow rays, and reflected and refracted rays.
@@ -249,6 +249,7 @@ pub fn gpu_node_bytes(traversal: u32) -> u64 {
     (match traversal {
         TRAVERSAL_WIDE => size_of::<GpuWideNode>(),
         TRAVERSAL_CWIDE => size_of::<GpuCwideNode>(),
+        TRAVERSAL_QWIDE => size_of::<GpuQwideNode>(),
         _ => size_of::<GpuNode>(),
     }) as u64
 }

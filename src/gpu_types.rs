@@ -118,6 +118,24 @@ pub struct GpuWideNode {
     pub entry: [u32; 4],
 }
 
+/// A node of the four-wide tree as the `TRAVERSAL_QWIDE` walk reads it (`bvh::qwide`
+/// quantises a `GpuWideNode` into it), 64 bytes, four texels: on axis `a`, child `l`'s box
+/// spans `origin[a] + q * scale[a]` for its low and high `q` (bytes `l` of `q[a]` and
+/// `q[3 + a]`), with `scale[a] = 2^(e[a] - 127)` for the exponent `e[a]`, byte `a` of
+/// `exps` (an f32 with those exponent bits). `q * scale` is exact, so both renderers
+/// decode the same floats whether or not a compiler fuses the multiply-add; the boxes are
+/// rounded outwards when quantised, so that each holds its child. `entry` as the wide
+/// node's.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuQwideNode {
+    pub origin: Vec3,
+    pub exps: u32,
+    pub q: [u32; 6],
+    pub _pad: [u32; 2],
+    pub entry: [u32; 4],
+}
+
 /// Bit of a `GpuWideNode::entry` that marks a leaf.
 pub const WIDE_LEAF: u32 = 1 << 31;
 /// `GpuWideNode::entry` of a lane without a child.
@@ -233,8 +251,13 @@ pub const TRAVERSAL_WIDE: u32 = 2;
 /// reached tested at once. Falls back like `TRAVERSAL_WIDE` where the tree does not fit
 /// (`SceneBuffers::gpu_cwide`).
 pub const TRAVERSAL_CWIDE: u32 = 3;
+/// BVH walk: `TRAVERSAL_WIDE`'s, step for step, over the same four-wide tree with each
+/// node's boxes quantised (`GpuQwideNode`: 64 bytes, four texels, against 112 and seven),
+/// decoded as it is fetched. Falls back like `TRAVERSAL_WIDE`, and where a node cannot be
+/// quantised (`SceneBuffers::gpu_qwide_nodes`).
+pub const TRAVERSAL_QWIDE: u32 = 4;
 /// The walks' names, indexed by `TRAVERSAL_*` (`GPURT_TRAVERSAL`, reports).
-pub const TRAVERSAL_NAMES: [&str; 4] = ["single", "pairs", "wide", "cwide"];
+pub const TRAVERSAL_NAMES: [&str; 5] = ["single", "pairs", "wide", "cwide", "qwide"];
 
 /// Shading model of the specular highlight (`--shading`, `frame::Shading`): Phong,
 /// `Ks * max(0, R.L)^Shine` with R the incoming ray mirrored about N (NFF's model, the
@@ -437,6 +460,7 @@ const _: () = {
     assert!(size_of::<GpuTriNormals>() == 48);
     assert!(size_of::<GpuNode>() == 32);
     assert!(size_of::<GpuCwideNode>() == 80);
+    assert!(size_of::<GpuQwideNode>() == 64);
     assert!(size_of::<GpuPlane>() == 32);
     assert!(size_of::<GpuMaterial>() == 32);
     assert!(size_of::<GpuLight>() == 64);

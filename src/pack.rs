@@ -6,9 +6,9 @@ use std::sync::OnceLock;
 use glam::Vec3;
 
 use crate::bvh::blocks::Blocks;
-use crate::bvh::cwide;
 use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
+use crate::bvh::{cwide, qwide};
 use crate::error::{Error, Result};
 use crate::gpu_types::*;
 use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
@@ -55,6 +55,9 @@ pub struct SceneBuffers {
     /// `nodes` as the compressed eight-wide tree of the GPU's `TRAVERSAL_CWIDE` walk
     /// (`gpu_cwide`), built on its first upload for that walk.
     gpu_cwide: OnceLock<Option<GpuCwide>>,
+    /// The four-wide tree with its boxes quantised, as the `TRAVERSAL_QWIDE` walk reads
+    /// it (`gpu_qwide_nodes`), built on its first upload for that walk.
+    gpu_qwide: OnceLock<Option<Vec<GpuQwideNode>>>,
 }
 
 /// The compressed eight-wide tree (`bvh::cwide`) with `prims` in the order its leaves
@@ -166,6 +169,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         blocks: OnceLock::new(),
         gpu_wide: OnceLock::new(),
         gpu_cwide: OnceLock::new(),
+        gpu_qwide: OnceLock::new(),
     })
 }
 
@@ -233,6 +237,15 @@ impl SceneBuffers {
             .as_ref()
     }
 
+    /// The four-wide tree's nodes quantised, as the `TRAVERSAL_QWIDE` walk reads them,
+    /// built the first time they are asked for; `None` where that walk cannot take this
+    /// scene (no wide tree, or a node that does not quantise: `qwide::build`).
+    pub fn gpu_qwide_nodes(&self) -> Option<&[GpuQwideNode]> {
+        self.gpu_qwide
+            .get_or_init(|| qwide::build(self.gpu_wide_nodes()?))
+            .as_deref()
+    }
+
     /// The compressed eight-wide tree and its primitives, built the first time they are
     /// asked for; `None` when the `TRAVERSAL_CWIDE` walk cannot take this scene
     /// (`cwide::build`).
@@ -252,10 +265,11 @@ impl SceneBuffers {
     /// Whether the four-wide and the compressed trees have been built (tests: each walk
     /// asks for its own tree only).
     #[cfg(test)]
-    pub(crate) fn trees_built(&self) -> (bool, bool) {
+    pub(crate) fn trees_built(&self) -> (bool, bool, bool) {
         (
             self.gpu_wide.get().is_some(),
             self.gpu_cwide.get().is_some(),
+            self.gpu_qwide.get().is_some(),
         )
     }
 
@@ -266,7 +280,8 @@ impl SceneBuffers {
     pub fn stack_entries(&self, traversal: u32) -> u32 {
         // Only the walk's own tree is asked for: each is built on first use.
         match traversal {
-            TRAVERSAL_WIDE => self.gpu_wide().map(|&(_, need)| need),
+            // The quantised tree is the wide tree's shape.
+            TRAVERSAL_WIDE | TRAVERSAL_QWIDE => self.gpu_wide().map(|&(_, need)| need),
             TRAVERSAL_CWIDE => self.gpu_cwide().map(|c| c.stack_words),
             _ => None,
         }
@@ -284,13 +299,18 @@ impl SceneBuffers {
     }
 
     /// The walk a GPU that prefers `traversal` uses for this scene: `TRAVERSAL_CWIDE`
-    /// only where the compressed tree fits it, else the wide walk where the scene's wide
-    /// tree fits it, else pairs.
+    /// only where the compressed tree fits it, `TRAVERSAL_QWIDE` only where the wide tree
+    /// quantises, else the wide walk where the scene's wide tree fits it, else pairs.
     pub fn traversal_for(&self, traversal: u32) -> u32 {
         match traversal {
             TRAVERSAL_CWIDE if self.gpu_cwide().is_some() => TRAVERSAL_CWIDE,
-            TRAVERSAL_WIDE | TRAVERSAL_CWIDE if self.gpu_wide_nodes().is_some() => TRAVERSAL_WIDE,
-            TRAVERSAL_WIDE | TRAVERSAL_CWIDE => TRAVERSAL_PAIRS,
+            TRAVERSAL_QWIDE if self.gpu_qwide_nodes().is_some() => TRAVERSAL_QWIDE,
+            TRAVERSAL_WIDE | TRAVERSAL_CWIDE | TRAVERSAL_QWIDE
+                if self.gpu_wide_nodes().is_some() =>
+            {
+                TRAVERSAL_WIDE
+            }
+            TRAVERSAL_WIDE | TRAVERSAL_CWIDE | TRAVERSAL_QWIDE => TRAVERSAL_PAIRS,
             _ => traversal,
         }
     }
@@ -315,9 +335,15 @@ impl SceneBuffers {
         if self.bvh_depth >= TRAVERSAL_STACK {
             return fail(format!("BVH depth {} exceeds the stack", self.bvh_depth));
         }
-        if globals.traversal == TRAVERSAL_WIDE {
+        if globals.traversal == TRAVERSAL_QWIDE
+            && self.gpu_qwide_nodes().map(<[_]>::len) != self.gpu_wide_nodes().map(<[_]>::len)
+        {
+            return fail("the quantised walk was chosen for a tree it cannot take".into());
+        }
+        if globals.traversal == TRAVERSAL_WIDE || globals.traversal == TRAVERSAL_QWIDE {
             // The wide tree's leaves are the binary tree's (checked above); its inner
             // entries must lead to later nodes, and `wide::gpu_nodes` bounded the stack.
+            // The quantised tree's entries are the wide tree's (`qwide::build`).
             let Some(wide) = self.gpu_wide_nodes() else {
                 return fail("the wide walk was chosen for a tree it cannot take".into());
             };
@@ -465,13 +491,15 @@ mod tests {
     #[test]
     fn each_walk_builds_only_its_own_tree() {
         for (traversal, built) in [
-            (TRAVERSAL_SINGLE, (false, false)),
-            (TRAVERSAL_PAIRS, (false, false)),
-            (TRAVERSAL_WIDE, (true, false)),
-            (TRAVERSAL_CWIDE, (false, true)),
+            (TRAVERSAL_SINGLE, (false, false, false)),
+            (TRAVERSAL_PAIRS, (false, false, false)),
+            (TRAVERSAL_WIDE, (true, false, false)),
+            (TRAVERSAL_CWIDE, (false, true, false)),
+            (TRAVERSAL_QWIDE, (true, false, true)),
         ] {
             let b = pack(balls()).unwrap();
             b.stack_entries(traversal);
+            b.traversal_for(traversal);
             assert_eq!(
                 b.trees_built(),
                 built,

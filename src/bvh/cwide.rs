@@ -39,13 +39,13 @@ pub fn scale(e: u32) -> f32 {
 
 /// Where grid line `q` lies, computed as both walks compute it. `q * scale` is exact (an
 /// integer below 256 times a power of two), so a fused multiply-add rounds the same.
-fn grid(origin: f32, q: u32, scale: f32) -> f32 {
+pub(super) fn grid(origin: f32, q: u32, scale: f32) -> f32 {
     origin + q as f32 * scale
 }
 
 /// The exponent byte of the smallest power-of-two step whose 255 steps from `lo` reach
 /// `hi` (as `grid` computes them); 0 for a flat axis; `None` beyond an f32's exponents.
-fn exponent(lo: f32, hi: f32) -> Option<u32> {
+pub(super) fn exponent(lo: f32, hi: f32) -> Option<u32> {
     if hi <= lo {
         return (hi == lo).then_some(0);
     }
@@ -65,7 +65,7 @@ fn exponent(lo: f32, hi: f32) -> Option<u32> {
 
 /// The highest grid line at or below `c`, and the lowest at or above it: a box rounded
 /// outwards. `None` when the grid does not reach.
-fn quantise(origin: f32, step: f32, lo: f32, hi: f32) -> Option<(u32, u32)> {
+pub(super) fn quantise(origin: f32, step: f32, lo: f32, hi: f32) -> Option<(u32, u32)> {
     if step == 0.0 {
         return (lo == origin && hi == origin).then_some((0, 0));
     }

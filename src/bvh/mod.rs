@@ -14,6 +14,7 @@
 
 pub mod blocks;
 pub mod cwide;
+pub mod qwide;
 pub mod wide;
 
 use glam::{Vec3, Vec3A};

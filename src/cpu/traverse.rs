@@ -8,12 +8,13 @@ use super::intersect::{self, lanes_of};
 #[cfg(target_arch = "x86_64")]
 use super::isa;
 use super::leaf::{crossings, leaf_triangles4, transmit_leaf};
-use super::types::{Bindings, Hit, Ray};
+use super::types::{Bindings, GpuWide, Hit, Ray};
 use super::walk::{Walk, start_walk};
 use super::wide::{self, Slabs};
+use crate::bvh::qwide;
 use crate::bvh::wide::WideNode;
 use crate::gpu_types::{
-    GpuNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
+    GpuNode, GpuQwideNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
     WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
@@ -132,7 +133,14 @@ impl Walk {
         }
     }
 
-    /// `next_leaf` for `TRAVERSAL_WIDE`, over the GPU's four-wide tree: `node` is a stack
+    /// Wide node `i` of the quantised tree, decoded as the shader decodes it
+    /// (`bvh::qwide::decode`).
+    fn qwide_node(nodes: &[GpuQwideNode], i: u32) -> GpuWideNode {
+        qwide::decode(&nodes[i as usize])
+    }
+
+    /// `next_leaf` for `TRAVERSAL_WIDE` and `TRAVERSAL_QWIDE`, over the GPU's four-wide
+    /// tree (its nodes decoded as they are fetched for the latter): `node` is a stack
     /// entry (`GpuWideNode::entry`). A node's four boxes are tested together, the children
     /// reached sorted by entry distance, the nearest entered and the others pushed
     /// farthest first; a leaf entry, entered or popped, is returned untested. The pushes
@@ -141,7 +149,7 @@ impl Walk {
     /// traverse.wgsl.)
     fn next_leaf_wide(
         &mut self,
-        wide: &[GpuWideNode],
+        wide: GpuWide,
         ray: &Ray,
         inv_dir: Vec3,
         tmin: f32,
@@ -157,7 +165,10 @@ impl Walk {
                     (e & WIDE_COUNT_MASK) + 1,
                 );
             }
-            let n = &wide[e as usize];
+            let n = &match wide {
+                GpuWide::Plain(nodes) => nodes[e as usize],
+                GpuWide::Quantised(nodes) => Self::qwide_node(nodes, e),
+            };
             *cost += 4;
             self.fetched += 1;
             // `intersect::slab` for the four boxes, lane by lane the same arithmetic.

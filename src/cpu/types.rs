@@ -26,8 +26,8 @@ pub struct Bindings<'a> {
     /// `wide`, when given.
     pub blocks: Option<&'a Blocks>,
     /// The GPU's four-wide tree, walked as the shader walks it, when `globals.traversal`
-    /// is `TRAVERSAL_WIDE` and `wide` is `None`.
-    pub gpu_wide: Option<&'a [GpuWideNode]>,
+    /// is `TRAVERSAL_WIDE` or `TRAVERSAL_QWIDE` and `wide` is `None`.
+    pub gpu_wide: Option<GpuWide<'a>>,
     /// The GPU's compressed eight-wide tree, walked as the shader walks it, when
     /// `globals.traversal` is `TRAVERSAL_CWIDE` and `wide` is `None`; `prims` are then in
     /// its order (`pack::GpuCwide`).
@@ -74,12 +74,22 @@ impl<'a> Bindings<'a> {
             // Blocks are found by a leaf's first primitive in `buffers.prims`' order,
             // which the compressed tree's `prims` do not keep.
             blocks: None,
-            gpu_wide: (globals.traversal == TRAVERSAL_WIDE)
-                .then(|| buffers.gpu_wide_nodes())
-                .flatten(),
+            gpu_wide: match globals.traversal {
+                TRAVERSAL_WIDE => buffers.gpu_wide_nodes().map(GpuWide::Plain),
+                TRAVERSAL_QWIDE => buffers.gpu_qwide_nodes().map(GpuWide::Quantised),
+                _ => None,
+            },
             gpu_cwide: cwide.map(|c| &c.nodes[..]),
         }
     }
+}
+
+/// The GPU's four-wide tree as a walk reads it: its nodes as they are
+/// (`TRAVERSAL_WIDE`), or quantised (`TRAVERSAL_QWIDE`, each decoded as it is fetched).
+#[derive(Clone, Copy, Debug)]
+pub enum GpuWide<'a> {
+    Plain(&'a [GpuWideNode]),
+    Quantised(&'a [GpuQwideNode]),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -31,6 +31,8 @@ pub struct Specialization {
     pub pairs: bool,
     pub wide: bool,
     pub cwide: bool,
+    /// The wide walk reads quantised nodes (`TRAVERSAL_QWIDE`, with `wide`).
+    pub qwide: bool,
     /// Count rays and node fetches by kind (`GpuGlobals::counters`).
     pub counters: bool,
     /// Trace shadow rays; off, every light reaches every surface facing it (set by the
@@ -78,8 +80,9 @@ impl Specialization {
                 SHADING_PHONG
             },
             pairs: g.traversal == TRAVERSAL_PAIRS,
-            wide: g.traversal == TRAVERSAL_WIDE,
+            wide: g.traversal == TRAVERSAL_WIDE || g.traversal == TRAVERSAL_QWIDE,
             cwide: g.traversal == TRAVERSAL_CWIDE,
+            qwide: g.traversal == TRAVERSAL_QWIDE,
             counters: g.counters != 0,
             shadow_rays: true,
             stack: scene.stack_entries(g.traversal).next_multiple_of(8),
@@ -110,6 +113,7 @@ impl Specialization {
             ("PAIRS", b(self.pairs)),
             ("WIDE", b(self.wide)),
             ("CWIDE", b(self.cwide)),
+            ("QWIDE", b(self.qwide)),
             ("COUNTERS", b(self.counters)),
             ("SHADOW_RAYS", b(self.shadow_rays)),
             ("STACK", f64::from(self.stack)),
@@ -151,6 +155,7 @@ mod tests {
             pairs: true,
             wide: true,
             cwide: true,
+            qwide: true,
             counters: true,
             shadow_rays: false,
             stack: 64,

@@ -7,7 +7,7 @@ use super::device::Gpu;
 use super::shaders::Fetch;
 use crate::error::{Error, Result};
 use crate::fault::AddressSpaceCap;
-use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_WIDE};
+use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 
 /// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
@@ -37,14 +37,16 @@ impl Texels {
 }
 
 /// The bytes of the BVH the walk `traversal` reads: the wide nodes for `TRAVERSAL_WIDE`,
-/// the compressed ones for `TRAVERSAL_CWIDE` (which `SceneBuffers::traversal_for` picks
-/// only where they exist), else the binary nodes.
+/// the compressed ones for `TRAVERSAL_CWIDE` and the quantised ones for
+/// `TRAVERSAL_QWIDE` (which `SceneBuffers::traversal_for` picks only where they exist),
+/// else the binary nodes.
 /// Only the walk's own tree is asked for: each is built on first use, and the compressed
 /// one brings a reordered copy of every primitive.
 fn node_bytes(scene: &SceneBuffers, traversal: u32) -> &[u8] {
     match traversal {
         TRAVERSAL_WIDE => scene.gpu_wide_nodes().map(bytemuck::cast_slice),
         TRAVERSAL_CWIDE => scene.gpu_cwide().map(|c| bytemuck::cast_slice(&c.nodes)),
+        TRAVERSAL_QWIDE => scene.gpu_qwide_nodes().map(bytemuck::cast_slice),
         _ => None,
     }
     .unwrap_or_else(|| bytemuck::cast_slice(&scene.nodes))
@@ -384,10 +386,11 @@ mod tests {
             f 1 0 0 1 0 1 0 1
             s 0 0 0 1  s 2 0 0 0.5  s -2 0 0 0.5  s 0 0 2 0.3  s 0 2 0 0.4  s 1 1 1 0.2";
         for (traversal, built) in [
-            (TRAVERSAL_SINGLE, (false, false)),
-            (TRAVERSAL_PAIRS, (false, false)),
-            (TRAVERSAL_WIDE, (true, false)),
-            (TRAVERSAL_CWIDE, (false, true)),
+            (TRAVERSAL_SINGLE, (false, false, false)),
+            (TRAVERSAL_PAIRS, (false, false, false)),
+            (TRAVERSAL_WIDE, (true, false, false)),
+            (TRAVERSAL_CWIDE, (false, true, false)),
+            (TRAVERSAL_QWIDE, (true, false, true)),
         ] {
             let scene = nff::parse(src, "t.nff", std::path::Path::new(".")).unwrap();
             let b = crate::pack::pack(scene).unwrap();

@@ -166,6 +166,7 @@ fn the_gpu_counts_what_the_cpu_twin_of_its_walk_counts() {
         TRAVERSAL_PAIRS,
         TRAVERSAL_WIDE,
         TRAVERSAL_CWIDE,
+        TRAVERSAL_QWIDE,
     ];
     let mut failures = Vec::new();
     for (name, scene, opts) in scenes() {

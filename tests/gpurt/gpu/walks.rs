@@ -20,9 +20,9 @@ use crate::common::versus::{
 };
 use crate::common::{files_with, own_scenes, shared_scenes};
 
-/// The same GPU with each traversal its adapter does not use by default (three of single,
-/// pairs, wide and cwide), so that every walk is checked against the CPU on every adapter
-/// the suite runs on.
+/// The same GPU with each traversal its adapter does not use by default (four of single,
+/// pairs, wide, cwide and qwide), so that every walk is checked against the CPU on every
+/// adapter the suite runs on.
 fn other_traversals() -> &'static [Gpu] {
     static OTHERS: OnceLock<Vec<Gpu>> = OnceLock::new();
     OTHERS.get_or_init(|| {
@@ -34,6 +34,7 @@ fn other_traversals() -> &'static [Gpu] {
             TRAVERSAL_PAIRS,
             TRAVERSAL_WIDE,
             TRAVERSAL_CWIDE,
+            TRAVERSAL_QWIDE,
         ]
         .into_iter()
         .filter(|&t| t != g.renderer.traversal())

@@ -138,7 +138,12 @@ fn the_wavefront_kernels_trace_what_the_main_kernel_traces() {
     };
     let software = gpurt::gpu::is_software(&g.ctx.info);
     let mut cases = Vec::new();
-    for traversal in [TRAVERSAL_WIDE, TRAVERSAL_CWIDE, TRAVERSAL_PAIRS] {
+    for traversal in [
+        TRAVERSAL_WIDE,
+        TRAVERSAL_QWIDE,
+        TRAVERSAL_CWIDE,
+        TRAVERSAL_PAIRS,
+    ] {
         let [wave, main] = both(g, traversal);
         for (name, scene, opts) in scenes() {
             let buffers = pack::pack(scene.clone()).expect("packs");
