@@ -36,7 +36,7 @@ pub struct Frames {
 /// The renderer, kept by kind so that the GPU's upload counter can be read.
 enum Traced {
     Gpu(Box<GpuSession>),
-    Cpu(CpuRenderer),
+    Cpu(Box<CpuRenderer>),
 }
 
 impl Frames {
@@ -55,7 +55,7 @@ impl Frames {
             Some(ctx) => Traced::Gpu(Box::new(
                 GpuSession::new(ctx, buffers.clone()).map_err(to_py)?,
             )),
-            None => Traced::Cpu(CpuRenderer::new(buffers.clone())),
+            None => Traced::Cpu(Box::new(CpuRenderer::new(buffers.clone()))),
         };
         Ok(Frames {
             renderer,
@@ -68,7 +68,7 @@ impl Frames {
     fn renderer(&mut self) -> &mut (dyn Renderer + Send) {
         match &mut self.renderer {
             Traced::Gpu(gpu) => gpu.as_mut(),
-            Traced::Cpu(cpu) => cpu,
+            Traced::Cpu(cpu) => cpu.as_mut(),
         }
     }
 
