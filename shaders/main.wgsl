@@ -188,6 +188,8 @@ fn pooled(
             output[slot].rays = r | PIXEL_CUT_SHORT;
         }
     }
+    // The marks are in storage memory, before another lane's own write of the same pixel.
+    storageBarrier();
     workgroupBarrier();
 
     var stack: array<Pending, TRACE_STACK>;
