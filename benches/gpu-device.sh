@@ -192,8 +192,10 @@ if [[ $what == *tests* ]]; then
         skips+=(--skip cli::shell::the_manual_page)
         echo "skipped, no groff here: cli::shell::the_manual_page*"
     fi
-    timeout "${TESTS_TIMEOUT:-300}" ./.device/gpurt-tests --test-threads "$(nproc)" "${skips[@]}" \
-        >"$OUT/tests.log" 2>&1
+    # A stalled GPU fails the tests that wait on it within a minute, each saying so,
+    # rather than leaving the run to its timeout.
+    GPURT_WAIT_LIMIT=${GPURT_WAIT_LIMIT:-60} timeout "${TESTS_TIMEOUT:-300}" \
+        ./.device/gpurt-tests --test-threads "$(nproc)" "${skips[@]}" >"$OUT/tests.log" 2>&1
     status=$?
     grep -v '^test .* ok$' "$OUT/tests.log" | tail -60
     if [[ $status == 124 ]]; then
@@ -231,10 +233,12 @@ if [[ $what == *loss* ]]; then
     done
     echo "busy renders finished: $finished of 15"
     echo "lost in the suite (GPURT_TEST_LOSS_ON_HARDWARE=1), beside the GPU tests:"
-    GPURT_TEST_LOSS_ON_HARDWARE=1 timeout 120 ./.device/gpurt-tests --test-threads "$(nproc)" \
-        gpu:: cli::errors::a_device_lost >"$OUT/loss-tests.log" 2>&1
+    # Waits end after 30 s (GPURT_WAIT_LIMIT): a stall shows as tests failing with "did
+    # not finish", which names them, before the 120 s limit.
+    GPURT_WAIT_LIMIT=30 GPURT_TEST_LOSS_ON_HARDWARE=1 timeout 120 ./.device/gpurt-tests \
+        --test-threads "$(nproc)" gpu:: cli::errors::a_device_lost >"$OUT/loss-tests.log" 2>&1
     echo "exit $? (124: stalled)"
-    grep -E '^test result|running for over' "$OUT/loss-tests.log"
+    grep -E '^test result|running for over|did not finish' "$OUT/loss-tests.log" | head -20
     rm -rf "$tmp"
 fi
 

@@ -22,6 +22,26 @@ use crate::error::{Error, Result};
 pub(crate) use pipelines::Slot;
 pub(crate) use resources::TEXEL_FORMAT;
 
+/// Longest the host waits for the GPU to finish what it was given (`Device::wait`): far
+/// beyond any submission's work, which is cut to a fraction of a second on a GPU
+/// (`DISPATCH_BUDGET` a dispatch) and to about a second of lavapipe's time (2^18 pixel
+/// samples), deep glass and many area lights included.
+pub const WAIT_LIMIT: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// `WAIT_LIMIT`, or `GPURT_WAIT_LIMIT` (seconds) where set: shorter to turn a stalled GPU
+/// into errors soon (the device script's test runs), or to test the limit.
+fn wait_limit() -> Result<std::time::Duration> {
+    match std::env::var("GPURT_WAIT_LIMIT").as_deref() {
+        Err(_) | Ok("") => Ok(WAIT_LIMIT),
+        Ok(v) => match v.parse::<f64>() {
+            Ok(s) if s > 0.0 && s <= 1e9 => Ok(std::time::Duration::from_secs_f64(s)),
+            _ => Err(Error::Render(format!(
+                "GPURT_WAIT_LIMIT={v}: expected seconds above 0"
+            ))),
+        },
+    }
+}
+
 /// The device, borrowed: what the renderer makes on it, error scopes, waits and readbacks.
 #[derive(Clone, Copy)]
 pub(crate) struct Device<'a> {
@@ -75,12 +95,24 @@ impl<'a> Device<'a> {
         Ok(f())
     }
 
-    /// Blocks until the GPU has finished everything submitted.
+    /// Blocks until the GPU has finished everything submitted, or fails once it has
+    /// waited `wait_limit()`: a device that stops finishing its work (a driver's fault,
+    /// a device lost whose fences never signal) ends the render with an error, never a
+    /// hang.
     pub(crate) fn wait(&self) -> Result<()> {
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| Error::Gpu(format!("waiting for the GPU: {e}")))
+        let limit = wait_limit()?;
+        let wait = wgpu::PollType::Wait {
+            submission_index: None,
+            timeout: Some(limit),
+        };
+        self.device.poll(wait).map(|_| ()).map_err(|e| match e {
+            wgpu::PollError::Timeout => Error::Gpu(format!(
+                "the GPU did not finish its work within {} s: the device is hung or lost \
+                 (GPURT_WAIT_LIMIT sets the limit)",
+                limit.as_secs_f64()
+            )),
+            e => Error::Gpu(format!("waiting for the GPU: {e}")),
+        })
     }
 
     /// Maps the first `bytes` of a readback buffer (`readback`) once the work submitted

@@ -322,6 +322,40 @@ fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
     assert!(err.contains("GPU error: reading back"), "{err}");
 }
 
+/// A GPU that does not finish its work within `GPURT_WAIT_LIMIT` (here a microsecond,
+/// which any frame's first submission outlasts) ends the command with an error saying so,
+/// exit 2 and no output file, instead of waiting for ever; a limit that is not a number
+/// of seconds is refused. (The default, `WAIT_LIMIT`, is ten minutes.)
+#[test]
+fn a_gpu_that_does_not_finish_is_an_error_not_a_hang() {
+    let Some(ctx) = crate::common::gpu_context() else {
+        return;
+    };
+    drop(ctx);
+    let d = workdir("wait-limit");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    for (limit, says) in [
+        (
+            "0.000001",
+            "GPU error: the GPU did not finish its work within 0.000001 s",
+        ),
+        ("soon", "GPURT_WAIT_LIMIT=soon: expected seconds above 0"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["ball.nff", "--backend", "gpu", "-o", "out.png"])
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_WAIT_LIMIT", limit)
+            .output()
+            .expect("gpurt runs");
+        assert_eq!(o.status.code(), Some(2), "{limit}: {}", stderr(&o));
+        assert!(stderr(&o).contains(says), "{limit}: {}", stderr(&o));
+        assert!(!d.join("out.png").exists(), "{limit}: no output");
+    }
+    let o = gpurt(&["ball.nff", "--backend", "gpu", "-o", "out.png"], &d);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
 /// A GPU out of memory on upload (`GPURT_FAULT=out-of-memory` allocates each texture, or
 /// storage buffer where the adapter reads the scene from buffers, on its own with the process's address space capped just above its size, and
 /// lavapipe's device memory is the process's own: `fault.rs`) ends in an error naming the
