@@ -459,6 +459,16 @@ fn print_row(r: &Row) {
             each.join(", ")
         );
     }
+    if let Some((main, pooled)) = r.gpu.as_ref().and_then(|g| g.counted.lanes_busy_all()) {
+        // The model's bound (`Counters::lanes_busy_all`), beside which a measured
+        // `main` / `pooled` ratio can be read.
+        eprintln!(
+            "  {}: at most {:.0}% of a warp's lanes busy, {:.0}% pooled (model)",
+            r.scene,
+            100.0 * main,
+            100.0 * pooled
+        );
+    }
     if let Some(c) = &r.cpu {
         let [eye, shadow, secondary] = c.counted.rays;
         eprintln!(
