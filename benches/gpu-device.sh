@@ -116,6 +116,7 @@ if [[ $what == *pooled* ]]; then
         echo "$k: exit $?"
         cat "$OUT/pooled-$k.md"
         grep -m1 'kernels:' "$OUT/pooled-$k.log"
+        [[ $k == main ]] && grep 'pooled (model)' "$OUT/pooled-$k.log"
     done
     # The eye-ray goal at 4K and 1 spp on the two large scenes, whose one-frame renders
     # get the medium-quality tree, on the high-quality one.
