@@ -366,11 +366,9 @@ fn resume(
                     var rng = st.rng;
                     let c = light_sample(s, m, ray_in.dir, reflect_dir(ray_in.dir, s.ns), light, st.light_sample, &rng);
                     st.rng = rng;
+                    st.lit += c.xyz;
                     if (c.w > 0.0) {
                         st.rays += 1u;
-                        st.lit += c.xyz;
-                    } else if (!SHADOW_RAYS) {
-                        st.lit += c.xyz;
                     }
                     st.light_sample += 1u;
                 }

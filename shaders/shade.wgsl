@@ -138,9 +138,9 @@ fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light
 }
 
 // Sample k of `light` at surface `s` (material m, incoming direction dir, mirror
-// direction r): Lambert and the highlight scaled by the shadow ray's transmission in xyz;
-// w is 1 when the light is above the surface and a shadow ray was traced, else 0 (and xyz
-// is 0, but for SHADOW_RAYS off, where the light is taken as unblocked).
+// direction r): in xyz Lambert and the highlight scaled by the shadow ray's transmission
+// (0 where the light is below the surface; with SHADOW_RAYS off the light is taken as
+// unblocked); w is 1 where a shadow ray was traced, else 0.
 fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> vec4<f32> {
     let lr = light_ray(s, m, dir, r, light, k, rng);
     if (lr.traced == 0u) {
@@ -169,11 +169,9 @@ fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<functio
         var k = 0u;
         for (; k < samples; k++) {
             let c = light_sample(s, m, dir, r, light, k, rng);
+            colour += c.xyz;
             if (c.w > 0.0) {
                 *rays += 1u;
-                colour += c.xyz;
-            } else if (!SHADOW_RAYS) {
-                colour += c.xyz;
             }
         }
         cut_short = cut_short || k < samples;
