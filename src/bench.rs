@@ -32,7 +32,7 @@ use std::time::{Duration, Instant};
 
 use crate::bvh::{self, wide::WideNode};
 use crate::counters::Counters;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{
@@ -168,9 +168,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
             r.fetch().name()
         );
     }
-    let bvh = match std::env::var("GPURT_BVH").as_deref() {
-        Ok(q @ ("medium" | "high")) => q.to_string(),
-        _ => "as a render of each row's samples gets it".to_string(),
+    let bvh = match bvh::Quality::forced().map_err(Error::Render)? {
+        Some(q) => q.name(),
+        None => "as a render of each row's samples gets it",
     };
     eprintln!("bvh         {bvh} (GPURT_BVH=medium|high to choose)");
     if time_cpu {

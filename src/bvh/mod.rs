@@ -76,13 +76,18 @@ impl Quality {
     }
 
     /// The build a render of `samples` camera samples over `prims` primitives gets:
-    /// `GPURT_BVH` (`medium` or `high`) where set, for measuring a tracer on either tree
-    /// whatever the render's length; else `for_work`.
+    /// `GPURT_BVH`'s (`forced`) where set, else `for_work`.
     pub fn chosen(prims: usize, samples: u64) -> Result<Quality, String> {
+        Ok(Quality::forced()?.unwrap_or_else(|| Quality::for_work(prims, samples)))
+    }
+
+    /// `GPURT_BVH` (`medium` or `high`): every tree at that quality, for measuring a
+    /// tracer on either tree whatever the render's length; `None` where unset or empty.
+    pub fn forced() -> Result<Option<Quality>, String> {
         match std::env::var("GPURT_BVH").as_deref() {
-            Err(_) | Ok("") => Ok(Quality::for_work(prims, samples)),
-            Ok("medium") => Ok(Quality::Medium),
-            Ok("high") => Ok(Quality::High),
+            Err(_) | Ok("") => Ok(None),
+            Ok("medium") => Ok(Some(Quality::Medium)),
+            Ok("high") => Ok(Some(Quality::High)),
             Ok(v) => Err(format!("GPURT_BVH={v}: expected medium or high")),
         }
     }
