@@ -30,15 +30,17 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
+mod table;
+
+use table::{CpuRow, GpuRow, Pass, Row};
+
 use crate::bvh::{self, wide::WideNode};
-use crate::counters::Counters;
 use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{
     AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE,
 };
-use crate::outln;
 use crate::pack;
 use crate::run;
 use crate::scene::{Camera, ReadOptions};
@@ -62,78 +64,6 @@ pub struct BenchConfig {
     pub read: ReadOptions,
 }
 
-/// One row of the table: one scene at one size and sample count.
-struct Row {
-    scene: String,
-    prims: usize,
-    width: u32,
-    height: u32,
-    spp: u32,
-    gpu: Option<GpuRow>,
-    cpu: Option<CpuRow>,
-}
-
-struct GpuRow {
-    compile: Duration,
-    upload: Duration,
-    device_bytes: u64,
-    eye: Pass,
-    /// `None` where the frame takes the wavefront kernels.
-    shaded: Option<Pass>,
-    direct: Pass,
-    full: Pass,
-    /// The `full` pass's counts.
-    counted: Counters,
-    /// GPU seconds of each wavefront kernel in one `full` frame, where it takes them.
-    kernels: Option<Vec<(&'static str, f64)>>,
-}
-
-/// One timed pass: median frame time on the device, median time with the image read
-/// back into a film, and rays traced per frame.
-#[derive(Clone, Copy)]
-struct Pass {
-    time: Duration,
-    with_readback: Duration,
-    rays: u64,
-}
-
-struct CpuRow {
-    time: Duration,
-    rays: u64,
-    /// Rays and node fetches by kind, on the CPU's own walk.
-    counted: Counters,
-}
-
-fn mrays(rays: u64, t: Duration) -> f64 {
-    rays as f64 / t.as_secs_f64().max(1e-12) / 1e6
-}
-
-/// Rays per second of the rays one pass adds over another, in millions; `-` when the
-/// difference is within timing noise.
-fn rate_between(more: Pass, less: Pass) -> String {
-    let rays = more.rays.saturating_sub(less.rays);
-    let t = more.time.saturating_sub(less.time);
-    if rays == 0 || t < Duration::from_micros(20) {
-        "-".into()
-    } else {
-        rate(mrays(rays, t))
-    }
-}
-
-/// Mrays/s with three significant digits or more: a software adapter's rates are a few
-/// Mrays/s, a GPU's thousands.
-fn rate(mrays: f64) -> String {
-    match mrays {
-        m if m < 10.0 => format!("{m:.2}"),
-        m if m < 100.0 => format!("{m:.1}"),
-        m => format!("{m:.0}"),
-    }
-}
-
-fn ms(t: Duration) -> String {
-    format!("{:.2}", t.as_secs_f64() * 1e3)
-}
-
 fn median(mut times: Vec<Duration>) -> Duration {
     times.sort();
     times[times.len() / 2]
@@ -147,11 +77,17 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     }
     // The CPU is timed beside the GPU, or in its place.
     let time_cpu = config.backend == Backend::Both || ctx.is_none();
-    let renderer = match &ctx {
-        Some(c) => Some(GpuRenderer::new(&c.device, None)?),
+    // The second renderer traces the `shaded` pass: its pipelines are compiled once for
+    // the whole run, as the first's are.
+    let renderers = match &ctx {
+        Some(c) => Some((
+            GpuRenderer::new(&c.device, None)?,
+            GpuRenderer::new(&c.device, None)?.with_shadow_rays(false),
+        )),
         None => None,
     };
-    if let Some(r) = &renderer {
+    let renderer = renderers.as_ref().map(|(r, _)| r);
+    if let Some(r) = renderer {
         let t = r.traversal();
         let fallback = if t == TRAVERSAL_WIDE || t == TRAVERSAL_QWIDE {
             " (pairs where a scene's wide tree does not fit the stack)"
@@ -221,12 +157,19 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                 };
                 let opts = with_camera(&prepared.buffers.camera);
                 let globals = frame::globals(&prepared.buffers, &opts);
-                if let Some(r) = &renderer {
+                if let Some(r) = renderer {
                     let kernels = r.kernels(&prepared.buffers, &globals);
                     eprintln!("  {name}: {width}x{height}, {spp} spp, kernels: {kernels}");
                 }
-                let gpu = match (&ctx, &renderer) {
-                    (Some(c), Some(r)) => Some(gpu_row(c, r, &prepared.buffers, &globals, config)?),
+                let gpu = match (&ctx, &renderers) {
+                    (Some(c), Some((r, unshadowed))) => Some(gpu_row(
+                        c,
+                        r,
+                        unshadowed,
+                        &prepared.buffers,
+                        &globals,
+                        config,
+                    )?),
                     _ => None,
                 };
                 let cpu = time_cpu
@@ -241,9 +184,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                     );
                 }
                 if std::mem::take(&mut header) {
-                    print_header();
+                    table::print_header();
                 }
-                print_row(&Row {
+                table::print_row(&Row {
                     scene: name.clone(),
                     prims: prepared.buffers.prims.len() + prepared.buffers.planes.len(),
                     width,
@@ -258,9 +201,12 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     Ok(())
 }
 
+/// The GPU's passes of one row on `renderer`, the `shaded` one on `unshadowed` (the same
+/// renderer tracing no shadow rays).
 fn gpu_row(
     ctx: &GpuContext,
     renderer: &GpuRenderer,
+    unshadowed: &GpuRenderer,
     buffers: &pack::SceneBuffers,
     globals: &GpuGlobals,
     config: &BenchConfig,
@@ -318,12 +264,9 @@ fn gpu_row(
         ..*globals
     };
     let (direct, ..) = pass(renderer, &depth_1)?;
-    let shaded = match renderer.kernels(buffers, &depth_1) {
-        "wavefront" => None,
-        _ => {
-            let unshadowed = GpuRenderer::new(device, None)?.with_shadow_rays(false);
-            Some(pass(&unshadowed, &depth_1)?.0)
-        }
+    let shaded = match renderer.frame(buffers, &depth_1).wavefront {
+        0 => Some(pass(unshadowed, &depth_1)?.0),
+        _ => None,
     };
     let counting = GpuGlobals {
         counters: 1,
@@ -363,117 +306,4 @@ fn cpu_row(buffers: &pack::SceneBuffers, globals: &GpuGlobals) -> Result<CpuRow>
         rays: counts.total(),
         counted: counts.counters(size_of::<WideNode>() as u64),
     })
-}
-
-/// Nodes fetched and node bytes read per ray of each kind, as cells: `nodes (bytes)`.
-fn per_ray(c: &Counters) -> [String; 3] {
-    [0, 1, 2].map(|k| match c.rays[k] {
-        0 => "-".to_string(),
-        _ => format!("{:.1} ({:.0})", c.nodes_per_ray(k), c.bytes_per_ray(k)),
-    })
-}
-
-fn print_header() {
-    outln!(
-        "| scene | prims | size | spp | rays/px | GPU frame ms | with readback ms | GPU Mrays/s | eye Mrays/s | shading ms | shadow Mrays/s | secondary Mrays/s | upload ms | compile ms | GPU MiB | CPU frame ms | CPU Mrays/s | GPU / CPU | eye nodes/ray (B) | shadow nodes/ray (B) | secondary nodes/ray (B) |"
-    );
-    outln!(
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
-    );
-}
-
-fn print_row(r: &Row) {
-    let pixels = u64::from(r.width) * u64::from(r.height);
-    let rays = r
-        .gpu
-        .as_ref()
-        .map(|g| g.full.rays)
-        .or(r.cpu.as_ref().map(|c| c.rays))
-        .unwrap_or(0);
-    let dash = || "-".to_string();
-    let (frame, readback, rate, eye, shading, shadow, secondary, upload, compile, mib) =
-        match &r.gpu {
-            Some(g) => (
-                ms(g.full.time),
-                ms(g.full.with_readback),
-                rate(mrays(g.full.rays, g.full.time)),
-                rate(mrays(g.eye.rays, g.eye.time)),
-                g.shaded
-                    .map_or_else(dash, |s| ms(s.time.saturating_sub(g.eye.time))),
-                // The shaded pass traces the eye rays alone: the direct pass's rays over its
-                // are the shadow rays.
-                rate_between(g.direct, g.shaded.unwrap_or(g.eye)),
-                rate_between(g.full, g.direct),
-                ms(g.upload),
-                ms(g.compile),
-                format!("{:.1}", g.device_bytes as f64 / (1 << 20) as f64),
-            ),
-            None => (
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-                dash(),
-            ),
-        };
-    let (cpu_frame, cpu_rate) = match &r.cpu {
-        Some(c) => (ms(c.time), format!("{:.1}", mrays(c.rays, c.time))),
-        None => (dash(), dash()),
-    };
-    let speedup = match (&r.gpu, &r.cpu) {
-        (Some(g), Some(c)) => format!("{:.1}x", c.time.as_secs_f64() / g.full.time.as_secs_f64()),
-        _ => dash(),
-    };
-    // The GPU's walk where the GPU is timed, else the CPU's.
-    let counted = r
-        .gpu
-        .as_ref()
-        .map(|g| g.counted)
-        .or(r.cpu.as_ref().map(|c| c.counted));
-    let [eye_nodes, shadow_nodes, secondary_nodes] = counted
-        .as_ref()
-        .map_or_else(|| [dash(), dash(), dash()], per_ray);
-    outln!(
-        "| {} | {} | {}x{} | {} | {:.2} | {frame} | {readback} | {rate} | {eye} | {shading} | {shadow} | {secondary} | {upload} | {compile} | {mib} | {cpu_frame} | {cpu_rate} | {speedup} | {eye_nodes} | {shadow_nodes} | {secondary_nodes} |",
-        r.scene,
-        r.prims,
-        r.width,
-        r.height,
-        r.spp,
-        rays as f64 / pixels as f64,
-    );
-    if let Some(kernels) = r.gpu.as_ref().and_then(|g| g.kernels.as_ref()) {
-        let each: Vec<String> = kernels
-            .iter()
-            .map(|(name, s)| format!("{} {:.2}", name.trim_start_matches("wf_"), s * 1e3))
-            .collect();
-        let total: f64 = kernels.iter().map(|(_, s)| s * 1e3).sum();
-        eprintln!(
-            "  {}: wavefront kernels, GPU ms a frame: {} (sum {total:.2})",
-            r.scene,
-            each.join(", ")
-        );
-    }
-    if let Some((main, pooled)) = r.gpu.as_ref().and_then(|g| g.counted.lanes_busy_all()) {
-        // The model's bound (`Counters::lanes_busy_all`), beside which a measured
-        // `main` / `pooled` ratio can be read.
-        eprintln!(
-            "  {}: at most {:.0}% of a warp's lanes busy, {:.0}% pooled (model)",
-            r.scene,
-            100.0 * main,
-            100.0 * pooled
-        );
-    }
-    if let Some(c) = &r.cpu {
-        let [eye, shadow, secondary] = c.counted.rays;
-        eprintln!(
-            "  {}: rays by kind (CPU count): {eye} eye, {shadow} shadow, {secondary} secondary",
-            r.scene
-        );
-    }
 }
