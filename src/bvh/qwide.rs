@@ -20,26 +20,22 @@ pub fn build(nodes: &[GpuWideNode]) -> Option<Vec<GpuQwideNode>> {
 /// box rounded outwards onto it. A lane without a child keeps zeros (the walk skips it
 /// by its entry).
 fn node(n: &GpuWideNode) -> Option<GpuQwideNode> {
-    let lanes: Vec<usize> = (0..4).filter(|&l| n.entry[l] != WIDE_EMPTY).collect();
+    let lanes = || (0..4).filter(|&l| n.entry[l] != WIDE_EMPTY);
     let (mut origin, mut exps, mut q) = ([0.0f32; 3], 0, [0u32; 6]);
     for a in 0..3 {
-        let lo = lanes
-            .iter()
-            .map(|&l| n.lo[a][l])
-            .fold(f32::INFINITY, f32::min);
-        let hi = lanes
-            .iter()
-            .map(|&l| n.hi[a][l])
-            .fold(f32::NEG_INFINITY, f32::max);
-        let (lo, hi) = if lanes.is_empty() {
-            (0.0, 0.0)
-        } else {
-            (lo, hi)
+        let (lo, hi) = match lanes().next() {
+            None => (0.0, 0.0),
+            Some(_) => (
+                lanes().map(|l| n.lo[a][l]).fold(f32::INFINITY, f32::min),
+                lanes()
+                    .map(|l| n.hi[a][l])
+                    .fold(f32::NEG_INFINITY, f32::max),
+            ),
         };
         let e = exponent(lo, hi)?;
         origin[a] = lo;
         exps |= e << (8 * a);
-        for &l in &lanes {
+        for l in lanes() {
             let (ql, qh) = quantise(lo, scale(e), n.lo[a][l], n.hi[a][l])?;
             q[a] |= ql << (8 * l);
             q[3 + a] |= qh << (8 * l);
