@@ -41,6 +41,14 @@ fn sample_offset(s: u32, n: u32, rng: ptr<function, u32>) -> vec2<f32> {
     return vec2<f32>((f32(s % k) + jx) / f32(cells), (f32(row * k) + jy * f32(cells)) / f32(n));
 }
 
+// The camera ray of sample s of pixel (px, py), with the sample's random stream seeded
+// in `rng`, which the sample's shading goes on drawing from.
+fn sample_ray(px: u32, py: u32, s: u32, rng: ptr<function, u32>) -> Ray {
+    *rng = rng_seed(py * globals.width + px, s, globals.seed);
+    let off = sample_offset(s, globals.spp, rng);
+    return camera_ray(f32(px) + off.x, f32(py) + off.y, rng);
+}
+
 fn aov(ray: Ray) -> vec3<f32> {
     let fetched_before = fetched;
     let hit = closest_hit(ray, globals.hither, NO_HIT);
@@ -109,9 +117,8 @@ fn main(
     let end = tile.sample_start + tile.sample_count;
     var s = tile.sample_start;
     for (; s < end; s++) {
-        var rng = rng_seed(py * g.width + px, s, g.seed);
-        let off = sample_offset(s, g.spp, &rng);
-        let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+        var rng: u32;
+        let ray = sample_ray(px, py, s, &rng);
         rays += 1u;
         if (COUNTERS) {
             counts.eye_rays += 1u;
@@ -243,9 +250,7 @@ fn pooled(
                 }
                 s = tile.sample_start;
             }
-            rng = rng_seed(py * g.width + px, s, g.seed);
-            let off = sample_offset(s, g.spp, &rng);
-            let eye = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+            let eye = sample_ray(px, py, s, &rng);
             rays += 1u;
             if (COUNTERS) {
                 counts.eye_rays += 1u;
@@ -307,9 +312,8 @@ fn resume(
                 st.phase = PHASE_DONE;
                 break;
             }
-            var rng = rng_seed(py * g.width + px, st.sample, g.seed);
-            let off = sample_offset(st.sample, g.spp, &rng);
-            let ray = camera_ray(f32(px) + off.x, f32(py) + off.y, &rng);
+            var rng: u32;
+            let ray = sample_ray(px, py, st.sample, &rng);
             st.rays += 1u;
             if (COUNTERS) {
                 counts.eye_rays += 1u;

@@ -165,9 +165,8 @@ fn wf_generate(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let xy = wave_xy(p / tile.sample_count);
     let s = tile.sample_start + p % tile.sample_count;
-    var rng = rng_seed(xy.y * globals.width + xy.x, s, globals.seed);
-    let off = sample_offset(s, globals.spp, &rng);
-    let ray = camera_ray(f32(xy.x) + off.x, f32(xy.y) + off.y, &rng);
+    var rng: u32;
+    let ray = sample_ray(xy.x, xy.y, s, &rng);
     var eye = PixelCounts();
     if (COUNTERS) {
         eye.eye_rays = 1u;

@@ -19,11 +19,11 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::lights::{Surfaces, light_rays};
-use super::main::{aov, camera_ray, sample_offset};
+use super::main::{aov, sample_ray};
 use super::packet::{Kernels, MAX_LANES, Packet};
 use super::shade::{Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace};
 use super::tracer::Alone;
-use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
+use super::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
 
 /// A ray traced in a packet, and its answer.
@@ -199,9 +199,8 @@ pub fn render_tile(
                 packet.clear();
                 for y in by..(by + bh).min(rows.end) {
                     for x in bx..(bx + bw).min(x1) {
-                        let mut rng = rng_seed(y * g.width + x, s, g.seed);
-                        let off = sample_offset(s, g.spp, &mut rng);
-                        let ray = camera_ray(g, x as f32 + off.x, y as f32 + off.y, &mut rng);
+                        let mut rng = 0;
+                        let ray = sample_ray(g, x, y, s, &mut rng);
                         let i = ((y - rows.start) * (x1 - x0) + x - x0) as usize;
                         lanes[n] = (i, ray, rng);
                         packet.set(n, &ray, g.hither, NO_HIT);

@@ -53,6 +53,14 @@ pub fn sample_offset(s: u32, n: u32, rng: &mut u32) -> Vec2 {
     )
 }
 
+/// The camera ray of sample `s` of pixel (`px`, `py`), with the sample's random stream
+/// seeded in `rng`, which the sample's shading goes on drawing from.
+pub fn sample_ray(g: &GpuGlobals, px: u32, py: u32, s: u32, rng: &mut u32) -> Ray {
+    *rng = rng_seed(py * g.width + px, s, g.seed);
+    let off = sample_offset(s, g.spp, rng);
+    camera_ray(g, px as f32 + off.x, py as f32 + off.y, rng)
+}
+
 /// `sum` plus samples `samples` of one pixel, added in sample order (as `main` in
 /// main.wgsl does within a band), and the rays traced for them.
 pub fn sample_sum(
@@ -65,9 +73,8 @@ pub fn sample_sum(
 ) -> Vec3 {
     let g = b.globals;
     for s in samples {
-        let mut rng = rng_seed(py * g.width + px, s, g.seed);
-        let off = sample_offset(s, g.spp, &mut rng);
-        let ray = camera_ray(g, px as f32 + off.x, py as f32 + off.y, &mut rng);
+        let mut rng = 0;
+        let ray = sample_ray(g, px, py, s, &mut rng);
         counts.eye += 1;
         sum += if g.aov == AOV_COLOR {
             trace(b, &mut Alone, ray, &mut rng, counts)

@@ -10,12 +10,12 @@
 
 use glam::Vec3;
 
-use super::main::{camera_ray, sample_offset};
+use super::main::sample_ray;
 use super::shade::{
     Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface,
 };
 use super::traverse::{closest_hit, transmission};
-use super::types::{Bindings, Hit, Ray, RayCounts, rng_seed};
+use super::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
 
 /// A path of the wave: one pixel sample's colour so far, its rays, counts, and whether any
@@ -144,9 +144,8 @@ impl Wave<'_, '_> {
         let g = self.b.globals;
         let (x, y, _) = self.wave_xy(p / t.sample_count);
         let s = t.sample_start + p % t.sample_count;
-        let mut rng = rng_seed(y * g.width + x, s, g.seed);
-        let off = sample_offset(s, g.spp, &mut rng);
-        let ray = camera_ray(g, x as f32 + off.x, y as f32 + off.y, &mut rng);
+        let mut rng = 0;
+        let ray = sample_ray(g, x, y, s, &mut rng);
         let eye = RayCounts {
             eye: 1,
             ..RayCounts::default()
