@@ -40,6 +40,8 @@ pub mod scene;
 pub mod session;
 #[cfg(feature = "native")]
 pub mod shard;
+#[cfg(feature = "native")]
+pub mod tune;
 pub mod view;
 
 pub use error::{Error, Result};

@@ -45,6 +45,7 @@ fn main() -> ExitCode {
         }) => tools::info(&scene, json, &ReadOptions { lenient }),
         Some(Command::Diff(diff)) => tools::diff(diff),
         Some(Command::Bench(bench)) => tools::bench(bench),
+        Some(Command::Tune(tune)) => tools::tune(tune),
         Some(Command::View(view)) => tools::view(view, launch),
         Some(Command::Merge { dir, output }) => farm::merge(&dir, &output),
         None => match (&args.render.out_dir, args.render.shard) {

@@ -28,6 +28,12 @@ pub trait Renderer {
     /// One line naming what renders: the adapter, or the CPU and its threads.
     fn describe(&self) -> String;
 
+    /// One line on how it traces, where that was chosen for the adapter: the GPU's walk,
+    /// kernels and fetch, and whether `gpurt tune` chose them (`--stats`).
+    fn strategy(&self) -> Option<String> {
+        None
+    }
+
     /// The frame this renderer traces when asked for `globals`: the same, but for the
     /// BVH walk, which the GPU picks for its adapter (`GpuRenderer::traversal`). A CPU
     /// render of this frame matches this renderer's node for node.
@@ -203,6 +209,10 @@ impl GpuSession {
 impl Renderer for GpuSession {
     fn describe(&self) -> String {
         self.ctx.describe()
+    }
+
+    fn strategy(&self) -> Option<String> {
+        Some(self.renderer.describe_strategy())
     }
 
     fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {

@@ -69,6 +69,28 @@ fn median(mut times: Vec<Duration>) -> Duration {
     times[times.len() / 2]
 }
 
+/// The median time of `frames` frames (at least one) of `scene` on the device alone,
+/// after a quarter of a second of warm-up frames: a GPU idle for a while (the CPU rows
+/// run in between) clocks down.
+pub fn time_frames(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &gpu::GpuScene,
+    frames: u32,
+) -> Result<Duration> {
+    let warm = Instant::now();
+    while warm.elapsed() < Duration::from_millis(250) {
+        gpu::trace_on_device(device, queue, scene)?;
+    }
+    let on_device = (0..frames.max(1))
+        .map(|_| {
+            let t = Instant::now();
+            gpu::trace_on_device(device, queue, scene).map(|()| t.elapsed())
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(median(on_device))
+}
+
 /// Runs the benchmark, printing each row as it is measured (header first) to stdout.
 pub fn run(config: &BenchConfig) -> Result<()> {
     let ctx = session::choose(config.backend, config.adapter.as_deref(), Missing::Error)?.gpu;
@@ -222,28 +244,15 @@ fn gpu_row(
             let upload = t.elapsed();
             let never = AtomicBool::new(false);
             let (_, rays) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
-            // A GPU idle for a while (the CPU rows run in between) clocks down: keep it busy
-            // for a quarter of a second before timing.
-            let warm = Instant::now();
-            while warm.elapsed() < Duration::from_millis(250) {
-                gpu::trace_on_device(device, queue, &scene)?;
-            }
-            let frames = 0..config.frames.max(1);
-            let with_readback = frames
-                .clone()
+            let time = time_frames(device, queue, &scene, config.frames)?;
+            let with_readback = (0..config.frames.max(1))
                 .map(|_| {
                     let t = Instant::now();
                     gpu::trace(device, queue, &scene, &|_| {}, &never).map(|_| t.elapsed())
                 })
                 .collect::<Result<Vec<_>>>()?;
-            let on_device = frames
-                .map(|_| {
-                    let t = Instant::now();
-                    gpu::trace_on_device(device, queue, &scene).map(|()| t.elapsed())
-                })
-                .collect::<Result<Vec<_>>>()?;
             let pass = Pass {
-                time: median(on_device),
+                time,
                 with_readback: median(with_readback),
                 rays,
             };

@@ -70,6 +70,11 @@ pub enum Command {
     /// markdown table (Mrays/s by ray kind, upload and compile apart, GPU memory).
     #[command(allow_negative_numbers = true)]
     Bench(BenchArgs),
+    /// Measure which walk of the BVH, kernels and way of reading the scene trace the given
+    /// scenes fastest on the GPU adapter, and keep the fastest for every later render on
+    /// that adapter (in the cache directory; GPURT_CACHE_DIR= measures without keeping).
+    /// Prints a markdown table and the choice.
+    Tune(TuneArgs),
     /// Print the completion script for a shell, e.g. `gpurt completions bash >
     /// ~/.local/share/bash-completion/completions/gpurt` (see the README for each shell).
     Completions { shell: clap_complete::Shell },
@@ -125,6 +130,32 @@ pub struct BenchArgs {
     /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
     /// with what follows each up to the next known keyword, warning of each, instead of
     /// refusing the file.
+    #[arg(long)]
+    pub lenient: bool,
+}
+
+#[derive(clap::Args)]
+pub struct TuneArgs {
+    /// Scenes to measure on: the kind of scenes the adapter will render.
+    #[arg(required = true)]
+    pub scenes: Vec<PathBuf>,
+    /// Image size, WxH.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: u32,
+    /// Maximum ray depth.
+    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
+    pub depth: u32,
+    /// Timed frames per scene and candidate; the median is kept.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub frames: u32,
+    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
+    #[arg(long)]
+    pub adapter: Option<String>,
+    /// Skip NFF keywords gpurt does not know, warning of each, instead of refusing the
+    /// file (as for rendering).
     #[arg(long)]
     pub lenient: bool,
 }

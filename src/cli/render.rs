@@ -111,6 +111,9 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     for (name, renderer) in &mut renderers {
         if args.verbose || args.stats {
             eprintln!("{name:<11} {}", renderer.describe());
+            if let Some(strategy) = renderer.strategy() {
+                eprintln!("strategy    {strategy}");
+            }
         }
         let progress = Progress::new(u64::from(opts.width) * u64::from(opts.height));
         let result = run::render_frame(

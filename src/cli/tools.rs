@@ -10,10 +10,11 @@ use gpurt::bench::{self, BenchConfig};
 use gpurt::compare::{self, Thresholds};
 use gpurt::run::{self, Prepared};
 use gpurt::scene::ReadOptions;
+use gpurt::tune::{self, TuneConfig};
 use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
-use super::args::{BenchArgs, DiffArgs, ViewArgs};
+use super::args::{BenchArgs, DiffArgs, TuneArgs, ViewArgs};
 use super::{print_threads, print_warnings};
 
 /// `gpurt info SCENE [--json] [--lenient]`.
@@ -103,6 +104,24 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             launch,
         },
     )?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `gpurt tune SCENE...`.
+pub fn tune(args: TuneArgs) -> gpurt::Result<ExitCode> {
+    let (width, height) = args.size;
+    tune::run(&TuneConfig {
+        scenes: args.scenes,
+        width,
+        height,
+        spp: args.spp,
+        depth: args.depth,
+        frames: args.frames,
+        adapter: args.adapter,
+        read: ReadOptions {
+            lenient: args.lenient,
+        },
+    })?;
     Ok(ExitCode::SUCCESS)
 }
 

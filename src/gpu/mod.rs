@@ -2,7 +2,8 @@
 //! reference traverses.
 //!
 //! Each module imports only modules listed before it here, so the arrows run one way:
-//! - `context` finds an adapter and opens a device;
+//! - `context` finds an adapter and opens a device; `cache` says where what is learnt
+//!   about an adapter is kept between runs;
 //! - `device` is the one door to wgpu's device and queue: `Device` (what is made on the
 //!   device, error scopes, waits, readbacks; the viewer uses it too) and `Gpu` (with the
 //!   queue: writes and submissions). No other module calls a method of either
@@ -12,6 +13,8 @@
 //!   scene needs;
 //! - `cut` cuts a frame into bounded dispatches, bands and submissions; `policy` says
 //!   which walk and which kernels a frame takes on an adapter, and how it is cut;
+//!   `tuning` keeps what `gpurt tune` measured fastest on an adapter, in place of
+//!   `policy`'s defaults;
 //! - `upload` puts a scene's arrays on the device;
 //! - `pipeline` owns the bind group layouts, the shader modules, the compiling of entry
 //!   points and the on-disk pipeline cache;
@@ -24,6 +27,7 @@
 //!   and warms up the pipelines they need;
 //! - `oneshot` renders a frame from buffers to a film in one blocking call (natively).
 
+mod cache;
 pub mod context;
 mod cut;
 pub(crate) mod device;
@@ -37,6 +41,7 @@ mod scene;
 pub mod shaders;
 pub mod specialization;
 mod trace;
+pub mod tuning;
 mod upload;
 mod wavefront;
 #[cfg(feature = "native")]
@@ -46,6 +51,7 @@ pub use context::{Choice, GpuContext, choose, is_software, open, open_on, reques
 pub use cut::DISPATCH_BUDGET;
 #[cfg(feature = "native")]
 pub use oneshot::render_gpu;
+pub use policy::{Kernels, Strategy, defaults};
 pub use renderer::GpuRenderer;
 pub use scene::GpuScene;
 #[cfg(feature = "native")]

@@ -8,23 +8,12 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
+use super::cache::cache_dir;
 use super::device::{Device, Slot};
 use super::shaders::{self, Fetch};
 use super::specialization::Specialization;
 use crate::error::Result;
 use crate::gpu_types::GpuTile;
-
-/// Where the pipeline cache lives: `GPURT_CACHE_DIR`, else `$XDG_CACHE_HOME/gpurt`, else
-/// `~/.cache/gpurt`. `GPURT_CACHE_DIR=` (empty) turns the cache off.
-fn cache_dir() -> Option<PathBuf> {
-    if let Ok(d) = std::env::var("GPURT_CACHE_DIR") {
-        return (!d.is_empty()).then(|| PathBuf::from(d));
-    }
-    let base = std::env::var_os("XDG_CACHE_HOME")
-        .map(PathBuf::from)
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
-    Some(base.join("gpurt"))
-}
 
 /// The on-disk pipeline cache: wgpu's cache of compiled pipelines, read from its file
 /// when a renderer is set up and written back after each pipeline it compiles.

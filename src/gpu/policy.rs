@@ -1,7 +1,9 @@
-//! What a frame takes on this adapter: which walk of the BVH and which kernels (the one
-//! `main` kernel, its `pooled` form or the wavefront ones), each chosen per adapter and per scene by what
-//! was measured, and overridable from the environment for measuring them side by side;
-//! and how the frame is cut into work.
+//! What a frame takes on this adapter: which walk of the BVH, which kernels (the one
+//! `main` kernel, its `pooled` form or the wavefront ones) and which way of reading the
+//! scene (`Strategy`), by what was measured for the kind of adapter (`defaults`) or on
+//! the adapter itself (`gpurt tune`, kept by `tuning`), per scene where its tree or size
+//! allows, and overridable from the environment for measuring them side by side; and
+//! how the frame is cut into work.
 
 use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
@@ -12,20 +14,54 @@ use crate::gpu_types::{
 };
 use crate::pack::SceneBuffers;
 
-/// The traversal for an adapter: `TRAVERSAL_WIDE` on every adapter (each scene falls back
-/// to pairs where its wide tree does not fit the stack). On the H100 a ray's time goes to
-/// waiting on node fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5
-/// times faster than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it
-/// is 2 to 19% faster than single (docs/gpu.md has the figures). The compressed
-/// eight-wide walk (`TRAVERSAL_CWIDE`) fetches 40 to 56% fewer node bytes, yet is 1.3 to
-/// 1.7 times slower on the H100 and slower on lavapipe's larger scenes: not the default.
-/// The quantised four-wide walk (`TRAVERSAL_QWIDE`, the wide walk on nodes of 64 bytes)
-/// fetches 41 to 43% fewer node bytes and is as fast as wide on lavapipe; unmeasured on a
-/// GPU, so not the default either. `GPURT_TRAVERSAL` (`single`, `pairs`, `wide`, `cwide`
-/// or `qwide`: `TRAVERSAL_NAMES`) overrides it, for measuring them on one adapter.
-pub(super) fn traversal_from_env() -> Result<u32> {
+/// The walk of the BVH, the kernels of a colour frame and the way the shaders read the
+/// scene that a renderer takes on an adapter: `defaults` (what was measured for the kind
+/// of adapter), or what `gpurt tune` measured on the adapter itself (`tuning`), each
+/// overridden by its variable of the environment where set (`traversal_for`,
+/// `kernels_for`, `fetch_for`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Strategy {
+    /// `TRAVERSAL_*`, where a scene's tree allows (`SceneBuffers::traversal_for`).
+    pub traversal: u32,
+    pub kernels: Kernels,
+    pub fetch: Fetch,
+}
+
+/// The choice for an adapter that `gpurt tune` has not measured, by what was measured on
+/// lavapipe and on the H100 and H200 (docs/gpu.md has the figures):
+///
+/// - the walk: `TRAVERSAL_WIDE` on every adapter (each scene falls back to pairs where its
+///   wide tree does not fit the stack). On the H100 a ray's time goes to waiting on node
+///   fetches, and the four-wide tree halves the chain of them: 1.2 to 1.5 times faster
+///   than pairs, which was 1.2 to 1.4 times faster than single. On lavapipe it is 2 to
+///   19% faster than single. The compressed eight-wide walk (`TRAVERSAL_CWIDE`) fetches
+///   40 to 56% fewer node bytes, yet is 1.3 to 1.7 times slower on the H100 and slower on
+///   lavapipe's larger scenes. The quantised four-wide walk (`TRAVERSAL_QWIDE`, the wide
+///   walk on nodes of 64 bytes) fetches 41 to 43% fewer node bytes and is as fast as wide
+///   on lavapipe; unmeasured on a GPU, so not the default either;
+/// - the kernels: the one kernel, `main` (`wavefront_for`, `pooled_for`);
+/// - the fetch: storage textures on software adapters, which lavapipe loads a texel at a
+///   time where it loads a storage buffer a component at a time (docs/gpu.md, item 2),
+///   and storage buffers on hardware ones: on an H100 (docs/gpu.md, "Storage buffers")
+///   buffers traced every frame of seven scenes 1.07 to 1.34 times faster than the
+///   textures, with the same rays and node fetches. In the browser, unmeasured so far,
+///   the textures stay.
+pub fn defaults(software: bool) -> Strategy {
+    Strategy {
+        traversal: TRAVERSAL_WIDE,
+        kernels: Kernels::Main,
+        fetch: match software || !cfg!(feature = "native") {
+            true => Fetch::Textures,
+            false => Fetch::Buffers,
+        },
+    }
+}
+
+/// The walk: `GPURT_TRAVERSAL` (`single`, `pairs`, `wide`, `cwide` or `qwide`:
+/// `TRAVERSAL_NAMES`) where set, for measuring the walks on one adapter, else `chosen`.
+pub(super) fn traversal_for(chosen: u32) -> Result<u32> {
     match std::env::var("GPURT_TRAVERSAL").as_deref() {
-        Err(_) | Ok("") => Ok(TRAVERSAL_WIDE),
+        Err(_) | Ok("") => Ok(chosen),
         Ok(v) => match TRAVERSAL_NAMES.iter().position(|&n| n == v) {
             Some(t) => Ok(t as u32),
             None => Err(Error::Render(format!(
@@ -37,25 +73,19 @@ pub(super) fn traversal_from_env() -> Result<u32> {
 }
 
 /// How a renderer's shaders read the scene's nodes, primitives and normals: `GPURT_FETCH`
-/// (`textures` or `buffers`) where set; else storage textures on software adapters,
-/// which lavapipe loads a texel at a time where it loads a storage buffer a component at
-/// a time (docs/gpu.md, item 2), and storage buffers on hardware ones, unless the scenes
-/// in hand (`buffers_fit` false) have an array larger than one storage buffer may be
-/// (textures grow by layers). On an H100 (docs/gpu.md, "Storage buffers") buffers traced
-/// every frame of seven scenes 1.07 to 1.34 times faster than the textures, with the same
-/// rays and node fetches. In the browser, unmeasured so far, the textures stay.
-pub(super) fn fetch_for(software: bool, buffers_fit: bool) -> Result<Fetch> {
+/// (`textures` or `buffers`) where set; else `chosen`, unless the scenes in hand
+/// (`buffers_fit` false) have an array larger than one storage buffer may be (textures
+/// grow by layers).
+pub(super) fn fetch_for(chosen: Fetch, buffers_fit: bool) -> Result<Fetch> {
     let var = std::env::var("GPURT_FETCH");
-    fetch_by(var.as_deref().ok(), software, buffers_fit)
+    fetch_by(var.as_deref().ok(), chosen, buffers_fit)
 }
 
 /// `fetch_for` with `GPURT_FETCH`'s value given (`None`: unset).
-fn fetch_by(var: Option<&str>, software: bool, buffers_fit: bool) -> Result<Fetch> {
+fn fetch_by(var: Option<&str>, chosen: Fetch, buffers_fit: bool) -> Result<Fetch> {
     match var {
-        None | Some("") if software || !cfg!(feature = "native") || !buffers_fit => {
-            Ok(Fetch::Textures)
-        }
-        None | Some("") => Ok(Fetch::Buffers),
+        None | Some("") if !buffers_fit => Ok(Fetch::Textures),
+        None | Some("") => Ok(chosen),
         Some("textures") => Ok(Fetch::Textures),
         Some("buffers") => Ok(Fetch::Buffers),
         Some(v) => Err(Error::Render(format!(
@@ -66,7 +96,7 @@ fn fetch_by(var: Option<&str>, software: bool, buffers_fit: bool) -> Result<Fetc
 
 /// The kernels that trace a colour frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(super) enum Kernels {
+pub enum Kernels {
     /// The one kernel, `main`.
     Main,
     /// The wavefront kernels (`shaders/wavefront.wgsl`).
@@ -75,17 +105,36 @@ pub(super) enum Kernels {
     Pooled,
 }
 
-/// `GPURT_KERNELS`: `main` (the one kernel), `wavefront` or `pooled` forces the kernels of
-/// every colour frame; unset or empty, `wavefront_for` and `pooled_for` choose.
-pub(super) fn kernels_from_env() -> Result<Option<Kernels>> {
+impl Kernels {
+    /// Every kind, by the name `GPURT_KERNELS` takes.
+    pub const ALL: [Kernels; 3] = [Kernels::Main, Kernels::Wavefront, Kernels::Pooled];
+
+    /// The name `GPURT_KERNELS` (and `--stats`, and a tuning file) gives it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kernels::Main => "main",
+            Kernels::Wavefront => "wavefront",
+            Kernels::Pooled => "pooled",
+        }
+    }
+
+    /// The kernels named `name`.
+    pub fn from_name(name: &str) -> Option<Kernels> {
+        Kernels::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+/// The kernels of every colour frame: `GPURT_KERNELS` (`main`, `wavefront` or `pooled`)
+/// where set, else `chosen`; `wavefront_for` and `pooled_for` then say which frames
+/// can take them.
+pub(super) fn kernels_for(chosen: Kernels) -> Result<Kernels> {
     match std::env::var("GPURT_KERNELS").as_deref() {
-        Err(_) | Ok("") => Ok(None),
-        Ok("main") => Ok(Some(Kernels::Main)),
-        Ok("wavefront") => Ok(Some(Kernels::Wavefront)),
-        Ok("pooled") => Ok(Some(Kernels::Pooled)),
-        Ok(v) => Err(Error::Render(format!(
-            "GPURT_KERNELS={v}: expected main, wavefront or pooled"
-        ))),
+        Err(_) | Ok("") => Ok(chosen),
+        Ok(v) => Kernels::from_name(v).ok_or_else(|| {
+            Error::Render(format!(
+                "GPURT_KERNELS={v}: expected main, wavefront or pooled"
+            ))
+        }),
     }
 }
 
@@ -278,7 +327,9 @@ fn wave_fits(limits: &wgpu::Limits, shape: &Shape, paths: u64, lights: u32) -> b
 
 #[cfg(test)]
 mod tests {
-    use super::{Fetch, Shape, cut_for, fetch_by, gpu_shape, shape_for, wave_fits};
+    use super::{
+        Fetch, Kernels, Shape, cut_for, defaults, fetch_by, gpu_shape, shape_for, wave_fits,
+    };
     use crate::gpu::wavefront::wave_paths;
     use crate::gpu_types::{GpuGlobals, WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS};
 
@@ -343,34 +394,48 @@ mod tests {
         }
     }
 
-    /// Unset, a hardware adapter reads buffers, a software one textures, and a scene too
-    /// large for one buffer textures on any; set, `GPURT_FETCH` decides, even for such a
-    /// scene (whose upload is then refused with the limit named); anything else is an
-    /// error naming the variable.
+    /// Unset, the adapter's choice stands (buffers on hardware by default, textures on
+    /// software adapters), but a scene too large for one buffer reads textures; set,
+    /// `GPURT_FETCH` decides, even for such a scene (whose upload is then refused with
+    /// the limit named); anything else is an error naming the variable.
     #[test]
     fn the_fetch_follows_the_adapter_the_scene_and_the_variable() {
-        let native = cfg!(feature = "native");
-        let hardware = if native {
-            Fetch::Buffers
-        } else {
-            Fetch::Textures
+        let hardware = match cfg!(feature = "native") {
+            true => Fetch::Buffers,
+            false => Fetch::Textures,
         };
+        assert_eq!(defaults(false).fetch, hardware);
+        assert_eq!(defaults(true).fetch, Fetch::Textures);
         for unset in [None, Some("")] {
-            assert_eq!(fetch_by(unset, false, true).unwrap(), hardware);
-            assert_eq!(fetch_by(unset, true, true).unwrap(), Fetch::Textures);
-            assert_eq!(fetch_by(unset, false, false).unwrap(), Fetch::Textures);
+            for chosen in [Fetch::Textures, Fetch::Buffers] {
+                assert_eq!(fetch_by(unset, chosen, true).unwrap(), chosen);
+                assert_eq!(fetch_by(unset, chosen, false).unwrap(), Fetch::Textures);
+            }
         }
-        for (software, fit) in [(false, true), (true, true), (false, false)] {
-            let by = |v| fetch_by(Some(v), software, fit).unwrap();
+        for (chosen, fit) in [
+            (Fetch::Buffers, true),
+            (Fetch::Textures, true),
+            (Fetch::Buffers, false),
+        ] {
+            let by = |v| fetch_by(Some(v), chosen, fit).unwrap();
             assert_eq!(by("textures"), Fetch::Textures);
             assert_eq!(by("buffers"), Fetch::Buffers);
         }
-        let e = fetch_by(Some("texture"), false, true)
+        let e = fetch_by(Some("texture"), Fetch::Buffers, true)
             .unwrap_err()
             .to_string();
         assert!(
             e.contains("GPURT_FETCH=texture") && e.contains("textures or buffers"),
             "{e}"
         );
+    }
+
+    /// Every kind of kernels goes by its name and back.
+    #[test]
+    fn kernels_go_by_their_names() {
+        for k in Kernels::ALL {
+            assert_eq!(Kernels::from_name(k.name()), Some(k));
+        }
+        assert_eq!(Kernels::from_name("megakernel"), None);
     }
 }

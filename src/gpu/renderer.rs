@@ -19,18 +19,19 @@ use super::pipeline::{
     resume_group_layout,
 };
 use super::policy::{
-    Kernels, cut_for, fetch_for, kernels_from_env, pooled_for, shape_for, traversal_from_env,
-    wavefront_for,
+    Kernels, Strategy, cut_for, defaults, fetch_for, kernels_for, pooled_for, shape_for,
+    traversal_for, wavefront_for,
 };
 use super::scene::{GpuScene, bind};
 use super::shaders::Fetch;
 use super::specialization::Specialization;
 use super::trace::encode_band;
+use super::tuning::{self, Tuning};
 use super::upload::{self, SceneData, check_sizes, scene_bytes, upload_scene};
 use super::wavefront::{Wave, WavePipelines, wave_binds, wave_paths};
 use crate::counters::gpu_node_bytes;
 use crate::error::Result;
-use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
+use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH, TRAVERSAL_NAMES};
 use crate::pack::SceneBuffers;
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
@@ -52,6 +53,8 @@ pub struct GpuRenderer {
     traversal: u32,
     /// How its shaders read the scene's nodes, primitives and normals.
     fetch: Fetch,
+    /// What `gpurt tune` measured on the adapter, where this renderer took it.
+    tuning: Option<Tuning>,
     /// The wavefront kernels' pipelines, shared with the uploaded scenes, where the
     /// adapter binds them (`wave_binds`), and whether colour frames take them (`None`: as
     /// `policy::wavefront_for` chooses).
@@ -75,10 +78,12 @@ pub struct GpuRenderer {
 impl GpuRenderer {
     /// Sets up the layouts. Shader modules and pipelines are made on first use by `render` (or
     /// `prepare`). `adapter_info` keys the on-disk pipeline cache, used when the device has
-    /// `PIPELINE_CACHE` (pass `None` to skip the cache).
+    /// `PIPELINE_CACHE`, and the adapter's tuning (`tuning::load`): pass `None` to skip
+    /// both, for `policy::defaults`. A tuning file that cannot be read is an error.
     pub fn new(device: &wgpu::Device, adapter_info: Option<&wgpu::AdapterInfo>) -> Result<Self> {
-        let fetch = fetch_for(Device::new(device).runs_on_cpu(), true)?;
-        Self::fetching(device, adapter_info, fetch)
+        Self::setup(device, adapter_info, |_, chosen| {
+            fetch_for(chosen.fetch, true)
+        })
     }
 
     /// `new`, for frames of `scene`: where its nodes, primitives or normals would not fit
@@ -89,10 +94,11 @@ impl GpuRenderer {
         adapter_info: Option<&wgpu::AdapterInfo>,
         scene: &SceneBuffers,
     ) -> Result<Self> {
-        let gpu = Device::new(device);
-        let traversal = scene.traversal_for(traversal_from_env()?);
-        let fit = upload::fits_buffers(&gpu.limits(), scene, traversal);
-        Self::fetching(device, adapter_info, fetch_for(gpu.runs_on_cpu(), fit)?)
+        Self::setup(device, adapter_info, |gpu, chosen| {
+            let traversal = scene.traversal_for(traversal_for(chosen.traversal)?);
+            let fit = upload::fits_buffers(&gpu.limits(), scene, traversal);
+            fetch_for(chosen.fetch, fit)
+        })
     }
 
     /// Whether this renderer reads `scene` as `for_scene` would have it: false only where
@@ -104,15 +110,29 @@ impl GpuRenderer {
     }
 
     /// `new`, its shaders reading the scene's nodes, primitives and normals as `fetch`
-    /// says whatever the adapter (`policy::fetch_for` chooses for `new`).
+    /// says whatever the adapter and its tuning.
     pub fn fetching(
         device: &wgpu::Device,
         adapter_info: Option<&wgpu::AdapterInfo>,
         fetch: Fetch,
     ) -> Result<Self> {
+        Self::setup(device, adapter_info, |_, _| Ok(fetch))
+    }
+
+    /// A renderer taking the adapter's tuning where `adapter_info` is given and one is
+    /// kept, else `policy::defaults`, each overridden from the environment, and reading
+    /// the scene as `fetch` says given that strategy.
+    fn setup(
+        device: &wgpu::Device,
+        adapter_info: Option<&wgpu::AdapterInfo>,
+        fetch: impl FnOnce(&Device, &Strategy) -> Result<Fetch>,
+    ) -> Result<Self> {
         let start = Instant::now();
         let gpu = &Device::new(device);
         let software = gpu.runs_on_cpu();
+        let tuning = adapter_info.map(tuning::load).transpose()?.flatten();
+        let chosen = tuning.as_ref().map_or(defaults(software), |t| t.strategy);
+        let fetch = fetch(gpu, &chosen)?;
         let cache_file = DiskCache::file(gpu, adapter_info);
         let layout = bind_group_layout(gpu, fetch);
         let resume_layout = resume_group_layout(gpu);
@@ -133,7 +153,7 @@ impl GpuRenderer {
             })?),
             false => None,
         };
-        let kernels = kernels_from_env()?;
+        let kernels = kernels_for(chosen.kernels)?;
         Ok(GpuRenderer {
             resume: Arc::new(ResumePipelines {
                 layout: resume_layout,
@@ -149,11 +169,12 @@ impl GpuRenderer {
             compile_time: Mutex::new(start.elapsed()),
             software,
             shape: shape_for(software)?,
-            traversal: traversal_from_env()?,
+            traversal: traversal_for(chosen.traversal)?,
             fetch,
+            tuning,
             wave,
-            wavefront: kernels.map(|k| k == Kernels::Wavefront),
-            pooled: kernels == Some(Kernels::Pooled),
+            wavefront: Some(kernels == Kernels::Wavefront),
+            pooled: kernels == Kernels::Pooled,
             shadow_rays: true,
             layer_rows: upload::layer_rows(&gpu.limits()),
             dispatch_budget: (!software).then_some(DISPATCH_BUDGET),
@@ -222,6 +243,41 @@ impl GpuRenderer {
     /// How this renderer's shaders read the scene's nodes, primitives and normals.
     pub fn fetch(&self) -> Fetch {
         self.fetch
+    }
+
+    /// The walk, kernels and fetch this renderer takes (each scene's walk as
+    /// `SceneBuffers::traversal_for` allows; the kernels where a frame can take them).
+    pub fn strategy(&self) -> Strategy {
+        let kernels = match (self.pooled, self.wavefront) {
+            (true, _) => Kernels::Pooled,
+            (false, Some(true)) => Kernels::Wavefront,
+            _ => Kernels::Main,
+        };
+        Strategy {
+            traversal: self.traversal,
+            kernels,
+            fetch: self.fetch,
+        }
+    }
+
+    /// The adapter's tuning, where this renderer took it (`tuning::load`).
+    pub fn tuning(&self) -> Option<&Tuning> {
+        self.tuning.as_ref()
+    }
+
+    /// `strategy` in words, and where it comes from, for `--stats`.
+    pub fn describe_strategy(&self) -> String {
+        let s = self.strategy();
+        let from = match &self.tuning {
+            Some(t) => format!("tuned on {}; {}", t.measured, t.file.display()),
+            None => "the defaults; `gpurt tune` measures this adapter".to_string(),
+        };
+        format!(
+            "walk {}, kernels {}, scene data from {} ({from})",
+            TRAVERSAL_NAMES[s.traversal as usize],
+            s.kernels.name(),
+            s.fetch.name()
+        )
     }
 
     /// Compiles (once) the pipeline for a scene and render settings. The first time, the

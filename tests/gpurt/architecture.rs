@@ -21,7 +21,7 @@ use graph::{Arrow, Graph, Module, circles};
 /// layers below its own, and those of its own layer as long as no circle forms.
 const LAYERS: &[&[&str]] = &[
     &["main", "cli"],
-    &["run", "batch", "shard", "bench", "info"],
+    &["run", "batch", "shard", "bench", "tune", "info"],
     &["view"],
     &["session"],
     &["agreement", "compare"],

@@ -1,6 +1,6 @@
 //! The `gpurt` command as a user runs it: exit codes, messages, files written or not.
 //! `render` (single renders and what they write), `errors` (refusals, interrupts, GPU
-//! faults), `tools` (`info`, `diff`, `bench`), `farm` (batches, shards, `merge`), `shell`
+//! faults), `tools` (`info`, `diff`, `bench`, `tune`), `farm` (batches, shards, `merge`), `shell`
 //! (completions, the manual page, suggestions, threads).
 
 mod errors;

@@ -1,11 +1,11 @@
-//! `gpurt info`, `gpurt diff` and `gpurt bench`: the documented JSON, exit codes and heat
-//! maps, the shading model bench times, and a reader that goes away ending the command
-//! quietly.
+//! `gpurt info`, `gpurt diff`, `gpurt bench` and `gpurt tune`: the documented JSON, exit
+//! codes and heat maps, the shading model bench times, the tuning renders take, and a
+//! reader that goes away ending the command quietly.
 
 use std::process::Command;
 
 use crate::common::inputs::SCENE;
-use crate::common::{gpurt, stderr, workdir};
+use crate::common::{gpu_context, gpurt, stderr, workdir};
 
 #[test]
 fn info_json_has_the_documented_keys() {
@@ -280,4 +280,143 @@ fn bench_times_the_shading_model_it_is_given() {
         "{table}"
     );
     assert!(table.lines().all(|l| cells(l) == cells(header)), "{table}");
+}
+
+/// `gpurt tune`: every candidate is timed on every scene and compared with the defaults'
+/// image, the one chosen is kept in the cache directory, and renders on the adapter take
+/// what is kept there (`--stats` says so): with the same image, unless the environment
+/// overrides it; a kept file for another version of gpurt is passed over, and a broken
+/// one refused at its line and column with nothing written.
+#[test]
+fn tune_keeps_a_strategy_that_renders_take() {
+    if gpu_context().is_none() {
+        return;
+    }
+    let d = workdir("tune");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let mirrors = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/mirrors.nff");
+    let run = |args: &[&str], env: &[(&str, &str)]| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_gpurt"));
+        c.args(args)
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", d.join("cache"));
+        for (k, v) in env {
+            c.env(k, v);
+        }
+        c.output().expect("gpurt runs")
+    };
+    let tune = [
+        "tune", "ball.nff", mirrors, "--size", "24x16", "--frames", "1",
+    ];
+    let o = run(&tune, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout).into_owned();
+    for scene in ["ball.nff", "mirrors.nff"] {
+        let rows = table
+            .lines()
+            .filter(|l| l.starts_with(&format!("| {scene} |")));
+        assert_eq!(rows.count(), 8, "{table}");
+    }
+    // Every candidate renders what the defaults render, so none is ruled out.
+    assert!(!table.contains("differ"), "{table}");
+    let chosen = table
+        .lines()
+        .find_map(|l| l.strip_prefix("chosen: "))
+        .unwrap_or_else(|| panic!("{table}"));
+    let [kernels, walk, fetch] = [0, 1, 2].map(|i| {
+        let word = chosen.split([',', ' ']).filter(|w| !w.is_empty()).nth(i);
+        word.unwrap().to_string()
+    });
+    let kept: Vec<_> = std::fs::read_dir(d.join("cache"))
+        .unwrap()
+        .flatten()
+        .collect();
+    assert_eq!(kept.len(), 1, "one file for the one adapter");
+    let file = kept[0].path();
+    let text = std::fs::read_to_string(&file).unwrap();
+    for line in [
+        format!("kernels = {kernels}"),
+        format!("walk = {walk}"),
+        format!("fetch = {fetch}"),
+    ] {
+        assert!(text.contains(&line), "{line} in\n{text}");
+    }
+
+    // A render takes what is kept: here a strategy off the defaults, for the same image.
+    let kept = text
+        .lines()
+        .map(|l| match l.split_once(" = ").map(|(k, _)| k) {
+            Some("kernels") => "kernels = pooled",
+            Some("walk") => "walk = qwide",
+            Some("fetch") => "fetch = buffers",
+            _ => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&file, &kept).unwrap();
+    let render = |out: &str, env: &[(&str, &str)]| {
+        let o = run(
+            &[
+                mirrors,
+                "-o",
+                out,
+                "--backend",
+                "gpu",
+                "--stats",
+                "--width",
+                "48",
+                "--height",
+                "32",
+            ],
+            env,
+        );
+        (o.status.code(), stderr(&o))
+    };
+    let strategy = |err: &str| {
+        let line = err.lines().find(|l| l.starts_with("strategy "));
+        line.unwrap_or_else(|| panic!("{err}")).to_string()
+    };
+    let (code, err) = render("tuned.png", &[]);
+    assert_eq!(code, Some(0), "{err}");
+    let s = strategy(&err);
+    assert!(
+        s.contains(
+            "walk qwide, kernels pooled, scene data from buffers (tuned on 2 scenes at 24x16"
+        ),
+        "{s}"
+    );
+    let (code, err) = render("defaults.png", &[("GPURT_CACHE_DIR", "")]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        strategy(&err).contains("(the defaults; `gpurt tune` measures this adapter)"),
+        "{err}"
+    );
+    let o = gpurt(&["diff", "tuned.png", "defaults.png"], &d);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stdout));
+    // The environment still overrides it.
+    let (_, err) = render(
+        "env.png",
+        &[("GPURT_KERNELS", "main"), ("GPURT_TRAVERSAL", "wide")],
+    );
+    assert!(
+        strategy(&err).contains("walk wide, kernels main, scene data from buffers (tuned"),
+        "{err}"
+    );
+
+    // Another version's file is passed over.
+    let older = kept.replace("gpurt = ", "gpurt = 0.0.0-");
+    std::fs::write(&file, &older).unwrap();
+    let (code, err) = render("older.png", &[]);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(strategy(&err).contains("(the defaults;"), "{err}");
+
+    // A broken one stops the render, naming its line and column, before any image.
+    let broken = kept.replace("walk = qwide", "walk = quad");
+    std::fs::write(&file, &broken).unwrap();
+    let line = broken.lines().position(|l| l.starts_with("walk")).unwrap() + 1;
+    let (code, err) = render("broken.png", &[]);
+    assert_eq!(code, Some(2), "{err}");
+    let at = format!("{}:{line}:8: expected one of", file.display());
+    assert!(err.contains(&at), "{at} in {err}");
+    assert!(!d.join("broken.png").exists());
 }

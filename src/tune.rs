@@ -1,0 +1,286 @@
+//! `gpurt tune`: which walk of the BVH, kernels and way of reading the scene trace the
+//! given scenes fastest on this adapter, kept for every later render on it
+//! (`gpu::tuning`). The defaults (`gpu::defaults`) were measured on lavapipe and on the
+//! H100 and H200; another adapter, or another workload, may be faster another way, and
+//! this measures it on the user's own hardware and scenes.
+//!
+//! Every candidate traces every scene once to be compared with the defaults' image
+//! (under the GPU-vs-CPU limits, which the candidates meet against the CPU in the
+//! suite), and is then timed as `gpurt bench` times a frame (`bench::time_frames`). A
+//! candidate whose image differs on any scene is never chosen. The fastest over all the
+//! scenes (the geometric mean of its frame times over the defaults') is kept where it is
+//! at least `MARGIN` faster than the defaults; otherwise the defaults are kept, so that
+//! timing noise does not move a render off what was measured with care.
+
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+use crate::bench::time_frames;
+use crate::compare::{self, Thresholds};
+use crate::error::{Error, Result};
+use crate::frame::{self, Overrides, RenderOptions};
+use crate::gpu::shaders::Fetch;
+use crate::gpu::{self, GpuRenderer, Kernels, Strategy};
+use crate::gpu_types::{TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
+use crate::run;
+use crate::scene::ReadOptions;
+use crate::{out, outln};
+
+/// How much faster (as a fraction of the defaults' time) the fastest candidate must be to
+/// be kept instead of the defaults, so that one no faster but for timing noise is not.
+pub const MARGIN: f64 = 0.03;
+
+/// What to measure.
+pub struct TuneConfig {
+    pub scenes: Vec<PathBuf>,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub depth: u32,
+    /// Timed frames per scene and candidate; the median is kept.
+    pub frames: u32,
+    pub adapter: Option<String>,
+    pub read: ReadOptions,
+}
+
+/// The strategies tried: the defaults first, then every other way of the two kernels
+/// (`main`, `pooled`), the two four-wide walks (`wide`, `qwide`) and the two fetches.
+/// Left out, as slower on every adapter measured by large factors: the wavefront kernels
+/// (1.3 to 1.7 times the one kernel's time on lavapipe, 2.8 to 41 times on an H200) and
+/// the single, pairs and compressed eight-wide walks (docs/gpu.md); `GPURT_KERNELS` and
+/// `GPURT_TRAVERSAL` still reach them.
+pub fn candidates(defaults: Strategy) -> Vec<Strategy> {
+    let mut all = vec![defaults];
+    for kernels in [Kernels::Main, Kernels::Pooled] {
+        for traversal in [TRAVERSAL_WIDE, TRAVERSAL_QWIDE] {
+            for fetch in [Fetch::Textures, Fetch::Buffers] {
+                let s = Strategy {
+                    traversal,
+                    kernels,
+                    fetch,
+                };
+                if !all.contains(&s) {
+                    all.push(s);
+                }
+            }
+        }
+    }
+    all
+}
+
+/// One candidate's figures over the scenes.
+#[derive(Clone, Debug, Default)]
+pub struct Measured {
+    /// Its frame time over the defaults' on each scene so far.
+    pub ratios: Vec<f64>,
+    /// Whether its image agreed with the defaults' on every scene.
+    pub agrees: bool,
+}
+
+impl Measured {
+    /// The geometric mean of its time over the defaults'.
+    pub fn score(&self) -> f64 {
+        let logs: f64 = self.ratios.iter().map(|r| r.ln()).sum();
+        (logs / self.ratios.len().max(1) as f64).exp()
+    }
+}
+
+/// The candidate to keep: the fastest of those whose images agreed, where it is at least
+/// `MARGIN` faster than the defaults (`measured[0]`), else the defaults.
+pub fn choose(measured: &[Measured]) -> usize {
+    let best = (1..measured.len())
+        .filter(|&i| measured[i].agrees)
+        .min_by(|&a, &b| measured[a].score().total_cmp(&measured[b].score()));
+    match best {
+        Some(i) if measured[i].score() <= 1.0 - MARGIN => i,
+        _ => 0,
+    }
+}
+
+/// `strategy` in a table's cells: kernels, walk, fetch.
+fn cells(s: &Strategy) -> String {
+    format!(
+        "{} | {} | {}",
+        s.kernels.name(),
+        TRAVERSAL_NAMES[s.traversal as usize],
+        s.fetch.name()
+    )
+}
+
+/// Measures every candidate on every scene, prints a row each and the verdict, and keeps
+/// the one chosen for the adapter (where there is a cache directory).
+pub fn run(config: &TuneConfig) -> Result<()> {
+    if config.scenes.is_empty() {
+        return Err(Error::Render("gpurt tune: no scene to measure".into()));
+    }
+    let ctx = gpu::open(config.adapter.as_deref())?;
+    eprintln!("adapter     {}", ctx.describe());
+    let defaults = gpu::defaults(gpu::is_software(&ctx.info));
+    let candidates = candidates(defaults);
+    // One renderer a candidate for every scene, so that each compiles its pipelines once.
+    // Made without the adapter's info, so that neither a tuning kept before nor the
+    // environment's choices (which `with_*` override) stand in for a candidate.
+    let renderers = candidates
+        .iter()
+        .map(|s| {
+            Ok(GpuRenderer::fetching(&ctx.device, None, s.fetch)?
+                .with_traversal(s.traversal)
+                .with_wavefront(s.kernels == Kernels::Wavefront)
+                .with_pooled(s.kernels == Kernels::Pooled))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let mut measured = vec![
+        Measured {
+            agrees: true,
+            ..Measured::default()
+        };
+        candidates.len()
+    ];
+    let overrides = Overrides {
+        width: Some(config.width),
+        height: Some(config.height),
+        spp: Some(config.spp),
+        max_depth: Some(config.depth),
+        ..Overrides::default()
+    };
+    outln!("| scene | kernels | walk | fetch | GPU frame ms | of the defaults' time | image |");
+    outln!("|---|---|---|---|---:|---:|---|");
+    let never = AtomicBool::new(false);
+    for path in &config.scenes {
+        let opts =
+            |c: &crate::scene::Camera| RenderOptions::for_camera(c).with_overrides(&overrides);
+        let prepared = run::prepare(path, None, &config.read, |c| opts(c).samples())?;
+        let buffers = &prepared.buffers;
+        let globals = frame::globals(buffers, &opts(&buffers.camera));
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        let mut reference = None;
+        let mut reference_time = 0.0;
+        for (i, renderer) in renderers.iter().enumerate() {
+            let frame = renderer.frame(buffers, &globals);
+            renderer.prepare(&ctx.device, &ctx.queue, buffers, &globals)?;
+            let scene = renderer.upload(&ctx.device, &ctx.queue, buffers, &globals)?;
+            let (film, _) = gpu::trace(&ctx.device, &ctx.queue, &scene, &|_| {}, &never)?;
+            let image = film.for_display(globals.aov).to_rgb8();
+            let agrees = match &reference {
+                None => Ok(()),
+                Some(r) => {
+                    let stats = compare::diff(r, &image, Thresholds::GPU_VS_CPU.tolerance_255)?;
+                    Thresholds::GPU_VS_CPU.check(&stats)
+                }
+            };
+            let time = time_frames(&ctx.device, &ctx.queue, &scene, config.frames)?.as_secs_f64();
+            if reference.is_none() {
+                (reference, reference_time) = (Some(image), time);
+            }
+            let ratio = time / reference_time;
+            let m = &mut measured[i];
+            m.ratios.push(ratio);
+            m.agrees &= agrees.is_ok();
+            let walk = TRAVERSAL_NAMES[frame.traversal as usize];
+            let kernels = renderer.kernels(buffers, &globals);
+            let image = match agrees {
+                Ok(()) => "as the defaults'".to_string(),
+                Err(why) => format!("differs: {why}"),
+            };
+            outln!(
+                "| {name} | {kernels} | {walk} | {} | {:.3} | {ratio:.3} | {image} |",
+                candidates[i].fetch.name(),
+                time * 1e3
+            );
+        }
+    }
+    outln!("");
+    outln!("| kernels | walk | fetch | of the defaults' time, geometric mean | images |");
+    outln!("|---|---|---|---:|---|");
+    for (s, m) in candidates.iter().zip(&measured) {
+        let images = match m.agrees {
+            true => "as the defaults'",
+            false => "one differed: never chosen",
+        };
+        outln!("| {} | {:.3} | {images} |", cells(s), m.score());
+    }
+    outln!("");
+    let chosen = choose(&measured);
+    let scenes = config.scenes.len();
+    let setting = format!(
+        "{scenes} scene{} at {}x{}, {} spp, depth {}",
+        if scenes == 1 { "" } else { "s" },
+        config.width,
+        config.height,
+        config.spp,
+        config.depth
+    );
+    let verdict = match chosen {
+        0 => format!(
+            "{setting}: the defaults, nothing was {:.0}% faster",
+            MARGIN * 100.0
+        ),
+        i => format!(
+            "{setting}: {:.3} of the defaults' time",
+            measured[i].score()
+        ),
+    };
+    let strategy = candidates[chosen];
+    out!(
+        "chosen: {} ({verdict})\n",
+        cells(&strategy).replace(" |", ",")
+    );
+    match gpu::tuning::save(&ctx.info, strategy, &verdict)? {
+        Some(file) => eprintln!(
+            "kept in {}: renders on this adapter take it",
+            file.display()
+        ),
+        None => eprintln!("not kept: GPURT_CACHE_DIR is empty, so there is no cache directory"),
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn m(ratios: &[f64], agrees: bool) -> Measured {
+        Measured {
+            ratios: ratios.to_vec(),
+            agrees,
+        }
+    }
+
+    /// The fastest agreeing candidate is kept, by the geometric mean of its ratios, and
+    /// only where it beats the defaults by the margin; one that differed never is.
+    #[test]
+    fn the_fastest_agreeing_candidate_is_kept_past_the_margin() {
+        let defaults = m(&[1.0, 1.0], true);
+        // 0.5 and 2.0: a geometric mean of 1, not faster; 0.9 and 0.9 is.
+        let all = [defaults.clone(), m(&[0.5, 2.0], true), m(&[0.9, 0.9], true)];
+        assert_eq!(choose(&all), 2);
+        assert!((all[1].score() - 1.0).abs() < 1e-12);
+        // The fastest differed: the next fastest.
+        let all = [
+            defaults.clone(),
+            m(&[0.5, 0.5], false),
+            m(&[0.9, 0.9], true),
+        ];
+        assert_eq!(choose(&all), 2);
+        // Within the margin: the defaults stay.
+        let near = 1.0 - MARGIN / 2.0;
+        let all = [defaults.clone(), m(&[near, near], true)];
+        assert_eq!(choose(&all), 0);
+        assert_eq!(choose(std::slice::from_ref(&defaults)), 0);
+    }
+
+    /// The defaults come first, every candidate once, and on any adapter's defaults the
+    /// same eight.
+    #[test]
+    fn the_candidates_start_with_the_defaults() {
+        for software in [false, true] {
+            let d = gpu::defaults(software);
+            let c = candidates(d);
+            assert_eq!(c[0], d);
+            assert_eq!(c.len(), 8);
+            for (i, s) in c.iter().enumerate() {
+                assert!(!c[..i].contains(s), "{s:?} twice");
+            }
+        }
+    }
+}
