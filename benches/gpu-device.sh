@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [pooled] [qwide] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [pooled] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -19,7 +19,9 @@
 # then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
 # through `main` and `pooled`. `qwide` times the seven scenes on the quantised four-wide
 # walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
-# `pooled` step's rows on the wide walk. `images` renders three scenes at 4K with the scene
+# `pooled` step's rows on the wide walk. `tune` runs `gpurt tune` on the seven scenes at
+# 1080p and 4K at 1 spp and at 4K at 16 spp, each into a cache directory of its own under
+# $OUT (tune-SIZE-SPP/, the kept file included; tune-*.md the tables). `images` renders three scenes at 4K with the scene
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
 # for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
@@ -28,7 +30,7 @@
 # (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
 # .device/spd) and renders each at 3840x2160 on the GPU and on the CPU backend.
-# SMOKE=1 runs the `wavefront`, `pooled` and `images` steps at thumbnail sizes, e.g. here on lavapipe
+# SMOKE=1 runs the `wavefront`, `pooled`, `qwide`, `tune` and `images` steps at thumbnail sizes, e.g. here on lavapipe
 # after packing (`SMOKE=1 GPURT_ADAPTER=llvmpipe benches/gpu-device.sh wavefront images`),
 # to check the script before a device runs it.
 set -uo pipefail
@@ -141,6 +143,21 @@ if [[ $what == *qwide* ]]; then
         echo "qwide, $k: exit $?"
         cat "$OUT/qwide-$k.md"
         grep -m1 '^traversal' "$OUT/qwide-$k.log"
+    done
+fi
+
+if [[ $what == *tune* ]]; then
+    # Which of the eight strategies `gpurt tune` tries is fastest on this adapter, by
+    # setting; each kept file comes back in its own cache directory.
+    echo "== tune"
+    for setting in "${hd[0]}x${hd[1]} 1" "${uhd[0]}x${uhd[1]} 1" "${uhd[0]}x${uhd[1]} ${spps#*,}"; do
+        read -r size spp <<<"$setting"
+        GPURT_CACHE_DIR="$OUT/tune-$size-$spp" timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt \
+            tune "${scenes[@]}" --size "$size" --spp "$spp" --frames 3 >"$OUT/tune-$size-$spp.md" \
+            2>"$OUT/tune-$size-$spp.log"
+        echo "$size, $spp spp: exit $?"
+        grep -A10 '^| kernels' "$OUT/tune-$size-$spp.md"
+        grep '^chosen' "$OUT/tune-$size-$spp.md"
     done
 fi
 

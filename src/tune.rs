@@ -6,22 +6,25 @@
 //!
 //! Every candidate traces every scene once to be compared with the defaults' image
 //! (under the GPU-vs-CPU limits, which the candidates meet against the CPU in the
-//! suite), and is then timed as `gpurt bench` times a frame (`bench::time_frames`). A
-//! candidate whose image differs on any scene is never chosen. The fastest over all the
+//! suite), and is then timed in rounds that take every candidate in turn
+//! (`time_in_rounds`). A candidate whose image differs on any scene is never chosen. The fastest over all the
 //! scenes (the geometric mean of its frame times over the defaults') is kept where it is
 //! at least `MARGIN` faster than the defaults; otherwise the defaults are kept, so that
 //! timing noise does not move a render off what was measured with care.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 
-use crate::bench::time_frames;
+use web_time::Instant;
+
 use crate::compare::{self, Thresholds};
 use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::shaders::Fetch;
 use crate::gpu::{self, GpuRenderer, Kernels, Strategy};
-use crate::gpu_types::{TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
+use crate::gpu_types::{GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
+use crate::pack::SceneBuffers;
 use crate::run;
 use crate::scene::ReadOptions;
 use crate::{out, outln};
@@ -107,6 +110,48 @@ fn cells(s: &Strategy) -> String {
     )
 }
 
+/// The median time in seconds of a frame of `buffers` on each of `renderers`, on the
+/// device alone, from `rounds` rounds that each time one frame of every renderer in turn
+/// (the order turned by one each round), so that what drifts over the run (the clocks,
+/// other work on the machine) falls on every candidate alike. Each renderer uploads the
+/// scene afresh each round, so that no more than one upload is held at once, and traces
+/// one frame untimed before its timed one; the GPU is kept busy for a quarter of a
+/// second first, as `gpurt bench` does, since an idle GPU clocks down.
+fn time_in_rounds(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    renderers: &[GpuRenderer],
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+    rounds: u32,
+) -> Result<Vec<f64>> {
+    let n = renderers.len();
+    let mut times = vec![Vec::new(); n];
+    let first = renderers[0].upload(device, queue, buffers, globals)?;
+    let warm = Instant::now();
+    while warm.elapsed() < Duration::from_millis(250) {
+        gpu::trace_on_device(device, queue, &first)?;
+    }
+    drop(first);
+    for round in 0..rounds.max(1) as usize {
+        for k in 0..n {
+            let i = (k + round) % n;
+            let scene = renderers[i].upload(device, queue, buffers, globals)?;
+            gpu::trace_on_device(device, queue, &scene)?;
+            let t = Instant::now();
+            gpu::trace_on_device(device, queue, &scene)?;
+            times[i].push(t.elapsed().as_secs_f64());
+        }
+    }
+    Ok(times
+        .into_iter()
+        .map(|mut t| {
+            t.sort_by(f64::total_cmp);
+            t[t.len() / 2]
+        })
+        .collect())
+}
+
 /// Measures every candidate on every scene, prints a row each and the verdict, and keeps
 /// the one chosen for the adapter (where there is a cache directory).
 pub fn run(config: &TuneConfig) -> Result<()> {
@@ -153,39 +198,39 @@ pub fn run(config: &TuneConfig) -> Result<()> {
         let buffers = &prepared.buffers;
         let globals = frame::globals(buffers, &opts(&buffers.camera));
         let name = path.file_name().unwrap_or_default().to_string_lossy();
+        let (device, queue) = (&ctx.device, &ctx.queue);
+        // Each candidate's image against the defaults'.
         let mut reference = None;
-        let mut reference_time = 0.0;
-        for (i, renderer) in renderers.iter().enumerate() {
-            let frame = renderer.frame(buffers, &globals);
-            renderer.prepare(&ctx.device, &ctx.queue, buffers, &globals)?;
-            let scene = renderer.upload(&ctx.device, &ctx.queue, buffers, &globals)?;
-            let (film, _) = gpu::trace(&ctx.device, &ctx.queue, &scene, &|_| {}, &never)?;
+        let mut agrees = Vec::with_capacity(renderers.len());
+        for renderer in &renderers {
+            renderer.prepare(device, queue, buffers, &globals)?;
+            let scene = renderer.upload(device, queue, buffers, &globals)?;
+            let (film, _) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
             let image = film.for_display(globals.aov).to_rgb8();
-            let agrees = match &reference {
+            agrees.push(match &reference {
                 None => Ok(()),
                 Some(r) => {
                     let stats = compare::diff(r, &image, Thresholds::GPU_VS_CPU.tolerance_255)?;
                     Thresholds::GPU_VS_CPU.check(&stats)
                 }
-            };
-            let time = time_frames(&ctx.device, &ctx.queue, &scene, config.frames)?.as_secs_f64();
-            if reference.is_none() {
-                (reference, reference_time) = (Some(image), time);
-            }
-            let ratio = time / reference_time;
-            let m = &mut measured[i];
-            m.ratios.push(ratio);
-            m.agrees &= agrees.is_ok();
-            let walk = TRAVERSAL_NAMES[frame.traversal as usize];
+            });
+            reference.get_or_insert(image);
+        }
+        let times = time_in_rounds(device, queue, &renderers, buffers, &globals, config.frames)?;
+        for (i, renderer) in renderers.iter().enumerate() {
+            let ratio = times[i] / times[0];
+            measured[i].ratios.push(ratio);
+            measured[i].agrees &= agrees[i].is_ok();
+            let walk = TRAVERSAL_NAMES[renderer.frame(buffers, &globals).traversal as usize];
             let kernels = renderer.kernels(buffers, &globals);
-            let image = match agrees {
+            let image = match &agrees[i] {
                 Ok(()) => "as the defaults'".to_string(),
                 Err(why) => format!("differs: {why}"),
             };
             outln!(
                 "| {name} | {kernels} | {walk} | {} | {:.3} | {ratio:.3} | {image} |",
                 candidates[i].fetch.name(),
-                time * 1e3
+                times[i] * 1e3
             );
         }
     }

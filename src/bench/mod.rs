@@ -72,7 +72,7 @@ fn median(mut times: Vec<Duration>) -> Duration {
 /// The median time of `frames` frames (at least one) of `scene` on the device alone,
 /// after a quarter of a second of warm-up frames: a GPU idle for a while (the CPU rows
 /// run in between) clocks down.
-pub fn time_frames(
+fn time_frames(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &gpu::GpuScene,
