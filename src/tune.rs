@@ -188,8 +188,9 @@ pub fn run(config: &TuneConfig) -> Result<()> {
         max_depth: Some(config.depth),
         ..Overrides::default()
     };
-    outln!("| scene | kernels | walk | fetch | GPU frame ms | of the defaults' time | image |");
-    outln!("|---|---|---|---|---:|---:|---|");
+    // The table's header waits for the first scene, so that a scene that cannot be read
+    // first is an error alone.
+    let mut header = true;
     let never = AtomicBool::new(false);
     for path in &config.scenes {
         let opts =
@@ -217,6 +218,12 @@ pub fn run(config: &TuneConfig) -> Result<()> {
             reference.get_or_insert(image);
         }
         let times = time_in_rounds(device, queue, &renderers, buffers, &globals, config.frames)?;
+        if std::mem::take(&mut header) {
+            outln!(
+                "| scene | kernels | walk | fetch | GPU frame ms | of the defaults' time | image |"
+            );
+            outln!("|---|---|---|---|---:|---:|---|");
+        }
         for (i, renderer) in renderers.iter().enumerate() {
             let ratio = times[i] / times[0];
             measured[i].ratios.push(ratio);

@@ -419,4 +419,12 @@ fn tune_keeps_a_strategy_that_renders_take() {
     let at = format!("{}:{line}:8: expected one of", file.display());
     assert!(err.contains(&at), "{at} in {err}");
     assert!(!d.join("broken.png").exists());
+
+    // A scene that cannot be read is an error alone: no table, nothing kept.
+    std::fs::write(d.join("bad.nff"), "v\nfrom 0 0 1\nbogus\n").unwrap();
+    std::fs::remove_file(&file).unwrap();
+    let o = run(&["tune", "bad.nff", "--size", "8x8", "--frames", "1"], &[]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.nff:3:1: "), "{}", stderr(&o));
+    assert!(o.stdout.is_empty() && !file.exists());
 }
