@@ -12,6 +12,7 @@
 //! `Shard` (`I/N`, parsed here) is also what a batch run as a job array takes its share
 //! of scenes by (`batch`).
 
+use std::io::Read;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -132,9 +133,23 @@ pub fn digest(scene: &Path, view: Option<&Path>, settings: &str) -> Result<Strin
             h = (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
         }
     };
-    eat(&std::fs::read(scene).map_err(|e| Error::io(scene, e))?);
+    // A file through a buffer of its own size at most, never whole: a scene may be
+    // gigabytes.
+    let mut eat_file = |path: &Path| -> Result<()> {
+        let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut buf = [0u8; 1 << 16];
+        loop {
+            match file.read(&mut buf) {
+                Ok(0) => return Ok(()),
+                Ok(n) => eat(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(Error::io(path, e)),
+            }
+        }
+    };
+    eat_file(scene)?;
     if let Some(v) = view {
-        eat(&std::fs::read(v).map_err(|e| Error::io(v, e))?);
+        eat_file(v)?;
     }
     eat(settings.as_bytes());
     Ok(format!("{h:016x}"))
@@ -344,24 +359,37 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
     // In shard order, which is row order (tiles) or sample order (samples).
     for m in have.into_iter().flatten() {
         let data = base(dir, m.shard).with_extension("rgbf32");
-        let bytes = std::fs::read(&data).map_err(|e| Error::io(&data, e))?;
+        let file = std::fs::File::open(&data).map_err(|e| Error::io(&data, e))?;
+        let len = file.metadata().map_err(|e| Error::io(&data, e))?.len();
         let images = match m.by {
             By::Tiles => 1,
             By::Samples => m.samples.len(),
         };
-        let want = images * m.rows.len() * w * 12;
-        if bytes.len() != want {
+        let want = (images * m.rows.len() * w * 12) as u64;
+        if len != want {
             return Err(Error::Render(format!(
-                "{}: {} bytes, expected {want} for rows {:?} and samples {:?}",
+                "{}: {len} bytes, expected {want} for rows {:?} and samples {:?}",
                 data.display(),
-                bytes.len(),
                 m.rows,
                 m.samples
             )));
         }
-        let values = bytes
-            .chunks_exact(12)
-            .map(|p| [0, 4, 8].map(|o| f32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]])));
+        // Streamed a pixel at a time through a buffer, never read whole: a shard of
+        // samples holds a whole frame for each of its samples.
+        let mut reader = std::io::BufReader::with_capacity(1 << 20, file);
+        let mut failed = None;
+        let values = std::iter::from_fn(|| {
+            let mut p = [0u8; 12];
+            match reader.read_exact(&mut p) {
+                Ok(()) => Some(
+                    [0, 4, 8].map(|o| f32::from_le_bytes([p[o], p[o + 1], p[o + 2], p[o + 3]])),
+                ),
+                Err(e) => {
+                    failed = Some(e);
+                    None
+                }
+            }
+        });
         let band = m.rows.start as usize * w..m.rows.end as usize * w;
         match m.by {
             By::Tiles => {
@@ -387,6 +415,11 @@ pub fn merge(dir: &Path) -> Result<(Accumulator, u32)> {
                     }
                 }
             }
+        }
+        // The file checked its length first, so only a file cut short since, or a failing
+        // disk, ends the pixels early.
+        if let Some(e) = failed {
+            return Err(Error::io(&data, e));
         }
     }
     accum.samples = first.spp;

@@ -245,6 +245,24 @@ fn image_shards_run_as_separate_processes_merge_into_the_single_process_image() 
     );
     assert!(!d.join("gap.png").exists());
 
+    // A shard's pixels cut short are named with the size they should have.
+    std::fs::create_dir_all(d.join("short")).unwrap();
+    for i in 0..3 {
+        for ext in ["json", "rgbf32"] {
+            let f = format!("shard-{i}-of-3.{ext}");
+            std::fs::copy(d.join("parts").join(&f), d.join("short").join(&f)).unwrap();
+        }
+    }
+    let cut = d.join("short/shard-2-of-3.rgbf32");
+    let len = std::fs::metadata(&cut).unwrap().len();
+    let file = std::fs::OpenOptions::new().write(true).open(&cut).unwrap();
+    file.set_len(len - 12).unwrap();
+    let o = gpurt(&["merge", "short", "-o", "short.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let expected = format!("shard-2-of-3.rgbf32: {} bytes, expected {len}", len - 12);
+    assert!(stderr(&o).contains(&expected), "{}", stderr(&o));
+    assert!(!d.join("short.png").exists());
+
     // A shard of another scene in the set is named as foreign.
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     shard("1/3", "gap", "ball.nff");
