@@ -17,6 +17,7 @@
 //! measured = 3 scenes at 1920x1080, 1 spp, depth 5: 0.81 of the defaults' time
 //! ```
 
+use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::cache::cache_dir;
@@ -52,6 +53,9 @@ fn adapter(info: &wgpu::AdapterInfo) -> String {
     )
 }
 
+/// The most a tuning file is read of: `save` writes a few hundred bytes.
+const MAX_BYTES: u64 = 64 << 10;
+
 /// The version of gpurt that reads and writes the files.
 const VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -63,12 +67,23 @@ pub fn load(info: &wgpu::AdapterInfo) -> Result<Option<Tuning>> {
     let Some(path) = file(info) else {
         return Ok(None);
     };
-    let text = match std::fs::read_to_string(&path) {
-        Ok(text) => text,
+    let file = match std::fs::File::open(&path) {
+        Ok(file) => file,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(Error::io(&path, e)),
     };
-    parse(&text, &path, &adapter(info))
+    // Read up to a bound: whatever the cache directory holds, no unbounded allocation.
+    let mut bytes = Vec::new();
+    file.take(MAX_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(&path, e))?;
+    if bytes.len() as u64 > MAX_BYTES {
+        return Err(Error::Scene {
+            file: path.display().to_string(),
+            msg: format!("longer than a tuning file can be ({MAX_BYTES} bytes); delete it"),
+        });
+    }
+    parse(&String::from_utf8_lossy(&bytes), &path, &adapter(info))
 }
 
 /// Writes `strategy` as the tuning of `info`'s adapter, `measured` saying what it was

@@ -419,6 +419,12 @@ fn tune_keeps_a_strategy_that_renders_take() {
     let at = format!("{}:{line}:8: expected one of", file.display());
     assert!(err.contains(&at), "{at} in {err}");
     assert!(!d.join("broken.png").exists());
+    // So is one longer than any tuning file, read no further than that.
+    std::fs::write(&file, format!("{kept}\n{}", "#".repeat(70 << 10))).unwrap();
+    let (code, err) = render("long.png", &[]);
+    assert_eq!(code, Some(2), "{err}");
+    assert!(err.contains("longer than a tuning file can be"), "{err}");
+    assert!(!d.join("long.png").exists());
 
     // A scene that cannot be read is an error alone: no table, nothing kept.
     std::fs::write(d.join("bad.nff"), "v\nfrom 0 0 1\nbogus\n").unwrap();
