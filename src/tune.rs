@@ -110,6 +110,36 @@ fn cells(s: &Strategy) -> String {
     )
 }
 
+/// Whether each of `renderers` traces the image of `buffers` the first (the defaults)
+/// traces, under the GPU-vs-CPU limits: `Err` says how it differs. Compiles each
+/// renderer's pipeline for the frame on the way.
+fn against_defaults(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    renderers: &[GpuRenderer],
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> Result<Vec<std::result::Result<(), String>>> {
+    let never = AtomicBool::new(false);
+    let mut reference = None;
+    let mut agrees = Vec::with_capacity(renderers.len());
+    for renderer in renderers {
+        renderer.prepare(device, queue, buffers, globals)?;
+        let scene = renderer.upload(device, queue, buffers, globals)?;
+        let (film, _) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
+        let image = film.for_display(globals.aov).to_rgb8();
+        agrees.push(match &reference {
+            None => Ok(()),
+            Some(r) => {
+                let stats = compare::diff(r, &image, Thresholds::GPU_VS_CPU.tolerance_255)?;
+                Thresholds::GPU_VS_CPU.check(&stats)
+            }
+        });
+        reference.get_or_insert(image);
+    }
+    Ok(agrees)
+}
+
 /// The median time in seconds of a frame of `buffers` on each of `renderers`, on the
 /// device alone, from `rounds` rounds that each time one frame of every renderer in turn
 /// (the order turned by one each round), so that what drifts over the run (the clocks,
@@ -191,7 +221,6 @@ pub fn run(config: &TuneConfig) -> Result<()> {
     // The table's header waits for the first scene, so that a scene that cannot be read
     // first is an error alone.
     let mut header = true;
-    let never = AtomicBool::new(false);
     for path in &config.scenes {
         let opts =
             |c: &crate::scene::Camera| RenderOptions::for_camera(c).with_overrides(&overrides);
@@ -200,23 +229,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
         let globals = frame::globals(buffers, &opts(&buffers.camera));
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         let (device, queue) = (&ctx.device, &ctx.queue);
-        // Each candidate's image against the defaults'.
-        let mut reference = None;
-        let mut agrees = Vec::with_capacity(renderers.len());
-        for renderer in &renderers {
-            renderer.prepare(device, queue, buffers, &globals)?;
-            let scene = renderer.upload(device, queue, buffers, &globals)?;
-            let (film, _) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
-            let image = film.for_display(globals.aov).to_rgb8();
-            agrees.push(match &reference {
-                None => Ok(()),
-                Some(r) => {
-                    let stats = compare::diff(r, &image, Thresholds::GPU_VS_CPU.tolerance_255)?;
-                    Thresholds::GPU_VS_CPU.check(&stats)
-                }
-            });
-            reference.get_or_insert(image);
-        }
+        let agrees = against_defaults(device, queue, &renderers, buffers, &globals)?;
         let times = time_in_rounds(device, queue, &renderers, buffers, &globals, config.frames)?;
         if std::mem::take(&mut header) {
             outln!(
