@@ -229,8 +229,15 @@ pub fn run(config: &TuneConfig) -> Result<()> {
         let globals = frame::globals(buffers, &opts(&buffers.camera));
         let name = path.file_name().unwrap_or_default().to_string_lossy();
         let (device, queue) = (&ctx.device, &ctx.queue);
+        let start = Instant::now();
         let agrees = against_defaults(device, queue, &renderers, buffers, &globals)?;
         let times = time_in_rounds(device, queue, &renderers, buffers, &globals, config.frames)?;
+        eprintln!(
+            "  {name}: BVH at {} quality, {} strategies compared and timed in {:.1} s",
+            buffers.bvh_quality.name(),
+            renderers.len(),
+            start.elapsed().as_secs_f64()
+        );
         if std::mem::take(&mut header) {
             outln!(
                 "| scene | kernels | walk | fetch | GPU frame ms | of the defaults' time | image |"
