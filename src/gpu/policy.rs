@@ -147,24 +147,19 @@ pub(super) fn pooled_for(forced: bool, globals: &GpuGlobals) -> bool {
     forced && globals.aov == AOV_COLOR
 }
 
-/// Whether a frame of `scene` traces through the wavefront kernels: as `forced` says
-/// when it says (`GPURT_KERNELS`, `GpuRenderer::with_wavefront`), else by what was
-/// measured. Colour frames without area lights only: an AOV traces eye rays alone, which
-/// one kernel does without idle lanes, and an area light's samples draw from a path's
-/// random stream in the depth-first order of its ray tree, which the wavefront's rounds
-/// (a generation of rays each) cannot follow.
+/// Whether a frame of `scene` traces through the wavefront kernels, where the
+/// renderer's kernels are the wavefront ones (`wavefront`: `GPURT_KERNELS`, a tuning,
+/// `GpuRenderer::with_wavefront`). Colour frames without area lights only: an AOV traces
+/// eye rays alone, which one kernel does without idle lanes, and an area light's samples
+/// draw from a path's random stream in the depth-first order of its ray tree, which the
+/// wavefront's rounds (a generation of rays each) cannot follow.
 ///
 /// Measured (docs/gpu.md, "The wavefront kernels"): the one kernel is 1.3 to 1.7 times
 /// faster than the kernels over queues of rays on lavapipe, and 2.8 to 41 times on an
-/// H200 (seven scenes, 1080p and 4K, 1 and 16 spp), so every adapter keeps it.
-pub(super) fn wavefront_for(
-    forced: Option<bool>,
-    _software: bool,
-    scene: &SceneBuffers,
-    globals: &GpuGlobals,
-) -> bool {
+/// H200 (seven scenes, 1080p and 4K, 1 and 16 spp), so no adapter's defaults take them.
+pub(super) fn wavefront_for(wavefront: bool, scene: &SceneBuffers, globals: &GpuGlobals) -> bool {
     let area_lights = scene.lights.iter().any(|l| l.kind == LIGHT_AREA);
-    globals.aov == AOV_COLOR && !area_lights && forced.unwrap_or(false)
+    globals.aov == AOV_COLOR && !area_lights && wavefront
 }
 
 /// Pixels a side of a wave's tile at most, before `cut_for` fits its records to

@@ -45,8 +45,6 @@ pub struct GpuRenderer {
     cache: Option<DiskCache>,
     pipelines: Mutex<HashMap<Specialization, wgpu::ComputePipeline>>,
     compile_time: Mutex<Duration>,
-    /// The device is a CPU (lavapipe).
-    software: bool,
     /// The work of a dispatch and of a submission on this device (`policy::shape_for`).
     shape: Shape,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
@@ -56,10 +54,10 @@ pub struct GpuRenderer {
     /// What `gpurt tune` measured on the adapter, where this renderer took it.
     tuning: Option<Tuning>,
     /// The wavefront kernels' pipelines, shared with the uploaded scenes, where the
-    /// adapter binds them (`wave_binds`), and whether colour frames take them (`None`: as
-    /// `policy::wavefront_for` chooses).
+    /// adapter binds them (`wave_binds`), and whether colour frames take them where they
+    /// can (`policy::wavefront_for`).
     wave: Option<Arc<WavePipelines>>,
-    wavefront: Option<bool>,
+    wavefront: bool,
     /// Whether the one kernel's colour frames take its `pooled` entry point where they
     /// can (`policy::pooled_for`).
     pooled: bool,
@@ -167,13 +165,12 @@ impl GpuRenderer {
             cache,
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
-            software,
             shape: shape_for(software)?,
             traversal: traversal_for(chosen.traversal)?,
             fetch,
             tuning,
             wave,
-            wavefront: Some(kernels == Kernels::Wavefront),
+            wavefront: kernels == Kernels::Wavefront,
             pooled: kernels == Kernels::Pooled,
             shadow_rays: true,
             layer_rows: upload::layer_rows(&gpu.limits()),
@@ -206,7 +203,7 @@ impl GpuRenderer {
         // The wavefront kernels trace every shadow ray.
         let wave = self.wave.is_some()
             && self.shadow_rays
-            && wavefront_for(self.wavefront, self.software, scene, globals);
+            && wavefront_for(self.wavefront, scene, globals);
         GpuGlobals {
             traversal: scene.traversal_for(self.traversal),
             wavefront: u32::from(wave),
@@ -250,8 +247,8 @@ impl GpuRenderer {
     pub fn strategy(&self) -> Strategy {
         let kernels = match (self.pooled, self.wavefront) {
             (true, _) => Kernels::Pooled,
-            (false, Some(true)) => Kernels::Wavefront,
-            _ => Kernels::Main,
+            (false, true) => Kernels::Wavefront,
+            (false, false) => Kernels::Main,
         };
         Strategy {
             traversal: self.traversal,

@@ -63,13 +63,11 @@ impl GpuRenderer {
         GpuRenderer { traversal, ..self }
     }
 
-    /// This renderer tracing colour frames through the wavefront kernels (`true`) or
-    /// the one kernel (`false`), whatever its adapter and the scene.
+    /// This renderer tracing colour frames through the wavefront kernels (`true`) where
+    /// a frame can take them (`policy::wavefront_for`), or the one kernel (`false`),
+    /// whatever its adapter.
     pub fn with_wavefront(self, wavefront: bool) -> Self {
-        GpuRenderer {
-            wavefront: Some(wavefront),
-            ..self
-        }
+        GpuRenderer { wavefront, ..self }
     }
 
     /// This renderer's one kernel tracing colour frames through its `pooled` entry point
