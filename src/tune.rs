@@ -7,10 +7,11 @@
 //! Every candidate traces every scene once to be compared with the defaults' image
 //! (under the GPU-vs-CPU limits, which the candidates meet against the CPU in the
 //! suite), and is then timed in rounds that take every candidate in turn
-//! (`time_in_rounds`). A candidate whose image differs on any scene is never chosen. The fastest over all the
-//! scenes (the geometric mean of its frame times over the defaults') is kept where it is
-//! at least `MARGIN` faster than the defaults; otherwise the defaults are kept, so that
-//! timing noise does not move a render off what was measured with care.
+//! (`time_in_rounds`). A candidate whose image differs on any scene is never chosen.
+//! The fastest over all the scenes (the geometric mean of its frame times over the
+//! defaults') is kept where it is at least `MARGIN` faster than the defaults; otherwise
+//! the defaults are kept, so that timing noise does not move a render off what was
+//! measured with care.
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
