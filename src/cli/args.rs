@@ -139,7 +139,8 @@ pub struct TuneArgs {
     /// Scenes to measure on: the kind of scenes the adapter will render.
     #[arg(required = true)]
     pub scenes: Vec<PathBuf>,
-    /// Image size, WxH.
+    /// Image size, WxH: that of the renders the adapter will make (frames of a few
+    /// milliseconds time noisily).
     #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
     pub size: (u32, u32),
     /// Samples per pixel.
