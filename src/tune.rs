@@ -141,13 +141,13 @@ fn against_defaults(
     Ok(agrees)
 }
 
-/// The median time in seconds of a frame of `buffers` on each of `renderers`, on the
-/// device alone, from `rounds` rounds that each time one frame of every renderer in turn
-/// (the order turned by one each round), so that what drifts over the run (the clocks,
-/// other work on the machine) falls on every candidate alike. Each renderer uploads the
-/// scene afresh each round, so that no more than one upload is held at once, and traces
-/// one frame untimed before its timed one; the GPU is kept busy for a quarter of a
-/// second first, as `gpurt bench` does, since an idle GPU clocks down.
+/// A frame of `buffers` timed on each of `renderers`, on the device alone, in `rounds`
+/// rounds that each time one frame of every renderer in turn (the order turned by one
+/// each round), so that what drifts over the run (the clocks, other work on the
+/// machine) falls on every candidate alike: `times[i][round]`, in seconds. Each renderer
+/// uploads the scene afresh each round, so that no more than one upload is held at once,
+/// and traces one frame untimed before its timed one; the GPU is kept busy for a quarter
+/// of a second first, as `gpurt bench` does, since an idle GPU clocks down.
 fn time_in_rounds(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -155,7 +155,7 @@ fn time_in_rounds(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
     rounds: u32,
-) -> Result<Vec<f64>> {
+) -> Result<Vec<Vec<f64>>> {
     let n = renderers.len();
     let mut times = vec![Vec::new(); n];
     let first = renderers[0].upload(device, queue, buffers, globals)?;
@@ -174,13 +174,21 @@ fn time_in_rounds(
             times[i].push(t.elapsed().as_secs_f64());
         }
     }
-    Ok(times
-        .into_iter()
-        .map(|mut t| {
-            t.sort_by(f64::total_cmp);
-            t[t.len() / 2]
-        })
-        .collect())
+    Ok(times)
+}
+
+/// The median of `values` (not empty).
+fn median(mut values: Vec<f64>) -> f64 {
+    values.sort_by(f64::total_cmp);
+    values[values.len() / 2]
+}
+
+/// A candidate's time over the defaults' on one scene, from the rounds' times of each
+/// (`time_in_rounds`): the median over the rounds of the ratio within each round, a
+/// paired measure, so that a round slowed as a whole counts once rather than skewing
+/// either side.
+pub fn ratio(candidate: &[f64], defaults: &[f64]) -> f64 {
+    median(candidate.iter().zip(defaults).map(|(c, d)| c / d).collect())
 }
 
 /// Measures every candidate on every scene, prints a row each and the verdict, and keeps
@@ -246,7 +254,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
             outln!("|---|---|---|---|---:|---:|---|");
         }
         for (i, renderer) in renderers.iter().enumerate() {
-            let ratio = times[i] / times[0];
+            let ratio = ratio(&times[i], &times[0]);
             measured[i].ratios.push(ratio);
             measured[i].agrees &= agrees[i].is_ok();
             let walk = TRAVERSAL_NAMES[renderer.frame(buffers, &globals).traversal as usize];
@@ -258,7 +266,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
             outln!(
                 "| {name} | {kernels} | {walk} | {} | {:.3} | {ratio:.3} | {image} |",
                 candidates[i].fetch.name(),
-                times[i] * 1e3
+                median(times[i].clone()) * 1e3
             );
         }
     }
@@ -340,6 +348,20 @@ mod tests {
         let all = [defaults.clone(), m(&[near, near], true)];
         assert_eq!(choose(&all), 0);
         assert_eq!(choose(std::slice::from_ref(&defaults)), 0);
+    }
+
+    /// A scene's ratio pairs each round's times: a round slow as a whole (here the
+    /// second, twice as slow for both) leaves it as the other rounds say, where the
+    /// medians' ratio would follow the rounds' order.
+    #[test]
+    fn a_scenes_ratio_pairs_the_rounds() {
+        let defaults = [1.0, 2.0, 1.0];
+        let candidate = [0.9, 1.8, 0.9];
+        assert!((ratio(&candidate, &defaults) - 0.9).abs() < 1e-12);
+        // Drift from round to round: the medians (1.5 and 1.25) would say 0.83.
+        let defaults = [1.0, 1.5, 2.0];
+        let candidate = [1.0, 1.25, 2.0];
+        assert!((ratio(&candidate, &defaults) - 1.0).abs() < 1e-12);
     }
 
     /// The defaults come first, every candidate once, and on any adapter's defaults the
