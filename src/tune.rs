@@ -15,10 +15,9 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
-use std::time::Duration;
-
 use web_time::Instant;
 
+use crate::bench::warm_up;
 use crate::compare::{self, Thresholds};
 use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions};
@@ -101,14 +100,10 @@ pub fn choose(measured: &[Measured]) -> usize {
     }
 }
 
-/// `strategy` in a table's cells: kernels, walk, fetch.
-fn cells(s: &Strategy) -> String {
-    format!(
-        "{} | {} | {}",
-        s.kernels.name(),
-        TRAVERSAL_NAMES[s.traversal as usize],
-        s.fetch.name()
-    )
+/// `strategy`'s kernels, walk and fetch, `between` each: a table's cells or a list.
+fn named(s: &Strategy, between: &str) -> String {
+    let walk = TRAVERSAL_NAMES[s.traversal as usize];
+    [s.kernels.name(), walk, s.fetch.name()].join(between)
 }
 
 /// Whether each of `renderers` traces the image of `buffers` the first (the defaults)
@@ -146,8 +141,8 @@ fn against_defaults(
 /// each round), so that what drifts over the run (the clocks, other work on the
 /// machine) falls on every candidate alike: `times[i][round]`, in seconds. Each renderer
 /// uploads the scene afresh each round, so that no more than one upload is held at once,
-/// and traces one frame untimed before its timed one; the GPU is kept busy for a quarter
-/// of a second first, as `gpurt bench` does, since an idle GPU clocks down.
+/// and traces one frame untimed before its timed one; the GPU is warmed up first, as
+/// `gpurt bench` does (`bench::warm_up`).
 fn time_in_rounds(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -158,12 +153,11 @@ fn time_in_rounds(
 ) -> Result<Vec<Vec<f64>>> {
     let n = renderers.len();
     let mut times = vec![Vec::new(); n];
-    let first = renderers[0].upload(device, queue, buffers, globals)?;
-    let warm = Instant::now();
-    while warm.elapsed() < Duration::from_millis(250) {
-        gpu::trace_on_device(device, queue, &first)?;
-    }
-    drop(first);
+    warm_up(
+        device,
+        queue,
+        &renderers[0].upload(device, queue, buffers, globals)?,
+    )?;
     for round in 0..rounds.max(1) as usize {
         for k in 0..n {
             let i = (k + round) % n;
@@ -278,7 +272,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
             true => "as the defaults'",
             false => "one differed: never chosen",
         };
-        outln!("| {} | {:.3} | {images} |", cells(s), m.score());
+        outln!("| {} | {:.3} | {images} |", named(s, " | "), m.score());
     }
     outln!("");
     let chosen = choose(&measured);
@@ -302,10 +296,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
         ),
     };
     let strategy = candidates[chosen];
-    out!(
-        "chosen: {} ({verdict})\n",
-        cells(&strategy).replace(" |", ",")
-    );
+    out!("chosen: {} ({verdict})\n", named(&strategy, ", "));
     match gpu::tuning::save(&ctx.info, strategy, &verdict)? {
         Some(file) => eprintln!(
             "kept in {}: renders on this adapter take it",

@@ -69,19 +69,29 @@ fn median(mut times: Vec<Duration>) -> Duration {
     times[times.len() / 2]
 }
 
+/// Traces frames of `scene` on the device for a quarter of a second, before timing: a
+/// GPU idle for a while (the CPU rows run in between) clocks down.
+pub(crate) fn warm_up(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &gpu::GpuScene,
+) -> Result<()> {
+    let warm = Instant::now();
+    while warm.elapsed() < Duration::from_millis(250) {
+        gpu::trace_on_device(device, queue, scene)?;
+    }
+    Ok(())
+}
+
 /// The median time of `frames` frames (at least one) of `scene` on the device alone,
-/// after a quarter of a second of warm-up frames: a GPU idle for a while (the CPU rows
-/// run in between) clocks down.
+/// after `warm_up`.
 fn time_frames(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &gpu::GpuScene,
     frames: u32,
 ) -> Result<Duration> {
-    let warm = Instant::now();
-    while warm.elapsed() < Duration::from_millis(250) {
-        gpu::trace_on_device(device, queue, scene)?;
-    }
+    warm_up(device, queue, scene)?;
     let on_device = (0..frames.max(1))
         .map(|_| {
             let t = Instant::now();

@@ -257,11 +257,6 @@ impl GpuRenderer {
         }
     }
 
-    /// The adapter's tuning, where this renderer took it (`tuning::load`).
-    pub fn tuning(&self) -> Option<&Tuning> {
-        self.tuning.as_ref()
-    }
-
     /// `strategy` in words, and where it comes from, for `--stats`.
     pub fn describe_strategy(&self) -> String {
         let s = self.strategy();
