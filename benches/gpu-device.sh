@@ -23,7 +23,7 @@
 # 1080p and 4K at 1 spp and at 4K at 16 spp, each into a cache directory of its own under
 # $OUT (tune-SIZE-SPP/, the kept file included; tune-*.md the tables). `images` renders three scenes at 4K with the scene
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
-# for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default) and, if
+# for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default; a first run on a fresh machine compiles every shader variant cold, so give it 600) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
 # than the limit and still says where it was.
 # `loss` looks for what stalls the GPU when a device is destroyed with work in flight
