@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [pooled] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [pooled] [goals] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -17,7 +17,9 @@
 # times the seven scenes through the one kernel's `main` and `pooled` entry points
 # (GPURT_KERNELS; pooled squares of 16 and 32 pixels, GPURT_POOL_SIDE) at 1 and 16 spp,
 # then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
-# through `main` and `pooled`. `qwide` times the seven scenes on the quantised four-wide
+# through `main` and `pooled`. `goals` benches balls-6 and mount-9 alone (where the
+# issue's goals were last missed) at both sizes and sample counts, GPU only, on the usual
+# tree and on the high-quality one. `qwide` times the seven scenes on the quantised four-wide
 # walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
 # `pooled` step's rows on the wide walk. `tune` runs `gpurt tune` on the seven scenes at
 # 1080p and 4K at 1 spp and at 4K at 16 spp, each into a cache directory of its own under
@@ -130,6 +132,26 @@ if [[ $what == *pooled* ]]; then
             >"$OUT/pooled-high-$k.md" 2>"$OUT/pooled-high-$k.log"
         echo "high, $k: exit $?"
         cat "$OUT/pooled-high-$k.md"
+    done
+fi
+
+if [[ $what == *goals* ]]; then
+    # The issue's goals where they were last missed, the shortest run that reads them:
+    # balls-6 (eye rays at 4K, secondary rays) and mount-9 (shadow rays at 1080p, its 4K
+    # frame) on the GPU alone, on the tree a render of that length gets and on the
+    # high-quality one.
+    echo "== goals"
+    big=()
+    for s in balls-6 mount-9; do big+=("$(ls "$spd/$s".nff* | head -1)"); done
+    for bvh in auto high; do
+        vars=()
+        [[ $bvh == high ]] && vars=(GPURT_BVH=high)
+        env "${vars[@]}" timeout "${WAVE_TIMEOUT:-180}" ./.device/gpurt bench \
+            "${big[@]}" --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu \
+            >"$OUT/goals-$bvh.md" 2>"$OUT/goals-$bvh.log"
+        echo "tree $bvh: exit $?"
+        grep -m1 '^bvh' "$OUT/goals-$bvh.log"
+        cat "$OUT/goals-$bvh.md"
     done
 fi
 
