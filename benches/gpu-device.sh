@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [pooled] [goals] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [wavefront] [pooled] [goals] [compile] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -19,7 +19,8 @@
 # then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
 # through `main` and `pooled`. `goals` benches balls-6 and mount-9 alone (where the
 # issue's goals were last missed) at both sizes and sample counts, GPU only, on the usual
-# tree and on the high-quality one. `qwide` times the seven scenes on the quantised four-wide
+# tree and on the high-quality one. `compile` prints each walk's and kernel's cold
+# compile time (the driver's shader cache off) on five scenes. `qwide` times the seven scenes on the quantised four-wide
 # walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
 # `pooled` step's rows on the wide walk. `tune` runs `gpurt tune` on the seven scenes at
 # 1080p and 4K at 1 spp and at 4K at 16 spp, each into a cache directory of its own under
@@ -153,6 +154,23 @@ if [[ $what == *goals* ]]; then
         grep -m1 '^bvh' "$OUT/goals-$bvh.log"
         cat "$OUT/goals-$bvh.md"
     done
+fi
+
+if [[ $what == *compile* ]]; then
+    # How long the driver takes to compile each pipeline cold (its shader cache off, no
+    # pipeline cache): the suite compiles every variant, and on a fresh machine its first
+    # run took minutes there. A small frame each, so the `shader` line is the compile.
+    echo "== compile"
+    for s in scenes/spheres.nff scenes/mesh.nff scenes/cones.nff scenes/glass.nff "${scenes[1]}"; do
+        for v in wide qwide cwide single pairs pooled wavefront; do
+            vars=(GPURT_TRAVERSAL=$v)
+            [[ $v == pooled || $v == wavefront ]] && vars=(GPURT_KERNELS=$v)
+            vars+=(__GL_SHADER_DISK_CACHE=0 MESA_SHADER_CACHE_DISABLE=true GPURT_CACHE_DIR=)
+            line=$(env "${vars[@]}" timeout 120 ./.device/gpurt "$s" -o /tmp/compile.png \
+                --width 64 --height 64 --backend gpu --stats 2>&1 | grep '^shader')
+            echo "$(basename "$s") $v: ${line:-no shader line (exit or timeout)}"
+        done
+    done | tee "$OUT/compile.log"
 fi
 
 if [[ $what == *qwide* ]]; then
