@@ -40,7 +40,8 @@ pub struct TuneConfig {
     pub height: u32,
     pub spp: u32,
     pub depth: u32,
-    /// Timed frames per scene and candidate; the median is kept.
+    /// Timed rounds per scene, each a frame of every candidate (`time_in_rounds`); a
+    /// candidate's ratio on the scene is the median over the rounds.
     pub frames: u32,
     pub adapter: Option<String>,
     pub read: ReadOptions,

@@ -149,7 +149,8 @@ pub struct TuneArgs {
     /// Maximum ray depth.
     #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub depth: u32,
-    /// Timed frames per scene and candidate; the median is kept.
+    /// Timed rounds per scene, each one frame of every candidate; a candidate's time on
+    /// the scene is the median over the rounds of its time over the defaults'.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub frames: u32,
     /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
