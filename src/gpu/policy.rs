@@ -38,7 +38,7 @@ pub struct Strategy {
 ///   40 to 56% fewer node bytes, yet is 1.3 to 1.7 times slower on the H100 and slower on
 ///   lavapipe's larger scenes. The quantised four-wide walk (`TRAVERSAL_QWIDE`, the wide
 ///   walk on nodes of 64 bytes) fetches 41 to 43% fewer node bytes and is as fast as wide
-///   on lavapipe; unmeasured on a GPU, so not the default either;
+///   on lavapipe, but 1.14 to 1.30 times slower on an H200 (`gpurt tune`);
 /// - the kernels: the one kernel, `main` (`wavefront_for`, `pooled_for`);
 /// - the fetch: storage textures on software adapters, which lavapipe loads a texel at a
 ///   time where it loads a storage buffer a component at a time (docs/gpu.md, item 2),
@@ -140,9 +140,10 @@ pub(super) fn kernels_for(chosen: Kernels) -> Result<Kernels> {
 
 /// Whether a frame traced by the one kernel takes its `pooled` entry point: where forced
 /// (`GPURT_KERNELS=pooled`, `GpuRenderer::with_pooled`), for colour frames (an AOV
-/// traces one ray a sample, which leaves no lane idle for long), else `main`. Not
-/// measured on a GPU yet, so nowhere by default; on lavapipe, which runs every lane
-/// through every branch, it has nothing to gain.
+/// traces one ray a sample, which leaves no lane idle for long), else `main`. Nowhere by
+/// default: on an H200 it was 1.04 to 1.59 times `main`'s frame time on the SPD scenes
+/// (`gpurt tune`, 1080p), and on lavapipe, which runs every lane through every branch,
+/// it has nothing to gain.
 pub(super) fn pooled_for(forced: bool, globals: &GpuGlobals) -> bool {
     forced && globals.aov == AOV_COLOR
 }
