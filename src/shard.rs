@@ -12,7 +12,7 @@
 //! `Shard` (`I/N`, parsed here) is also what a batch run as a job array takes its share
 //! of scenes by (`batch`).
 
-use std::io::Read;
+use std::io::{Read, Write};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -201,8 +201,16 @@ pub fn write_samples(dir: &Path, m: &Manifest, per_sample: &[Film]) -> Result<()
 fn write<'a>(dir: &Path, m: &Manifest, floats: impl Iterator<Item = &'a f32>) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let base = base(dir, m.shard);
-    let bytes: Vec<u8> = floats.flat_map(|c| c.to_le_bytes()).collect();
-    atomic::write_atomic(&base.with_extension("rgbf32"), &bytes)?;
+    // Streamed: a samples shard holds a frame a sample (3 GiB a sample at 16384x16384),
+    // which a copy as bytes would hold a second time.
+    let data = base.with_extension("rgbf32");
+    atomic::write_atomic_with(&data, |w| {
+        for c in floats {
+            w.write_all(&c.to_le_bytes())
+                .map_err(|e| Error::io(&data, e))?;
+        }
+        Ok(())
+    })?;
     let mut manifest = json!({
         "format": FORMAT,
         "shard": m.shard.index,
@@ -228,12 +236,23 @@ fn write<'a>(dir: &Path, m: &Manifest, floats: impl Iterator<Item = &'a f32>) ->
     atomic::write_atomic(&base.with_extension("json"), text.as_bytes())
 }
 
+/// The most a shard manifest is read of: `write` writes under a kilobyte and the scene's
+/// path (at most a few kilobytes).
+const MAX_MANIFEST_BYTES: u64 = 1 << 20;
+
 fn read_manifest(path: &Path) -> Result<Manifest> {
     let bad = |why: &str| Error::Scene {
         file: path.display().to_string(),
         msg: format!("not a gpurt shard manifest: {why}"),
     };
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // Read up to a bound: whatever a shard directory holds, no unbounded allocation.
+    let mut text = String::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_MANIFEST_BYTES + 1).read_to_string(&mut text))
+        .map_err(|e| Error::io(path, e))?;
+    if text.len() as u64 > MAX_MANIFEST_BYTES {
+        return Err(bad(&format!("longer than {MAX_MANIFEST_BYTES} bytes")));
+    }
     let v: Value = serde_json::from_str(&text).map_err(|e| bad(&e.to_string()))?;
     if v["format"] != FORMAT {
         return Err(bad(&format!("format is not {FORMAT}")));
@@ -477,5 +496,30 @@ mod tests {
             }
             assert_eq!(next, h);
         }
+    }
+
+    /// A manifest past the bound is refused by name, without being read whole; one within
+    /// it that is not a manifest is refused for what it lacks.
+    #[test]
+    fn a_manifest_too_long_is_refused_by_name() {
+        let dir = crate::film::tests::scratch_dir("long-manifest");
+        let path = dir.join("shard-0-of-1.json");
+        let mut text = String::from("{\"format\": \"");
+        text.push_str(&"x".repeat(MAX_MANIFEST_BYTES as usize));
+        text.push_str("\"}");
+        std::fs::write(&path, &text).unwrap();
+        let err = merge(&dir).unwrap_err().to_string();
+        assert!(err.contains("shard-0-of-1.json"), "{err}");
+        assert!(
+            err.contains(&format!("longer than {MAX_MANIFEST_BYTES} bytes")),
+            "{err}"
+        );
+        std::fs::write(&path, "{\"format\": \"other\"}").unwrap();
+        let err = merge(&dir).unwrap_err().to_string();
+        assert!(
+            err.contains("not a gpurt shard manifest: format is not"),
+            "{err}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
