@@ -17,6 +17,7 @@ pub use encode::Format;
 use image::{ColorType, DynamicImage, ImageFormat, RgbImage};
 
 use crate::gpu_types::{AOV_COST, AOV_DEPTH};
+use crate::limits::MAX_IMAGE_SIDE;
 use crate::{Error, Result};
 
 /// A rendered image: linear RGB, row-major, top row first.
@@ -291,13 +292,23 @@ fn image_error(path: &Path, e: image::ImageError) -> Error {
     Error::Image(format!("{}: {e}", path.display()))
 }
 
+/// Bytes a decoder may allocate for each pixel an image's header declares: four float
+/// channels (an EXR with alpha), the most any format gpurt reads decodes to.
+const DECODED_BYTES_PER_PIXEL: u64 = 16;
+
 /// Reads and decodes an image, recognising the format by content (falling back to the
-/// extension).
+/// extension). Any image gpurt writes is read, up to `MAX_IMAGE_SIDE` a side (the image
+/// crate's own default stops at 512 MiB, a 10000x10000 EXR); a larger one is refused by
+/// its header before anything is decoded, and a decoder may take no more memory than
+/// the size its header declares.
 fn decode(path: &Path) -> Result<DynamicImage> {
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
+    let open = || {
+        image::ImageReader::open(path)
+            .map_err(|e| Error::io(path, e))?
+            .with_guessed_format()
+            .map_err(|e| Error::io(path, e))
+    };
+    let mut reader = open()?;
     if reader.format().is_none() {
         let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
         return Err(Error::Image(format!(
@@ -306,6 +317,19 @@ fn decode(path: &Path) -> Result<DynamicImage> {
             supported.join(", ")
         )));
     }
+    let (w, h) = open()?
+        .into_dimensions()
+        .map_err(|e| image_error(path, e))?;
+    if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
+        return Err(Error::Image(format!(
+            "{}: {w}x{h} pixels, larger than any image gpurt reads or writes \
+             (at most {MAX_IMAGE_SIDE} a side)",
+            path.display()
+        )));
+    }
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(u64::from(w) * u64::from(h) * DECODED_BYTES_PER_PIXEL + (64 << 20));
+    reader.limits(limits);
     reader.decode().map_err(|e| image_error(path, e))
 }
 
@@ -458,6 +482,60 @@ pub(crate) mod tests {
         fs::write(&garbage, b"not an image").unwrap();
         let err = load_rgb8(&garbage).unwrap_err().to_string();
         assert!(err.contains("garbage.png"), "{err}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A PNG declaring `w`x`h` pixels and holding `rows` black rows of them, compressed
+    /// as they are made, so that the test never holds the image.
+    fn black_png(w: u32, h: u32, rows: u32) -> Vec<u8> {
+        use std::io::Write;
+        fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
+            let mut crc = flate2::Crc::new();
+            crc.update(kind);
+            crc.update(data);
+            out.extend((data.len() as u32).to_be_bytes());
+            out.extend(kind);
+            out.extend(data);
+            out.extend(crc.sum().to_be_bytes());
+        }
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::fast());
+        let row = vec![0u8; 1 + 3 * w as usize];
+        for _ in 0..rows {
+            z.write_all(&row).unwrap();
+        }
+        let mut ihdr = Vec::from(w.to_be_bytes());
+        ihdr.extend(h.to_be_bytes());
+        ihdr.extend([8, 2, 0, 0, 0]);
+        let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+        chunk(&mut out, b"IHDR", &ihdr);
+        chunk(&mut out, b"IDAT", &z.finish().unwrap());
+        chunk(&mut out, b"IEND", &[]);
+        out
+    }
+
+    /// Every image gpurt writes is read back, the ones past the image crate's default
+    /// 512 MiB limit too (this one decodes to 588 MB); one whose header declares more
+    /// than gpurt's largest side is refused by that header, with its size, at once.
+    #[test]
+    fn large_images_load_and_larger_headers_are_refused() {
+        let dir = scratch_dir("large");
+        let large = dir.join("large.png");
+        fs::write(&large, black_png(14_000, 14_000, 14_000)).unwrap();
+        let img = load_rgb8(&large).unwrap();
+        assert_eq!(img.dimensions(), (14_000, 14_000));
+        assert!(img.as_raw().iter().all(|&c| c == 0));
+        drop(img);
+        let bomb = dir.join("bomb.png");
+        fs::write(&bomb, black_png(MAX_IMAGE_SIDE + 1, 1, 1)).unwrap();
+        let err = load_rgb8(&bomb).unwrap_err().to_string();
+        assert!(
+            err.contains("bomb.png") && err.contains("16385x1 pixels"),
+            "{err}"
+        );
+        // The header alone decides: of the 60000 rows it declares, one is there.
+        fs::write(&bomb, black_png(60_000, 60_000, 1)).unwrap();
+        let err = load_rgb8(&bomb).unwrap_err().to_string();
+        assert!(err.contains("60000x60000 pixels, larger than"), "{err}");
         fs::remove_dir_all(&dir).unwrap();
     }
 }
