@@ -107,25 +107,9 @@ fn named(s: &Strategy, between: &str) -> String {
     [s.kernels.name(), walk, s.fetch.name()].join(between)
 }
 
-/// Memory the image comparisons running at once may take: FLIP holds about
-/// `FLIP_BYTES_PER_PIXEL` while it runs (620 MB at 3840x2160, measured by `gpurt diff`'s
-/// peak memory), so at 4K three compare at once, at 1080p up to twelve.
-const COMPARISONS_BYTES: u64 = 2 << 30;
-const FLIP_BYTES_PER_PIXEL: u64 = 80;
-
-/// How many image comparisons of `pixels` pixels run at once: what `COMPARISONS_BYTES`
-/// holds, at least one, at most one a core.
-fn comparisons_at_once(pixels: u64) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let fit = COMPARISONS_BYTES / (FLIP_BYTES_PER_PIXEL * pixels).max(1);
-    (fit as usize).clamp(1, cores)
-}
-
 /// Whether each of `renderers` traces the image of `buffers` the first (the defaults)
 /// traces, under the GPU-vs-CPU limits: `Err` says how it differs. Compiles each
-/// renderer's pipeline for the frame on the way. The comparisons run on threads of their
-/// own while the GPU traces the next candidates (FLIP takes seconds at 4K, on one core),
-/// as many at once as `comparisons_at_once` allows.
+/// renderer's pipeline for the frame on the way.
 fn against_defaults(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -134,45 +118,23 @@ fn against_defaults(
     globals: &GpuGlobals,
 ) -> Result<Vec<std::result::Result<(), String>>> {
     let never = AtomicBool::new(false);
-    let trace = |renderer: &GpuRenderer| -> Result<image::RgbImage> {
+    let mut reference = None;
+    let mut agrees = Vec::with_capacity(renderers.len());
+    for renderer in renderers {
         renderer.prepare(device, queue, buffers, globals)?;
         let scene = renderer.upload(device, queue, buffers, globals)?;
         let (film, _) = gpu::trace(device, queue, &scene, &|_| {}, &never)?;
-        Ok(film.for_display(globals.aov).to_rgb8())
-    };
-    let Some((first, others)) = renderers.split_first() else {
-        return Ok(Vec::new());
-    };
-    let reference = trace(first)?;
-    let at_once = comparisons_at_once(u64::from(reference.width()) * u64::from(reference.height()));
-    std::thread::scope(|threads| {
-        let mut agrees = vec![Ok(())];
-        let mut running = std::collections::VecDeque::new();
-        for renderer in others {
-            let image = trace(renderer)?;
-            if running.len() == at_once
-                && let Some(oldest) = running.pop_front()
-            {
-                agrees.push(finished(oldest)?);
+        let image = film.for_display(globals.aov).to_rgb8();
+        agrees.push(match &reference {
+            None => Ok(()),
+            Some(r) => {
+                let stats = compare::diff(r, &image, Thresholds::GPU_VS_CPU.tolerance_255)?;
+                Thresholds::GPU_VS_CPU.check(&stats)
             }
-            let reference = &reference;
-            running.push_back(threads.spawn(move || {
-                let t = Thresholds::GPU_VS_CPU;
-                Ok(t.check(&compare::diff(reference, &image, t.tolerance_255)?))
-            }));
-        }
-        for comparison in running {
-            agrees.push(finished(comparison)?);
-        }
-        Ok(agrees)
-    })
-}
-
-/// What a comparison's thread returned (a panic there goes on here).
-fn finished<T>(comparison: std::thread::ScopedJoinHandle<'_, Result<T>>) -> Result<T> {
-    comparison
-        .join()
-        .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        });
+        reference.get_or_insert(image);
+    }
+    Ok(agrees)
 }
 
 /// A frame of `buffers` timed on each of `renderers`, on the device alone, in `rounds`
@@ -355,19 +317,6 @@ mod tests {
             ratios: ratios.to_vec(),
             agrees,
         }
-    }
-
-    /// The comparisons at once stay within their memory, one at least, one a core at most.
-    #[test]
-    fn comparisons_at_once_fit_their_memory() {
-        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-        for (w, h) in [(1u64, 1u64), (1920, 1080), (3840, 2160), (15360, 8640)] {
-            let n = comparisons_at_once(w * h);
-            assert!((1..=cores).contains(&n), "{w}x{h}: {n}");
-            assert!(n == 1 || n as u64 * FLIP_BYTES_PER_PIXEL * w * h <= COMPARISONS_BYTES);
-        }
-        assert_eq!(comparisons_at_once(3840 * 2160), cores.min(3));
-        assert_eq!(comparisons_at_once(15360 * 8640), 1);
     }
 
     /// The fastest agreeing candidate is kept, by the geometric mean of its ratios, and
