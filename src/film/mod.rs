@@ -298,9 +298,9 @@ const DECODED_BYTES_PER_PIXEL: u64 = 16;
 
 /// Reads and decodes an image, recognising the format by content (falling back to the
 /// extension). Any image gpurt writes is read, up to `MAX_IMAGE_SIDE` a side (the image
-/// crate's own default stops at 512 MiB, a 10000x10000 EXR); a larger one is refused by
-/// its header before anything is decoded, and a decoder may take no more memory than
-/// the size its header declares.
+/// crate's own default limit, 512 MiB, refused a 10000x10000 EXR gpurt had written); a
+/// larger one is refused by its header before anything is decoded, and a decoder may
+/// take no more memory than the size its header declares.
 fn decode(path: &Path) -> Result<DynamicImage> {
     let open = || {
         image::ImageReader::open(path)
