@@ -10,6 +10,7 @@
 //! wait 30         # let 30 frames be shown
 //! ```
 
+use std::io::Read;
 use std::path::Path;
 
 use super::camera::{DragMode, Input};
@@ -34,18 +35,19 @@ pub enum Event {
     Wait(u32),
 }
 
-/// Reads and parses a script file.
+/// Reads and parses a script file, read no further than `MAX_SCRIPT_BYTES` (a file's
+/// length says nothing of a pipe or a device such as /dev/zero).
 pub fn load(path: &Path) -> Result<Vec<Event>> {
-    let len = std::fs::metadata(path)
-        .map_err(|e| Error::io(path, e))?
-        .len();
-    if len > MAX_SCRIPT_BYTES {
+    let mut text = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_SCRIPT_BYTES + 1).read_to_end(&mut text))
+        .map_err(|e| Error::io(path, e))?;
+    if text.len() as u64 > MAX_SCRIPT_BYTES {
         return Err(Error::Scene {
             file: path.display().to_string(),
-            msg: format!("a script of {len} bytes is too long (at most {MAX_SCRIPT_BYTES})"),
+            msg: format!("a script is at most {MAX_SCRIPT_BYTES} bytes; this one is longer"),
         });
     }
-    let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse(&String::from_utf8_lossy(&text), &path.display().to_string())
 }
 
@@ -201,5 +203,21 @@ mod tests {
             let e = parse(text, "s").unwrap_err().to_string();
             assert!(e.starts_with(want), "{text:?}: {e}");
         }
+    }
+
+    /// A script is read no further than its bound, whatever its length says: a device
+    /// that never ends is refused, not read until memory runs out.
+    #[test]
+    fn an_endless_script_is_refused_at_its_bound() {
+        let zero = Path::new("/dev/zero");
+        if !zero.exists() {
+            eprintln!("SKIPPED an_endless_script_is_refused_at_its_bound: no /dev/zero here");
+            return;
+        }
+        let err = load(zero).unwrap_err().to_string();
+        assert!(
+            err.contains("/dev/zero") && err.contains("at most"),
+            "{err}"
+        );
     }
 }
