@@ -5,6 +5,7 @@
 //! written once for the `main` and `resume` entry points alike.
 
 use std::collections::HashMap;
+use std::io::Read;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -14,6 +15,10 @@ use super::shaders::{self, Fetch};
 use super::specialization::Specialization;
 use crate::error::Result;
 use crate::gpu_types::GpuTile;
+
+/// The most of a pipeline cache file that is read, far past any written: after the whole
+/// suite on an H200 the cache directory held under 1 MB.
+const MAX_CACHE_BYTES: u64 = 1 << 30;
 
 /// The on-disk pipeline cache: wgpu's cache of compiled pipelines, read from its file
 /// when a renderer is set up and written back after each pipeline it compiles.
@@ -31,9 +36,15 @@ impl DiskCache {
             .and_then(|info| Some(cache_dir()?.join(wgpu::util::pipeline_cache_key(info)?)))
     }
 
-    /// The cache, holding what `file` holds if it can be read.
+    /// The cache, holding what `file` holds if it can be read and is no longer than
+    /// `MAX_CACHE_BYTES` (a longer one, which `save` never writes, is left unread: an
+    /// empty cache only costs compile time).
     pub(super) fn open(gpu: &Device, file: PathBuf) -> DiskCache {
-        let data = std::fs::read(&file).ok();
+        let mut data = Vec::new();
+        let read = std::fs::File::open(&file)
+            .and_then(|f| f.take(MAX_CACHE_BYTES + 1).read_to_end(&mut data))
+            .is_ok_and(|n| n as u64 <= MAX_CACHE_BYTES);
+        let data = read.then_some(data);
         // SAFETY: the file is named by the adapter's cache key (`file`), and only `save`
         // writes it, with what `PipelineCache::get_data` gave.
         let cache = unsafe { gpu.pipeline_cache("gpurt", data.as_deref()) };
