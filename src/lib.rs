@@ -17,6 +17,7 @@ pub mod atomic;
 pub mod batch;
 #[cfg(feature = "native")]
 pub mod bench;
+pub mod bounded;
 pub mod bvh;
 #[cfg(feature = "native")]
 pub mod compare;

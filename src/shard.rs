@@ -246,13 +246,16 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
         msg: format!("not a gpurt shard manifest: {why}"),
     };
     // Read up to a bound: whatever a shard directory holds, no unbounded allocation.
-    let mut text = String::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_MANIFEST_BYTES + 1).read_to_string(&mut text))
-        .map_err(|e| Error::io(path, e))?;
-    if text.len() as u64 > MAX_MANIFEST_BYTES {
-        return Err(bad(&format!("longer than {MAX_MANIFEST_BYTES} bytes")));
-    }
+    let bytes = crate::bounded::read(path, MAX_MANIFEST_BYTES)
+        .map_err(|e| Error::io(path, e))?
+        .ok_or_else(|| bad(&format!("longer than {MAX_MANIFEST_BYTES} bytes")))?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        let e = std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        );
+        Error::io(path, e)
+    })?;
     let v: Value = serde_json::from_str(&text).map_err(|e| bad(&e.to_string()))?;
     if v["format"] != FORMAT {
         return Err(bad(&format!("format is not {FORMAT}")));

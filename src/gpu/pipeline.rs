@@ -5,7 +5,6 @@
 //! written once for the `main` and `resume` entry points alike.
 
 use std::collections::HashMap;
-use std::io::Read;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
@@ -40,11 +39,7 @@ impl DiskCache {
     /// `MAX_CACHE_BYTES` (a longer one, which `save` never writes, is left unread: an
     /// empty cache only costs compile time).
     pub(super) fn open(gpu: &Device, file: PathBuf) -> DiskCache {
-        let mut data = Vec::new();
-        let read = std::fs::File::open(&file)
-            .and_then(|f| f.take(MAX_CACHE_BYTES + 1).read_to_end(&mut data))
-            .is_ok_and(|n| n as u64 <= MAX_CACHE_BYTES);
-        let data = read.then_some(data);
+        let data = crate::bounded::read(&file, MAX_CACHE_BYTES).ok().flatten();
         // SAFETY: the file is named by the adapter's cache key (`file`), and only `save`
         // writes it, with what `PipelineCache::get_data` gave.
         let cache = unsafe { gpu.pipeline_cache("gpurt", data.as_deref()) };

@@ -17,7 +17,6 @@
 //! measured = 3 scenes at 1920x1080, 1 spp, depth 5: 0.81 of the defaults' time
 //! ```
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
 
 use super::cache::cache_dir;
@@ -67,22 +66,18 @@ pub fn load(info: &wgpu::AdapterInfo) -> Result<Option<Tuning>> {
     let Some(path) = file(info) else {
         return Ok(None);
     };
-    let file = match std::fs::File::open(&path) {
-        Ok(file) => file,
+    // Read up to a bound: whatever the cache directory holds, no unbounded allocation.
+    let bytes = match crate::bounded::read(&path, MAX_BYTES) {
+        Ok(Some(bytes)) => bytes,
+        Ok(None) => {
+            return Err(Error::Scene {
+                file: path.display().to_string(),
+                msg: format!("longer than a tuning file can be ({MAX_BYTES} bytes); delete it"),
+            });
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
         Err(e) => return Err(Error::io(&path, e)),
     };
-    // Read up to a bound: whatever the cache directory holds, no unbounded allocation.
-    let mut bytes = Vec::new();
-    file.take(MAX_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| Error::io(&path, e))?;
-    if bytes.len() as u64 > MAX_BYTES {
-        return Err(Error::Scene {
-            file: path.display().to_string(),
-            msg: format!("longer than a tuning file can be ({MAX_BYTES} bytes); delete it"),
-        });
-    }
     parse(&String::from_utf8_lossy(&bytes), &path, &adapter(info))
 }
 

@@ -10,7 +10,6 @@
 //! wait 30         # let 30 frames be shown
 //! ```
 
-use std::io::Read;
 use std::path::Path;
 
 use super::camera::{DragMode, Input};
@@ -38,16 +37,12 @@ pub enum Event {
 /// Reads and parses a script file, read no further than `MAX_SCRIPT_BYTES` (a file's
 /// length says nothing of a pipe or a device such as /dev/zero).
 pub fn load(path: &Path) -> Result<Vec<Event>> {
-    let mut text = Vec::new();
-    std::fs::File::open(path)
-        .and_then(|f| f.take(MAX_SCRIPT_BYTES + 1).read_to_end(&mut text))
-        .map_err(|e| Error::io(path, e))?;
-    if text.len() as u64 > MAX_SCRIPT_BYTES {
-        return Err(Error::Scene {
+    let text = crate::bounded::read(path, MAX_SCRIPT_BYTES)
+        .map_err(|e| Error::io(path, e))?
+        .ok_or_else(|| Error::Scene {
             file: path.display().to_string(),
             msg: format!("a script is at most {MAX_SCRIPT_BYTES} bytes; this one is longer"),
-        });
-    }
+        })?;
     parse(&String::from_utf8_lossy(&text), &path.display().to_string())
 }
 

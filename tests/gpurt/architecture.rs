@@ -34,7 +34,7 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["gpu_types"],
     &["limits"],
-    &["error", "atomic", "console", "fault"],
+    &["error", "atomic", "bounded", "console", "fault"],
 ];
 
 /// What the check finds, one line each: circles (with the arrows that close them, by
