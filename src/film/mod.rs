@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 pub use encode::Format;
 
-use image::{ColorType, DynamicImage, ImageFormat, RgbImage};
+use image::{ColorType, DynamicImage, ImageDecoder, ImageFormat, RgbImage};
 
 use crate::gpu_types::{AOV_COST, AOV_DEPTH};
 use crate::limits::MAX_IMAGE_SIDE;
@@ -302,13 +302,10 @@ const DECODED_BYTES_PER_PIXEL: u64 = 16;
 /// larger one is refused by its header before anything is decoded, and a decoder may
 /// take no more memory than the size its header declares.
 fn decode(path: &Path) -> Result<DynamicImage> {
-    let open = || {
-        image::ImageReader::open(path)
-            .map_err(|e| Error::io(path, e))?
-            .with_guessed_format()
-            .map_err(|e| Error::io(path, e))
-    };
-    let mut reader = open()?;
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| Error::io(path, e))?
+        .with_guessed_format()
+        .map_err(|e| Error::io(path, e))?;
     if reader.format().is_none() {
         let supported: Vec<_> = Format::ALL.iter().map(|f| f.extension()).collect();
         return Err(Error::Image(format!(
@@ -317,9 +314,10 @@ fn decode(path: &Path) -> Result<DynamicImage> {
             supported.join(", ")
         )));
     }
-    let (w, h) = open()?
-        .into_dimensions()
-        .map_err(|e| image_error(path, e))?;
+    // The decoder reads the header; its limits are set from what the header declares.
+    reader.no_limits();
+    let mut decoder = reader.into_decoder().map_err(|e| image_error(path, e))?;
+    let (w, h) = decoder.dimensions();
     if w > MAX_IMAGE_SIDE || h > MAX_IMAGE_SIDE {
         return Err(Error::Image(format!(
             "{}: {w}x{h} pixels, larger than any image gpurt reads or writes \
@@ -329,8 +327,12 @@ fn decode(path: &Path) -> Result<DynamicImage> {
     }
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(u64::from(w) * u64::from(h) * DECODED_BYTES_PER_PIXEL + (64 << 20));
-    reader.limits(limits);
-    reader.decode().map_err(|e| image_error(path, e))
+    // As `ImageReader::decode` does: the image's buffer counts against the limit too.
+    limits
+        .reserve(decoder.total_bytes())
+        .and_then(|()| decoder.set_limits(limits))
+        .and_then(|()| DynamicImage::from_decoder(decoder))
+        .map_err(|e| image_error(path, e))
 }
 
 /// Loads an image as 8-bit RGB for diffing. PNG, PPM and BMP are taken as stored (alpha is
