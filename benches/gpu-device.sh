@@ -151,7 +151,7 @@ if [[ $what == *goals* ]]; then
             "${big[@]}" --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu \
             >"$OUT/goals-$bvh.md" 2>"$OUT/goals-$bvh.log"
         echo "tree $bvh: exit $?"
-        grep -m1 '^bvh' "$OUT/goals-$bvh.log"
+        grep -E '^(adapter|features|bvh) ' "$OUT/goals-$bvh.log"
         cat "$OUT/goals-$bvh.md"
     done
 fi

@@ -194,6 +194,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
     }
     let ctx = gpu::open(config.adapter.as_deref())?;
     eprintln!("adapter     {}", ctx.describe());
+    eprintln!("features    {}", ctx.capabilities());
     let defaults = gpu::defaults(gpu::is_software(&ctx.info));
     let candidates = candidates(defaults);
     // One renderer a candidate for every scene, so that each compiles its pipelines once.

@@ -106,6 +106,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
     let ctx = session::choose(config.backend, config.adapter.as_deref(), Missing::Error)?.gpu;
     if let Some(ctx) = &ctx {
         eprintln!("adapter     {}", ctx.describe());
+        eprintln!("features    {}", ctx.capabilities());
     }
     // The CPU is timed beside the GPU, or in its place.
     let time_cpu = config.backend == Backend::Both || ctx.is_none();

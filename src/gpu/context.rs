@@ -17,6 +17,23 @@ impl GpuContext {
     pub fn describe(&self) -> String {
         describe(&self.info)
     }
+
+    /// One line saying which of the adapter's optional features that bear on the
+    /// renderer's speed it offers, e.g. `timestamps yes, subgroups yes, ray queries no`:
+    /// timestamps time the wavefront's kernels; subgroups (a warp's lanes exchanging
+    /// values) and ray queries (traversal in the hardware's ray-tracing units) are what a
+    /// walk would need to go past the software walks of now. `gpurt bench` and `tune`
+    /// print it beside the adapter, so a measurement says what the hardware had.
+    pub fn capabilities(&self) -> String {
+        let has = self.adapter.features();
+        [
+            ("timestamps", wgpu::Features::TIMESTAMP_QUERY),
+            ("subgroups", wgpu::Features::SUBGROUP),
+            ("ray queries", wgpu::Features::EXPERIMENTAL_RAY_QUERY),
+        ]
+        .map(|(name, f)| format!("{name} {}", if has.contains(f) { "yes" } else { "no" }))
+        .join(", ")
+    }
 }
 
 pub fn describe(info: &wgpu::AdapterInfo) -> String {

@@ -266,6 +266,29 @@ fn bench_times_the_shading_model_it_is_given() {
     let err = stderr(&o);
     assert!(err.contains("shading     blinn-phong"), "{err}");
     assert!(!err.contains("warning"), "{err}");
+    // Beside the adapter, which of its features bear on speed.
+    if gpu_context().is_some() {
+        let features = err.lines().find(|l| l.starts_with("features    "));
+        let names = features.map(|l| {
+            l.split(", ")
+                .map(|f| f.trim_start_matches("features").trim())
+                .map(|f| {
+                    f.rsplit_once(' ')
+                        .filter(|(_, v)| *v == "yes" || *v == "no")
+                })
+                .map(|f| f.map(|(name, _)| name.to_string()))
+                .collect::<Vec<_>>()
+        });
+        assert_eq!(
+            names,
+            Some(vec![
+                Some("timestamps".to_string()),
+                Some("subgroups".to_string()),
+                Some("ray queries".to_string())
+            ]),
+            "{err}"
+        );
+    }
     let table = String::from_utf8_lossy(&o.stdout);
     assert_eq!(
         table.lines().filter(|l| l.starts_with("| ball ")).count(),
