@@ -249,13 +249,7 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
     let bytes = crate::bounded::read(path, MAX_MANIFEST_BYTES)
         .map_err(|e| Error::io(path, e))?
         .ok_or_else(|| bad(&format!("longer than {MAX_MANIFEST_BYTES} bytes")))?;
-    let text = String::from_utf8(bytes).map_err(|_| {
-        let e = std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            "stream did not contain valid UTF-8",
-        );
-        Error::io(path, e)
-    })?;
+    let text = std::io::read_to_string(bytes.as_slice()).map_err(|e| Error::io(path, e))?;
     let v: Value = serde_json::from_str(&text).map_err(|e| bad(&e.to_string()))?;
     if v["format"] != FORMAT {
         return Err(bad(&format!("format is not {FORMAT}")));
