@@ -1,6 +1,7 @@
-//! The command line's arguments: the clap definitions of every command and their value
-//! parsers. What each command does is in its own module; this one only says what it
-//! accepts (the flags, their limits and defaults, and the `--help` text).
+//! The command line's arguments: the clap definitions of every command (rendering's
+//! here, the other commands' in `tools`) and their value parsers (`values`). What each
+//! command does is in its own module; these only say what it accepts (the flags, their
+//! limits and defaults, and the `--help` text).
 
 use std::path::PathBuf;
 
@@ -14,6 +15,12 @@ use gpurt::limits::{
 };
 use gpurt::scene::{Camera, ReadOptions};
 use gpurt::session::Backend;
+
+mod tools;
+mod values;
+
+pub use tools::{BenchArgs, DiffArgs, TuneArgs, ViewArgs};
+use values::{backends, parse_colour, shadings};
 
 #[derive(Parser)]
 #[command(
@@ -80,153 +87,6 @@ pub enum Command {
     Completions { shell: clap_complete::Shell },
     /// Print the manual page (roff), e.g. `gpurt man > ~/.local/share/man/man1/gpurt.1`.
     Man,
-}
-
-#[derive(clap::Args)]
-pub struct DiffArgs {
-    pub a: PathBuf,
-    pub b: PathBuf,
-    /// Write a heat map (A | B | magnified difference) here.
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-    /// Largest acceptable FLIP mean (default 0.01).
-    #[arg(long, value_parser = parse_limit)]
-    pub max_flip: Option<f64>,
-    /// Largest acceptable fraction of pixels differing by more than 2/255 (default 0.005).
-    #[arg(long, value_parser = parse_limit)]
-    pub max_bad: Option<f64>,
-}
-
-#[derive(clap::Args)]
-pub struct BenchArgs {
-    /// Scenes to render.
-    #[arg(required = true)]
-    pub scenes: Vec<PathBuf>,
-    /// Image sizes, WxH, comma-separated.
-    #[arg(long, default_value = "1920x1080", value_delimiter = ',', value_parser = parse_size)]
-    pub sizes: Vec<(u32, u32)>,
-    /// Samples per pixel, comma-separated.
-    #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: Vec<u32>,
-    /// Maximum ray depth.
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
-    pub depth: u32,
-    /// Model of the specular highlight; everything else is shaded alike.
-    #[arg(long, default_value = "phong", value_parser = shadings())]
-    pub shading: Shading,
-    /// Timed GPU frames per pass; the median is reported.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
-    pub frames: u32,
-    /// Which backends to time.
-    #[arg(long, default_value = "both", value_parser = backends(&[
-        (Backend::Gpu, None),
-        (Backend::Cpu, None),
-        (Backend::Both, None),
-    ]))]
-    pub backend: Backend,
-    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
-    /// with what follows each up to the next known keyword, warning of each, instead of
-    /// refusing the file.
-    #[arg(long)]
-    pub lenient: bool,
-}
-
-#[derive(clap::Args)]
-pub struct TuneArgs {
-    /// Scenes to measure on: the kind of scenes the adapter will render.
-    #[arg(required = true)]
-    pub scenes: Vec<PathBuf>,
-    /// Image size, WxH: that of the renders the adapter will make (frames of a few
-    /// milliseconds time noisily).
-    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
-    pub size: (u32, u32),
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: u32,
-    /// Maximum ray depth.
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
-    pub depth: u32,
-    /// Timed rounds per scene, each one frame of every candidate; a candidate's time on
-    /// the scene is the median over the rounds of its time over the defaults'.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
-    pub frames: u32,
-    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// Skip NFF keywords gpurt does not know, warning of each, instead of refusing the
-    /// file (as for rendering).
-    #[arg(long)]
-    pub lenient: bool,
-}
-
-#[derive(clap::Args)]
-pub struct ViewArgs {
-    /// Scene to view (as for rendering).
-    pub scene: PathBuf,
-    /// Window width (default: the scene's resolution).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
-    pub width: Option<u32>,
-    /// Window height.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_IMAGE_SIDE as i64))]
-    pub height: Option<u32>,
-    /// Stop accumulating after this many samples per pixel (default: the most a frame may
-    /// have, MAX_SPP).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: Option<u32>,
-    /// Maximum ray depth, the eye ray counting as 1.
-    #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
-    pub depth: u32,
-    #[arg(long, value_parser = parse_colour, help = format!(
-        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
-    ))]
-    pub ambient: Option<Vec3>,
-    /// Seed of the sample hash.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
-    /// Model of the specular highlight; everything else is shaded alike.
-    #[arg(long, default_value = "phong", value_parser = shadings())]
-    pub shading: Shading,
-    /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
-    #[arg(long, default_value = "auto", value_parser = backends(&[
-        (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
-        (Backend::Gpu, Some("WGSL compute through wgpu, on any adapter")),
-        (Backend::Cpu, Some("The CPU reference renderer")),
-    ]))]
-    pub backend: Backend,
-    /// Use the first GPU adapter whose name contains this (also GPURT_ADAPTER).
-    #[arg(long)]
-    pub adapter: Option<String>,
-    /// Start from this file's NFF `v` block instead of the scene's camera.
-    #[arg(long, value_name = "FILE")]
-    pub view: Option<PathBuf>,
-    /// Replay the input events in this file (drag, pan, wheel, key, wait; see
-    /// docs/viewer.md).
-    #[arg(long, value_name = "EVENTS")]
-    pub script: Option<PathBuf>,
-    /// After the script (and, with --spp, once the view has its samples), write what the
-    /// window shows to this file and exit.
-    #[arg(long, value_name = "OUT.png", requires = "script")]
-    pub screenshot: Option<PathBuf>,
-    /// On exit, print the time to the first picture, frame times and tracing rates.
-    #[arg(long)]
-    pub stats: bool,
-    /// Skip NFF keywords gpurt does not know (other tracers' dialects: `Q`, `fp`, `obj`)
-    /// with what follows each up to the next known keyword, warning of each, instead of
-    /// refusing the file.
-    #[arg(long)]
-    pub lenient: bool,
-}
-
-impl ViewArgs {
-    /// How the scene is read.
-    pub fn read_options(&self) -> ReadOptions {
-        ReadOptions {
-            lenient: self.lenient,
-        }
-    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -402,68 +262,6 @@ impl RenderArgs {
     pub fn options(&self, camera: &Camera) -> RenderOptions {
         RenderOptions::for_camera(camera).with_overrides(&self.overrides())
     }
-}
-
-fn parse_colour(s: &str) -> Result<Vec3, String> {
-    let v: Vec<f32> = s
-        .split(',')
-        .map(|p| p.trim().parse::<f32>().map_err(|e| format!("'{p}': {e}")))
-        .collect::<Result<_, _>>()?;
-    match v[..] {
-        [g] if g.is_finite() && g >= 0.0 => Ok(Vec3::splat(g)),
-        [r, g, b] if [r, g, b].iter().all(|c| c.is_finite() && *c >= 0.0) => Ok(Vec3::new(r, g, b)),
-        _ => Err("expected one non-negative number or three separated by commas".into()),
-    }
-}
-
-/// A threshold: a finite number, not negative (NaN would make every comparison pass).
-fn parse_limit(s: &str) -> Result<f64, String> {
-    match s.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!("'{s}': expected a finite number, 0 or more")),
-    }
-}
-
-/// `--backend`'s parser for a command: the backends it accepts, in order, each with the
-/// line `--help` shows for it.
-fn backends(
-    accepted: &[(Backend, Option<&'static str>)],
-) -> impl clap::builder::TypedValueParser<Value = Backend> {
-    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-    let values = accepted.iter().map(|&(backend, help)| {
-        let value = PossibleValue::new(backend.name());
-        match help {
-            Some(help) => value.help(help),
-            None => value,
-        }
-    });
-    PossibleValuesParser::new(values)
-        .map(|name| Backend::from_name(&name).expect("a backend's name"))
-}
-
-/// `--shading`'s parser: every model by its name, with the line `--help` shows for it.
-fn shadings() -> impl clap::builder::TypedValueParser<Value = Shading> {
-    use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
-    PossibleValuesParser::new(Shading::ALL.map(|s| {
-        PossibleValue::new(s.name()).help(match s {
-            Shading::Phong => "Ks (R.L)^Shine, R the mirrored ray: NFF's model",
-            Shading::BlinnPhong => {
-                "Ks (N.H)^Shine, H halfway between the light and the viewer: the P3D course's"
-            }
-        })
-    }))
-    .map(|name| Shading::from_name(&name).expect("a shading model's name"))
-}
-
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s
-        .split_once('x')
-        .ok_or_else(|| format!("'{s}': expected WIDTHxHEIGHT"))?;
-    let dim = |d: &str| match d.trim().parse::<u32>() {
-        Ok(v) if (1..=MAX_IMAGE_SIDE).contains(&v) => Ok(v),
-        _ => Err(format!("'{s}': each side must be 1 to {MAX_IMAGE_SIDE}")),
-    };
-    Ok((dim(w)?, dim(h)?))
 }
 
 #[cfg(test)]
