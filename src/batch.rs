@@ -115,8 +115,12 @@ fn render_one(
     let prepared = run::prepare(scene, opts.view.as_deref(), &opts.read, |c| {
         options(c).samples()
     })?;
-    let buffers = Arc::new(prepared.buffers);
+    let mut buffers = prepared.buffers;
     let options = options(&buffers.camera);
+    if gpu.is_none() {
+        buffers.for_cpu_alone(options.aov);
+    }
+    let buffers = Arc::new(buffers);
     let frame = frame::globals(&buffers, &options);
     let mut cpu;
     let renderer: &mut dyn Renderer = match (gpu, session.as_mut()) {

@@ -145,7 +145,7 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         height: opts.height,
         spp: opts.spp,
         seed: opts.seed,
-        n_nodes: buffers.nodes.len() as u32,
+        n_nodes: buffers.node_count() as u32,
         n_planes: buffers.planes.len() as u32,
         n_lights: buffers.lights.len() as u32,
         aov: opts.aov,

@@ -25,7 +25,12 @@ pub const EPSILON_REL: f32 = 5e-6;
 /// The flat scene: what is uploaded to the GPU and what the CPU reference traverses.
 #[derive(Clone, Debug)]
 pub struct SceneBuffers {
+    /// The binary tree, which the GPU's walks read (and build their own trees from), empty
+    /// once `for_cpu_alone` has dropped it.
     pub nodes: Vec<GpuNode>,
+    /// Nodes of the binary tree as built, kept when `for_cpu_alone` drops them
+    /// (`GpuGlobals::n_nodes`, `--stats`).
+    node_count: usize,
     /// Bounded primitives in BVH leaf order.
     pub prims: Vec<GpuPrim>,
     pub tri_normals: Vec<GpuTriNormals>,
@@ -46,8 +51,8 @@ pub struct SceneBuffers {
     /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
-    /// The CPU renderer's triangle leaves in blocks of four (`bvh::blocks`), built with
-    /// `wide`.
+    /// The CPU renderer's triangle leaves in blocks of four (`bvh::blocks`), built from
+    /// `wide`'s leaves.
     blocks: OnceLock<Blocks>,
     /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`),
     /// and the stack entries that walk needs, built on its first upload for that walk.
@@ -152,6 +157,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     permute(&mut records, order);
     flat::to_edges(&mut records);
     Ok(SceneBuffers {
+        node_count: nodes.len(),
         nodes,
         prims: records,
         tri_normals,
@@ -216,11 +222,39 @@ impl SceneBuffers {
     }
 
     /// The leaves of two to four triangles as blocks for the CPU renderer's single-ray
-    /// walk (`bvh::blocks`), built the first time they are asked for: `nodes` and `prims`
-    /// must not change after that.
+    /// walk (`bvh::blocks`), from the eight-wide tree's leaves, built the first time they
+    /// are asked for: `nodes` and `prims` must not change after that.
     pub fn triangle_blocks(&self) -> &Blocks {
         self.blocks
-            .get_or_init(|| Blocks::build(&self.nodes, &self.prims))
+            .get_or_init(|| Blocks::build(self.wide_nodes(), &self.prims))
+    }
+
+    /// Readies the scene for frames of the AOV `aov` that only the CPU traces, and frees
+    /// what they never read: builds the eight-wide tree, drops the binary tree it was
+    /// built from (the CPU walks the wide tree; only the GPU, its wireframe and the
+    /// `cost` AOV, which walks the GPU's tree, read `nodes`), then builds the triangle
+    /// blocks from the wide tree's leaves, so that the binary tree and the blocks are
+    /// never held at once. Nothing for the `cost` AOV. A 2M-triangle terrain peaks 19
+    /// bytes a primitive lower (`benches/scene-memory.sh`). The scene cannot go to the
+    /// GPU after this: `check_for_gpu` refuses it.
+    pub fn for_cpu_alone(&mut self, aov: u32) {
+        if aov == AOV_COST {
+            return;
+        }
+        self.wide_nodes();
+        self.nodes = Vec::new();
+        self.triangle_blocks();
+    }
+
+    /// Whether `for_cpu_alone` has dropped the binary tree.
+    pub fn is_cpu_only(&self) -> bool {
+        self.nodes.len() != self.node_count
+    }
+
+    /// Nodes of the binary tree as built (`GpuGlobals::n_nodes`; its count stays when
+    /// `for_cpu_alone` drops it).
+    pub fn node_count(&self) -> usize {
+        self.node_count
     }
 
     /// `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them, built
@@ -315,6 +349,16 @@ impl SceneBuffers {
         }
     }
 
+    /// `check`, for a GPU's frame: which also needs the binary tree (`for_cpu_alone`).
+    pub fn check_for_gpu(&self, globals: &GpuGlobals) -> Result<()> {
+        if self.is_cpu_only() {
+            return Err(Error::Gpu(
+                "internal error: the binary tree was dropped for the CPU's walk alone".into(),
+            ));
+        }
+        self.check(globals)
+    }
+
     /// Proves the invariants the GPU shader relies on, since it runs without runtime
     /// bounds checks: every index in range, every inner node's children after it (so a
     /// traversal visits each node at most once and ends), the tree shallow enough for the
@@ -396,7 +440,7 @@ impl SceneBuffers {
         {
             return fail("a light has a bad kind or sample count".into());
         }
-        let counts_ok = globals.n_nodes as usize == n
+        let counts_ok = globals.n_nodes as usize == self.node_count
             && globals.n_planes as usize == self.planes.len()
             && globals.n_lights as usize == self.lights.len();
         if !counts_ok || globals.max_depth > MAX_DEPTH || globals.spp == 0 {
@@ -514,6 +558,10 @@ mod tests {
         let b = pack(balls()).unwrap();
         let g = globals(&b);
         b.check(&g).unwrap();
+        let mut cpu = b.clone();
+        cpu.for_cpu_alone(AOV_COLOR);
+        assert!(cpu.is_cpu_only() && cpu.check_for_gpu(&g).is_err());
+        cpu.check(&g).unwrap();
         let inner = b.nodes.iter().position(|n| n.count() == 0).unwrap();
 
         let mut bad = b.clone();

@@ -130,10 +130,14 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
         |camera| args.options(camera).samples() / u64::from(shard.count),
     )?;
     print_warnings(&warnings);
-    let buffers = Arc::new(buffers);
+    let mut buffers = buffers;
     let opts = args.options(&buffers.camera);
     let globals = frame::globals(&buffers, &opts);
     let found = session::choose(args.backend, args.adapter.as_deref(), Missing::Cpu)?;
+    if found.gpu.is_none() {
+        buffers.for_cpu_alone(opts.aov);
+    }
+    let buffers = Arc::new(buffers);
     let backend = if found.gpu.is_some() { "gpu" } else { "cpu" };
     let mut renderer: Box<dyn Renderer> = match found.gpu {
         Some(ctx) => Box::new(GpuSession::new(ctx, buffers.clone())?),

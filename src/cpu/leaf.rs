@@ -27,8 +27,11 @@ pub(crate) fn leaf_triangles4(
     leaf: &[GpuPrim],
     ray: &Ray,
 ) -> Option<(Vec4, Vec4, Vec4)> {
-    match b.blocks.and_then(|blocks| blocks.get(first)) {
-        Some(block) => Some(intersect::triangles4(block, ray)),
+    match b
+        .blocks
+        .and_then(|blocks| blocks.get(first, leaf.len() as u32))
+    {
+        Some(block) => Some(intersect::triangles4(&block, ray)),
         None => intersect::intersect_triangles4(leaf, ray),
     }
 }

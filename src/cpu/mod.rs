@@ -124,6 +124,11 @@ pub fn render_rows_with(
     let (w, h) = (globals.width, globals.height);
     accum.check(w, h, globals.spp, &samples)?;
     let rows = rows.start.min(h)..rows.end.min(h);
+    if globals.aov == crate::gpu_types::AOV_COST && buffers.is_cpu_only() {
+        return Err(Error::Render(
+            "internal error: the cost AOV walks the binary tree, which was dropped".into(),
+        ));
+    }
     let b = Bindings::new(buffers, globals);
     // Packets need the eight-wide tree (the `cost` AOV walks the GPU's instead).
     let kernels = kernels.filter(|_| b.wide.is_some());

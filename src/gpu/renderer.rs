@@ -249,7 +249,7 @@ impl GpuRenderer {
             self.fetch,
             self.layer_rows,
         )?;
-        scene.check(globals)?;
+        scene.check_for_gpu(globals)?;
         let spec = self.spec(scene, globals);
         let data = self.upload_scene(gpu, scene, globals.traversal)?;
         let pipeline = self.pipeline(gpu, scene, &data, globals)?;
@@ -296,7 +296,7 @@ impl GpuRenderer {
         let gpu = &Gpu::new(device, queue);
         let limits = gpu.limits();
         let globals = &self.frame(scene, globals);
-        scene.check(globals)?;
+        scene.check_for_gpu(globals)?;
         let spec = self.spec(scene, globals);
         let spec_changed = spec != uploaded.spec;
         if spec_changed {
