@@ -22,7 +22,7 @@ fn height(x: f64, y: f64) -> f64 {
 const VIEW: &str = "v\nfrom 0.5 -0.9 0.9\nat 0.5 0.5 0\nup 0 0 1\nangle 40\nhither 0.001\n\
                     resolution 256 256\nb 0.2 0.3 0.5\nl 0.2 -0.5 2\nl 1 0.2 1.5\n";
 
-fn terrain(n: usize, format: &str, out: &mut impl Write) -> io::Result<()> {
+pub fn terrain(n: usize, format: &str, out: &mut impl Write) -> io::Result<()> {
     let p = |i: usize, j: usize| {
         let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
         [x as f32, y as f32, height(x, y) as f32]
@@ -86,7 +86,7 @@ fn terrain(n: usize, format: &str, out: &mut impl Write) -> io::Result<()> {
     Ok(())
 }
 
-fn spheres(n: usize, out: &mut impl Write) -> io::Result<()> {
+pub fn spheres(n: usize, out: &mut impl Write) -> io::Result<()> {
     out.write_all(VIEW.as_bytes())?;
     out.write_all(b"f 0.7 0.7 0.7 1 0 1 0 1\npl 0 0 0  1 0 0  0 1 0\n")?;
     out.write_all(b"f 0.8 0.3 0.2 0.7 0.3 30 0 1\n")?;

@@ -1,7 +1,9 @@
 //! Faults the command line can be made to meet (`GPURT_FAULT`), so that its tests check
 //! end to end what a user would see when a GPU fails: an error naming the step, a
 //! non-zero exit, no output file. Each fault is a real failure of the device or its
-//! driver, brought about at a chosen moment; nothing here fakes an error.
+//! driver, brought about at a chosen moment; nothing here fakes an error. One more is
+//! a real waste of memory, so that the test guarding the renderer's peak memory can show
+//! that it catches one.
 
 use crate::error::{Error, Result};
 
@@ -19,6 +21,10 @@ pub enum Fault {
     /// memory is the process's own (lavapipe cannot run out otherwise: its allocations
     /// are overcommitted, docs/gpu.md); on a GPU the cap meets only wgpu's host side.
     OutOfMemory,
+    /// `keep-primitives`: a copy of the scene's primitives is made once the scene is
+    /// packed and held until the image is written, as a copy kept past its use would be
+    /// (tests/gpurt/memory.rs shows that its guard fails then).
+    KeepPrimitives,
 }
 
 /// Room the `out-of-memory` fault leaves each texture allocation: a texture larger than
@@ -34,8 +40,9 @@ impl Fault {
             Err(_) | Ok("") => Ok(None),
             Ok("lose-device") => Ok(Some(Fault::LoseDevice)),
             Ok("out-of-memory") => Ok(Some(Fault::OutOfMemory)),
+            Ok("keep-primitives") => Ok(Some(Fault::KeepPrimitives)),
             Ok(v) => Err(Error::Render(format!(
-                "GPURT_FAULT={v}: expected `lose-device` or `out-of-memory`"
+                "GPURT_FAULT={v}: expected `lose-device`, `out-of-memory` or `keep-primitives`"
             ))),
         }
     }

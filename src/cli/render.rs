@@ -55,7 +55,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         buffers,
         warnings,
         parse_time,
-        build_time,
+        mut build_time,
     } = run::prepare(
         scene_path,
         args.view.as_deref(),
@@ -69,7 +69,33 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         counters: u32::from(args.stats),
         ..frame::globals(&buffers, &opts)
     };
+    let mut buffers = buffers;
+
+    // The GPU's context, when one renders: found while the scene was read.
+    let mut gpu = None;
+    if !wireframe_only {
+        let found = match probe {
+            Some(probe) => probe.join()?,
+            None => session::Found {
+                gpu: None,
+                note: None,
+            },
+        };
+        print_note(&found, args.verbose || args.stats);
+        print_threads(args.verbose || args.stats);
+        gpu = found.gpu;
+    }
+    // A frame that only the CPU's own walk traces frees the binary tree (the GPU's, which
+    // the wireframe and the `cost` AOV also read) before it renders.
+    if gpu.is_none() && !wireframe_only && args.overlay.is_none() {
+        // Its eight-wide tree and blocks are built here, counted with the BVH.
+        let t = Instant::now();
+        buffers.for_cpu_alone(args.options(&buffers.camera).aov);
+        build_time += t.elapsed();
+    }
     let buffers = Arc::new(buffers);
+    let _copy = (gpurt::fault::Fault::from_env()? == Some(gpurt::fault::Fault::KeepPrimitives))
+        .then(|| buffers.prims.clone());
 
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
     // image is compared against it.
@@ -82,16 +108,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         renderers.push(cpu());
     }
     if !wireframe_only {
-        let found = match probe {
-            Some(probe) => probe.join()?,
-            None => session::Found {
-                gpu: None,
-                note: None,
-            },
-        };
-        print_note(&found, args.verbose || args.stats);
-        print_threads(args.verbose || args.stats);
-        match found.gpu {
+        match gpu {
             Some(ctx) => {
                 device = Some(ctx.clone());
                 renderers.push(("gpu", Box::new(GpuSession::new(ctx, buffers.clone())?)));
@@ -192,7 +209,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         eprintln!(
             "scene       {} prims in BVH ({} nodes, depth {}), {} planes, {} lights",
             buffers.prims.len(),
-            buffers.nodes.len(),
+            buffers.node_count(),
             buffers.bvh_depth,
             buffers.planes.len(),
             buffers.lights.len()

@@ -8,11 +8,17 @@ mod bvh;
 mod cli;
 mod common;
 mod cpu;
+/// The generated scenes of the memory benchmarks, for `memory`'s guard (its `main` goes
+/// unused here).
+#[path = "../../examples/field.rs"]
+#[allow(dead_code)]
+mod field_example;
 mod fuzzed;
 mod gallery;
 mod gpu;
 mod hostile;
 mod layout;
+mod memory;
 mod packet;
 mod parse;
 mod session;
