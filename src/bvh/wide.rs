@@ -125,7 +125,7 @@ impl<'a> Optimal<'a> {
         // Nodes are in depth-first order, the first child right after its parent and the
         // second after the first's subtree: backwards, a node comes right after its first
         // child, whose cost row is then on top of the stack and its second child's below.
-        let mut stack: Vec<[f32; WIDTH]> = Vec::new();
+        let mut stack: Vec<[f64; WIDTH]> = Vec::new();
         for n in (0..nodes.len()).rev() {
             let node = &nodes[n];
             if node.count() > 0 {
@@ -136,14 +136,18 @@ impl<'a> Optimal<'a> {
                 unreachable!("an inner node's children come after it");
             };
             // The least cost of the two children sharing `lanes`, and the first child's
-            // lanes (the fewest, among equal costs).
+            // lanes (the fewest, among equal costs: `min_by` keeps the first).
             let split = |lanes: usize| {
                 (1..lanes)
                     .map(|k| (first[k - 1] + second[lanes - k - 1], k))
-                    .fold((f32::INFINITY, 0), |a, b| if b.0 < a.0 { b } else { a })
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .expect("two lanes or more")
             };
             let (spread, own) = split(WIDTH);
-            let open = area(node) + spread;
+            // In f64: a scene's coordinates may reach 1e35 (the chain of the walks' tests),
+            // whose areas overflow f32 and would leave every choice tied at infinity.
+            let d = (node.max - node.min).as_dvec3();
+            let open = d.x * d.y + d.y * d.z + d.z * d.x + spread;
             let mut row = [open; WIDTH];
             let mut word = own as u32;
             for lanes in 2..=WIDTH {
@@ -469,6 +473,19 @@ mod tests {
             })
             .collect();
         let binary = bvh::build(&chain, Quality::Medium);
+        check(&binary, &cpu_lanes(&build(&binary.nodes)), false);
+        // Boxes wide in two axes as far out as 1e35, whose areas overflow f32: the costs
+        // must still choose (an all-infinite tie once gave a node nine lanes).
+        let wide: Vec<Aabb> = (0..200)
+            .map(|k| {
+                let x = 1.5f32.powi(k);
+                Aabb {
+                    min: glam::Vec3A::new(0.7 * x, -0.3 * x, -0.3 * x),
+                    max: glam::Vec3A::new(1.3 * x, 0.3 * x, 0.3 * x),
+                }
+            })
+            .collect();
+        let binary = bvh::build(&wide, Quality::Medium);
         check(&binary, &cpu_lanes(&build(&binary.nodes)), false);
         assert!(build(&[]).is_empty());
         assert!(gpu_nodes(&[]).is_none());
