@@ -1,5 +1,5 @@
 //! Heap memory at each stage of getting a scene ready, per primitive: reading the file
-//! straight into the renderers' records (as `run::prepare` does), packing it (BVH build,
+//! straight into the renderers' records (as `run::read` does), packing it (BVH build,
 //! the records put in leaf order) and rendering a small CPU frame.
 //! Counts every allocation through a wrapping global allocator, so the figures are the
 //! program's own heap, without the binary, thread stacks or allocator slack that the
@@ -131,9 +131,8 @@ fn image_stages(path: &Path, size: &str, out: &Path) -> gpurt::Result<()> {
         rows.push((name.to_string(), t.elapsed(), peak, CURRENT.load(Relaxed)));
     };
     let t = Instant::now();
-    let prepared = gpurt::run::prepare(path, None, &Default::default(), |_| {
-        u64::from(w) * u64::from(h)
-    })?;
+    let read = gpurt::run::read(path, None, &Default::default())?;
+    let prepared = gpurt::run::pack(read, u64::from(w) * u64::from(h))?;
     stage("read, parse, pack", t);
     let opts = gpurt::frame::RenderOptions {
         width: w,

@@ -104,10 +104,8 @@ fn main() -> anyhow::Result<()> {
     // are those of the first sample either way; a longer render gets a better tree,
     // `bvh::Quality::for_work`).
     let spp: u64 = std::env::var("SPP").map_or(Ok(1), |s| s.parse())?;
-    let buffers = gpurt::run::prepare(&scene, None, &Default::default(), |_| {
-        u64::from(size) * u64::from(size) * spp
-    })?
-    .buffers;
+    let read = gpurt::run::read(&scene, None, &Default::default())?;
+    let buffers = gpurt::run::pack(read, u64::from(size) * u64::from(size) * spp)?.buffers;
     anyhow::ensure!(
         buffers.planes.is_empty()
             && buffers.prims.iter().all(|p| p.kind() != PRIM_BOX)

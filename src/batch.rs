@@ -112,9 +112,9 @@ fn render_one(
 ) -> Result<(u64, Vec<String>)> {
     let options =
         |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&opts.overrides);
-    let prepared = run::prepare(scene, opts.view.as_deref(), &opts.read, |c| {
-        options(c).samples()
-    })?;
+    let read = run::read(scene, opts.view.as_deref(), &opts.read)?;
+    let samples = options(read.camera()).samples();
+    let prepared = run::pack(read, samples)?;
     let mut buffers = prepared.buffers;
     let options = options(&buffers.camera);
     if gpu.is_none() {

@@ -1,5 +1,5 @@
-//! One render from a scene file to a film, as the command line drives it: read and pack
-//! (timed), then the frame on any `Renderer`, made ready, traced and timed the same way
+//! One render from a scene file to a film, as the command line drives it: read, then
+//! pack for the frame the camera and the options make (each timed), then the frame on any `Renderer`, made ready, traced and timed the same way
 //! on both backends.
 
 use std::path::Path;
@@ -11,8 +11,23 @@ use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
+use crate::scene::flat::FlatScene;
 use crate::scene::{self, Camera, ReadOptions};
 use crate::session::Renderer;
+
+/// A scene read into the renderers' records, not yet packed: its camera says what a
+/// frame of it traces, and so the samples that choose its tree's build (`pack`).
+pub struct Read {
+    flat: FlatScene,
+    parse_time: Duration,
+}
+
+impl Read {
+    /// The scene's camera (the view's, when one was given).
+    pub fn camera(&self) -> &Camera {
+        &self.flat.scene.camera
+    }
+}
 
 /// A scene read and packed, with the time each step took and the reader's warnings (the
 /// `Scene` itself is gone: packing consumes it).
@@ -23,30 +38,35 @@ pub struct Prepared {
     pub build_time: Duration,
 }
 
-/// Reads and packs the scene at `path`, with the camera of the NFF `v` block in `view`
-/// when one is given (a view found in `gpurt view`, printed with its C key), for a
-/// render of `samples(camera)` camera samples (which picks the BVH's build quality), read
-/// as `read` says (`--lenient`).
-pub fn prepare(
-    path: &Path,
-    view: Option<&Path>,
-    read: &ReadOptions,
-    samples: impl FnOnce(&Camera) -> u64,
-) -> Result<Prepared> {
+/// Reads the scene at `path` straight into the renderers' records (the scene is never
+/// held twice), with the camera of the NFF `v` block in `view` when one is given (a view
+/// found in `gpurt view`, printed with its C key), read as `read` says (`--lenient`).
+pub fn read(path: &Path, view: Option<&Path>, read: &ReadOptions) -> Result<Read> {
     let t0 = Instant::now();
-    // Read straight into the renderers' records: the scene is never held twice.
     let mut flat = scene::load_flat_with(path, read)?;
     if let Some(view) = view {
         flat.scene.camera = scene::summary(view)?.scene.camera;
     }
+    Ok(Read {
+        flat,
+        parse_time: t0.elapsed(),
+    })
+}
+
+/// Packs a scene read by `read` for a render of `samples` camera samples, which picks
+/// the BVH's build quality (`bvh::Quality::chosen`).
+pub fn pack(read: Read, samples: u64) -> Result<Prepared> {
+    let Read {
+        mut flat,
+        parse_time,
+    } = read;
     let t1 = Instant::now();
     let warnings = std::mem::take(&mut flat.scene.warnings);
-    let samples = samples(&flat.scene.camera);
     let buffers = pack::pack_flat(flat, samples)?;
     Ok(Prepared {
         buffers,
         warnings,
-        parse_time: t1 - t0,
+        parse_time,
         build_time: t1.elapsed(),
     })
 }

@@ -229,7 +229,9 @@ pub fn run(config: &TuneConfig) -> Result<()> {
     for path in &config.scenes {
         let opts =
             |c: &crate::scene::Camera| RenderOptions::for_camera(c).with_overrides(&overrides);
-        let prepared = run::prepare(path, None, &config.read, |c| opts(c).samples())?;
+        let read = run::read(path, None, &config.read)?;
+        let samples = opts(read.camera()).samples();
+        let prepared = run::pack(read, samples)?;
         let buffers = &prepared.buffers;
         let globals = frame::globals(buffers, &opts(&buffers.camera));
         let name = path.file_name().unwrap_or_default().to_string_lossy();

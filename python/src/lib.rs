@@ -1,5 +1,5 @@
 //! `gpurt._native`: the compiled half of the Python module `gpurt`. A way in over the
-//! library (`scene`, `run::prepare`'s steps, `frame`, `session::Renderer`, `film`); it adds
+//! library (`scene`, `run::read` and `run::pack`, `frame`, `session::Renderer`, `film`); it adds
 //! no rendering of its own. The pure-Python half (`gpurt/__init__.py`) holds `Image`, the
 //! ndarray that shows itself in Jupyter.
 //!

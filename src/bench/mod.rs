@@ -178,8 +178,9 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                 let prepared = match builds.iter().position(wanted) {
                     Some(i) => &builds[i],
                     None => {
-                        let b =
-                            run::prepare(path, None, &config.read, |c| with_camera(c).samples())?;
+                        let read = run::read(path, None, &config.read)?;
+                        let samples = with_camera(read.camera()).samples();
+                        let b = run::pack(read, samples)?;
                         eprintln!(
                             "  {name}: BVH built at {} quality for {width}x{height}, {spp} spp",
                             b.buffers.bvh_quality.name()

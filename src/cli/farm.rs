@@ -123,12 +123,11 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
     let cancel = cancel_on_signals();
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(
-        scene,
-        args.view.as_deref(),
-        &args.read_options(),
-        |camera| args.options(camera).samples() / u64::from(shard.count),
-    )?;
+    } = {
+        let read = run::read(scene, args.view.as_deref(), &args.read_options())?;
+        let samples = args.options(read.camera()).samples() / u64::from(shard.count);
+        run::pack(read, samples)?
+    };
     print_warnings(&warnings);
     let mut buffers = buffers;
     let opts = args.options(&buffers.camera);

@@ -56,12 +56,11 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         warnings,
         parse_time,
         mut build_time,
-    } = run::prepare(
-        scene_path,
-        args.view.as_deref(),
-        &args.read_options(),
-        |camera| args.options(camera).samples(),
-    )?;
+    } = {
+        let read = run::read(scene_path, args.view.as_deref(), &args.read_options())?;
+        let samples = args.options(read.camera()).samples();
+        run::pack(read, samples)?
+    };
     print_warnings(&warnings);
     let opts = args.options(&buffers.camera);
     // `--stats` counts rays and node fetches by kind as the frame renders.

@@ -70,19 +70,16 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         .transpose()?;
     let Prepared {
         buffers, warnings, ..
-    } = run::prepare(
-        &args.scene,
-        args.view.as_deref(),
-        &args.read_options(),
-        |camera| {
-            // Quick to the first image: the build that suits one frame at the window's size.
-            let (w, h) = (
-                args.width.unwrap_or(camera.width),
-                args.height.unwrap_or(camera.height),
-            );
-            u64::from(w) * u64::from(h)
-        },
-    )?;
+    } = {
+        let read = run::read(&args.scene, args.view.as_deref(), &args.read_options())?;
+        // Quick to the first image: the build that suits one frame at the window's size.
+        let camera = read.camera();
+        let (w, h) = (
+            args.width.unwrap_or(camera.width),
+            args.height.unwrap_or(camera.height),
+        );
+        run::pack(read, u64::from(w) * u64::from(h))?
+    };
     print_warnings(&warnings);
     print_threads(args.stats);
     window::run(

@@ -1,5 +1,5 @@
 //! A scene's bounded primitives read straight into the records the renderers read
-//! (`GpuPrim`, `GpuTriNormals`): the `Sink` that `run::prepare` loads through, so that
+//! (`GpuPrim`, `GpuTriNormals`): the `Sink` that `run::read` loads through, so that
 //! no primitive is ever held in two forms. `pack` builds the tree over the records,
 //! puts them in its leaf order in place, and turns the triangles into edges.
 //!
