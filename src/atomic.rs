@@ -105,7 +105,20 @@ pub fn check_writable(path: &Path) -> Result<()> {
         .write(true)
         .create_new(true)
         .open(&temp)
-        .map_err(|e| Error::io(path, e))?;
+        .map_err(
+            |e| match target.parent().filter(|d| !d.as_os_str().is_empty()) {
+                Some(dir) if e.kind() == std::io::ErrorKind::NotFound && !dir.is_dir() => {
+                    Error::io(
+                        path,
+                        std::io::Error::new(
+                            e.kind(),
+                            format!("the folder {} does not exist", dir.display()),
+                        ),
+                    )
+                }
+                _ => Error::io(path, e),
+            },
+        )?;
     let _ = fs::remove_file(&temp);
     Ok(())
 }

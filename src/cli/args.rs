@@ -116,9 +116,13 @@ impl ImageFormat {
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Aov {
+    /// The shaded image (the default).
     Color,
+    /// The surface normal at the first hit, each axis mapped from [-1, 1] to [0, 1].
     Normal,
+    /// The distance to the first hit, nearest light, farthest dark.
     Depth,
+    /// The BVH nodes the GPU's walk tests a pixel, as a heat map.
     Cost,
     /// The wireframe alone (drawn by the GPU), as `gpurt view` shows it.
     Wireframe,

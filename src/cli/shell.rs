@@ -28,6 +28,9 @@ pub fn man() -> gpurt::Result<ExitCode> {
     clap_mangen::Man::new(cmd.clone())
         .render(&mut page)
         .map_err(failed)?;
+    // clap_mangen names each subcommand as a page of its own (`gpurt-info(1)`), which is
+    // never installed: its text is a section further down this page.
+    let mut page = refer_to_sections(&page);
     for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()) {
         let name = sub.get_name();
         let man = clap_mangen::Man::new(sub.clone().bin_name(format!("gpurt {name}")));
@@ -44,6 +47,28 @@ pub fn man() -> gpurt::Result<ExitCode> {
     }
     out!("{}", String::from_utf8_lossy(&page));
     Ok(ExitCode::SUCCESS)
+}
+
+/// The root page's list of subcommands, each `gpurt\-NAME(1)` made `gpurt NAME` and the
+/// section of this page that has it.
+fn refer_to_sections(roff: &[u8]) -> Vec<u8> {
+    String::from_utf8_lossy(roff)
+        .lines()
+        .map(|l| {
+            match l
+                .strip_prefix("gpurt\\-")
+                .and_then(|rest| rest.strip_suffix("(1)"))
+            {
+                Some(name) if name == "help" => "\\fBgpurt help\\fR\n".to_string(),
+                Some(name) => format!(
+                    "\\fBgpurt {name}\\fR (section GPURT {} below)\n",
+                    name.to_uppercase()
+                ),
+                None => format!("{l}\n"),
+            }
+        })
+        .collect::<String>()
+        .into_bytes()
 }
 
 /// A subcommand's sections as subsections of its own section: `.SH` becomes `.SS`.

@@ -19,6 +19,34 @@ pub(super) fn closest<'k>(word: &[u8], keywords: &[&'k str]) -> Option<&'k str> 
         .map(|(_, k)| k)
 }
 
+/// Words other tracers' scene files use where NFF has a statement, with that statement:
+/// a file in another dialect is told NFF's word (compared ignoring case).
+pub(super) const OTHER_WORDS: [(&str, &str); 15] = [
+    ("sphere", "s"),
+    ("cone", "c"),
+    ("cylinder", "c"),
+    ("polygon", "p"),
+    ("triangle", "p"),
+    ("face", "p"),
+    ("light", "l"),
+    ("camera", "v"),
+    ("view", "v"),
+    ("material", "f"),
+    ("fill", "f"),
+    ("background", "b"),
+    ("plane", "pl"),
+    ("box", "aabb"),
+    ("include", "mesh"),
+];
+
+/// NFF's statement for `word`, another tracer's word for it (`OTHER_WORDS`), if any.
+pub(super) fn nff_word_for(word: &[u8]) -> Option<&'static str> {
+    OTHER_WORDS
+        .iter()
+        .find(|(other, _)| other.as_bytes().eq_ignore_ascii_case(word))
+        .map(|&(_, nff)| nff)
+}
+
 /// The keywords of a `v` block.
 pub(super) const VIEW_KEYWORDS: [&str; 8] = [
     "from",

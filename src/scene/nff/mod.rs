@@ -25,7 +25,7 @@ use crate::scene::options::ReadOptions;
 use crate::scene::palette::Palette;
 use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
-use keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
+use keywords::{STATEMENTS, VIEW_KEYWORDS, closest, nff_word_for};
 
 /// Parses NFF text (gzip-compressed or not). `name` is used in messages; `base` is the
 /// directory `mesh` paths are relative to.
@@ -173,10 +173,14 @@ impl Parser<'_> {
                     let text = self.lx.text(&tok);
                     let meant = closest(text, &STATEMENTS)
                         .or_else(|| closest(text, &VIEW_KEYWORDS).map(|_| "v"));
-                    let hint = match meant {
-                        Some("v") => "; a view keyword belongs in a 'v' block".to_string(),
-                        Some(k) => format!("; did you mean '{k}'?"),
-                        None => String::new(),
+                    let hint = match (nff_word_for(text), meant) {
+                        (Some(k), _) => format!(
+                            "; NFF's statement for that is '{k}' (--lenient skips the \
+                             statements gpurt does not read)"
+                        ),
+                        (None, Some("v")) => "; a view keyword belongs in a 'v' block".to_string(),
+                        (None, Some(k)) => format!("; did you mean '{k}'?"),
+                        (None, None) => String::new(),
                     };
                     return Err(self.lx.error_at(
                         &tok,
@@ -274,7 +278,7 @@ impl Parser<'_> {
             return Err(self.lx.error_at(
                 &ntok,
                 format!(
-                    "{kind} vertex count {n} is more than the rest of the file can hold ({rest} bytes)"
+                    "{kind} of {n} vertices, but the file has only {rest} bytes left: too few to hold them (is the count right?)"
                 ),
             ));
         }

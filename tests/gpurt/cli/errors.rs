@@ -143,6 +143,22 @@ fn unknown_output_format_is_refused_before_rendering() {
     assert!(!d.join("out.jpg").exists());
 }
 
+/// An output in a folder that does not exist is refused before rendering, naming the
+/// folder rather than giving the system's bare "No such file or directory".
+#[test]
+fn an_output_in_a_missing_folder_names_the_folder() {
+    let d = workdir("missing-folder");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = gpurt(&["ball.nff", "-o", "nodir/out.png", "--backend", "cpu"], &d);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("the folder nodir does not exist"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!d.join("nodir").exists());
+}
+
 #[test]
 fn missing_scene_and_bad_arguments_fail_cleanly() {
     let d = workdir("missing");

@@ -102,7 +102,17 @@ fn the_manual_page_is_accepted_by_groff_and_has_every_subcommand() {
         "GPURT MAN",
     ] {
         assert!(page.contains(&format!(".SH \"{section}\"")), "no {section}");
+        // The list of subcommands refers to this section, not to a page of its own
+        // (`gpurt-info(1)`), which is never installed.
+        assert!(
+            page.contains(&format!("(section {section} below)")),
+            "no reference to {section}"
+        );
     }
+    assert!(
+        !page.contains("(1)\n"),
+        "a reference to another page: {page}"
+    );
     for option in [
         "\\-\\-threads",
         "\\-\\-shading",

@@ -34,8 +34,20 @@ fn truncated_entity_points_at_the_end_of_the_file() {
         &format!("{VIEW}p 3\n0 0 0\n1 0\n"),
         6,
         3,
-        &["vertex count 3", "rest of the file"],
+        &["polygon of 3 vertices", "bytes left"],
     );
+}
+
+/// Another tracer's word for a statement is told NFF's, and where to look for lenience.
+#[test]
+fn another_tracers_word_is_told_the_nff_statement() {
+    assert_error(
+        &format!("{VIEW}sphere 0 0 0 1\n"),
+        6,
+        1,
+        &["'sphere'", "NFF's statement for that is 's'", "--lenient"],
+    );
+    assert_error(&format!("{VIEW}Polygon 3\n"), 6, 1, &["is 'p'"]);
 }
 
 #[test]
@@ -55,7 +67,7 @@ fn absurd_counts_are_rejected_at_the_count() {
         &format!("{VIEW}p 4000000000\n0 0 0\n1 0 0\n1 1 0\n"),
         6,
         3,
-        &["4000000000", "rest of the file"],
+        &["4000000000", "bytes left"],
     );
     assert_error(
         &format!("{VIEW}pp 99999999999\n"),
