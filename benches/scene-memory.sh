@@ -5,9 +5,11 @@
 # 1 GB plain. Each is rendered at SIZE x SIZE, 1 spp, by the release gpurt on each backend
 # and, when BASELINE names another gpurt binary (an older build), by that one too, side by
 # side in the same run (interleaved, best of REPEAT for the times). Prints a markdown table:
-# exit code, parse and build seconds, peak memory (VmHWM, as --stats prints it; else
-# /usr/bin/time's max RSS) and peak bytes per primitive. Files are generated into a
-# temporary folder and deleted at the end (the comment files need 4 GB of disk while they
+# exit code, parse, build and render seconds (as --stats prints them: a CPU-only render
+# builds its eight-wide tree and triangle blocks in the build step; builds before that
+# did in the render), the whole process's wall time, peak memory (VmHWM, as --stats
+# prints it; else /usr/bin/time's max RSS) and peak bytes per primitive. Files are
+# generated into a temporary folder and deleted at the end (the comment files need 4 GB of disk while they
 # exist).
 #
 #   benches/scene-memory.sh
@@ -69,7 +71,7 @@ for scene in "${scenes[@]}"; do
     for backend in $BACKENDS; do
         # Meshes and comments are read the same on both backends: the CPU tells it.
         [ "$backend" != cpu ] && [ "$name" != terrain ] && [ "$name" != spheres ] && continue
-        declare -A parse=() build=() peak=() rc=()
+        declare -A parse=() build=() render=() wall=() peak=() rc=()
         for _ in $(seq "$REPEAT"); do
             for b in "${bins[@]}"; do
                 read -r tag bin <<<"$b"
@@ -79,6 +81,8 @@ for scene in "${scenes[@]}"; do
                     --height "$SIZE" --spp 1 --backend "$backend" --stats \
                     -o "$WORK/out.png" >/dev/null 2>"$log" || code=$?
                 rss=$(tail -n 1 "$WORK/time" | awk '{ print $2 }')
+                wall[$tag]="${wall[$tag]:-} $(tail -n 1 "$WORK/time" | awk '{ print $1 }')"
+                render[$tag]="${render[$tag]:-} $(awk -v k="$backend" '$1 == k && $3 == "s," { print $2; exit }' "$log")"
                 vm=$(awk '$1 == "peak" { print $3; exit }' "$log")
                 p=${vm:-$(awk -v k="$rss" 'BEGIN { print k / 1024 }')}
                 rc[$tag]=$code
@@ -92,12 +96,13 @@ for scene in "${scenes[@]}"; do
         for b in "${bins[@]}"; do
             read -r tag _ <<<"$b"
             best() { tr ' ' '\n' <<<"$1" | grep -v '^$' | min; }
-            printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$prims" "$mb" "$backend" \
-                "$tag" "${rc[$tag]}" "$(best "${parse[$tag]}")" "$(best "${build[$tag]}")" \
-                "$(best "${peak[$tag]}")" >>"$ROWS"
+            printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "$prims" "$mb" \
+                "$backend" "$tag" "${rc[$tag]}" "$(best "${parse[$tag]}")" \
+                "$(best "${build[$tag]}")" "$(best "${peak[$tag]}")" "$(best "${render[$tag]}")" \
+                "$(best "${wall[$tag]}")" >>"$ROWS"
             echo "row: $(tail -n 1 "$ROWS")" >&2
         done
-        unset parse build peak rc
+        unset parse build render wall peak rc
     done
 done
 
@@ -107,11 +112,12 @@ echo
 awk -F '\t' '
 function num(x, f) { return x == "" ? "-" : sprintf(f, x) }
 BEGIN {
-    print "| scene | prims | file MB | backend | gpurt | exit | parse s | build s | peak MiB | peak bytes/prim |"
-    print "|---|---:|---:|---|---|---|---:|---:|---:|---:|"
+    print "| scene | prims | file MB | backend | gpurt | exit | parse s | build s | render s | wall s | peak MiB | peak bytes/prim |"
+    print "|---|---:|---:|---|---|---|---:|---:|---:|---:|---:|---:|"
 }
 {
     per = ($2 > 1 && $9 != "") ? sprintf("%.0f", $9 * 1048576 / $2) : "-"
-    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5, $6,
-        num($7, "%.2f"), num($8, "%.2f"), num($9, "%.0f"), per
+    printf "| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", $1, $2, $3, $4, $5,
+        $6, num($7, "%.2f"), num($8, "%.2f"), num($10, "%.2f"), num($11, "%.2f"),
+        num($9, "%.0f"), per
 }' "$ROWS"
