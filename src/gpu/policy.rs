@@ -246,7 +246,7 @@ const GPU_BAND_BYTES: u64 = 256 << 20;
 /// Pixel samples one dispatch traces at most on a GPU: a 4K frame at one sample is one
 /// dispatch, at 4 samples a pass two strips of 1088 rows, over four million invocations
 /// each, many times what a large GPU holds at once, so that few dispatches end with the
-/// GPU half idle. On an H200 (docs/gpu.md, README), strips of 2^24 made 4K frames of
+/// GPU half idle. On an H200 (docs/gpu.md, docs/speed.md), strips of 2^24 made 4K frames of
 /// seven scenes 2 to 22% faster than the 1024x1024 squares of 2^22 before them (12
 /// dispatches a frame at 1 spp, four of them 112 rows high); strips of 2^22 were slower
 /// at 16 spp. A slow GPU's
