@@ -59,7 +59,7 @@ fn refer_to_sections(roff: &[u8]) -> Vec<u8> {
                 .strip_prefix("gpurt\\-")
                 .and_then(|rest| rest.strip_suffix("(1)"))
             {
-                Some(name) if name == "help" => "\\fBgpurt help\\fR\n".to_string(),
+                Some("help") => "\\fBgpurt help\\fR\n".to_string(),
                 Some(name) => format!(
                     "\\fBgpurt {name}\\fR (section GPURT {} below)\n",
                     name.to_uppercase()
