@@ -6,21 +6,20 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use glam::Vec3;
 use gpurt::film;
-use gpurt::frame::{Overrides, RenderOptions, Shading};
+use gpurt::frame::{Overrides, RenderOptions};
 use gpurt::gpu_types as gt;
-use gpurt::limits::{
-    DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS,
-};
+use gpurt::limits::{DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS};
 use gpurt::scene::{Camera, ReadOptions};
 use gpurt::session::Backend;
 
+mod shade;
 mod tools;
 mod values;
 
+pub use shade::ShadeArgs;
 pub use tools::{BenchArgs, DiffArgs, TuneArgs, ViewArgs};
-use values::{backends, parse_colour, shadings};
+use values::backends;
 
 #[derive(Parser)]
 #[command(
@@ -186,16 +185,8 @@ pub struct RenderArgs {
     /// Samples per pixel (stratified and jittered).
     #[arg(long, default_value_t = DEFAULT_SPP, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: u32,
-    #[arg(long, value_parser = parse_colour, help = format!(
-        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
-    ))]
-    pub ambient: Option<Vec3>,
-    /// Seed of the sample hash.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
-    /// Model of the specular highlight; everything else is shaded alike.
-    #[arg(long, default_value = "phong", value_parser = shadings())]
-    pub shading: Shading,
+    #[command(flatten)]
+    pub shade: ShadeArgs,
     /// Which renderer traces the rays.
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some(
@@ -254,10 +245,10 @@ impl RenderArgs {
             height: self.height,
             spp: Some(self.spp),
             max_depth: Some(self.depth),
-            ambient: self.ambient,
+            ambient: self.shade.ambient,
             aov: Some(self.aov.code().unwrap_or(gt::AOV_COLOR)),
-            seed: Some(self.seed),
-            shading: Some(self.shading),
+            seed: Some(self.shade.seed),
+            shading: Some(self.shade.shading),
         }
     }
 
@@ -271,6 +262,7 @@ impl RenderArgs {
 #[cfg(test)]
 mod tests {
     use clap::CommandFactory;
+    use gpurt::frame::Shading;
 
     use super::*;
 
@@ -348,7 +340,7 @@ mod tests {
         let shading = |args: &[&str]| -> Shading {
             let cli = Cli::try_parse_from(args).expect("parses");
             match cli.command {
-                Some(Command::View(v)) => v.shading,
+                Some(Command::View(v)) => v.shade.shading,
                 Some(Command::Bench(b)) => b.shading,
                 _ => cli.render.overrides().shading.expect("always set"),
             }

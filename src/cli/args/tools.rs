@@ -3,13 +3,13 @@
 
 use std::path::PathBuf;
 
-use glam::Vec3;
 use gpurt::frame::Shading;
-use gpurt::limits::{DEFAULT_AMBIENT, DEFAULT_DEPTH, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
+use gpurt::limits::{DEFAULT_DEPTH, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
 use gpurt::scene::ReadOptions;
 use gpurt::session::Backend;
 
-use super::values::{backends, parse_colour, parse_limit, parse_size, shadings};
+use super::shade::ShadeArgs;
+use super::values::{backends, parse_limit, parse_size, shadings};
 
 #[derive(clap::Args)]
 pub struct DiffArgs {
@@ -108,16 +108,8 @@ pub struct ViewArgs {
     /// Maximum ray depth, the eye ray counting as 1.
     #[arg(long, default_value_t = DEFAULT_DEPTH, value_parser = clap::value_parser!(u32).range(1..=MAX_DEPTH as i64))]
     pub depth: u32,
-    #[arg(long, value_parser = parse_colour, help = format!(
-        "Ambient light: one grey level or r,g,b (default: the scene's `am`, else {DEFAULT_AMBIENT})"
-    ))]
-    pub ambient: Option<Vec3>,
-    /// Seed of the sample hash.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
-    /// Model of the specular highlight; everything else is shaded alike.
-    #[arg(long, default_value = "phong", value_parser = shadings())]
-    pub shading: Shading,
+    #[command(flatten)]
+    pub shade: ShadeArgs,
     /// Which renderer traces the rays (the window is drawn on the GPU adapter either way).
     #[arg(long, default_value = "auto", value_parser = backends(&[
         (Backend::Auto, Some("The GPU when there is a hardware adapter, else the CPU")),
