@@ -290,65 +290,70 @@ pub enum WgslValue {
     F32(f32),
 }
 
+/// `(name, value)` of each constant listed by its identifier, which is also its name in
+/// WGSL: a name cannot be paired with another constant's value.
+macro_rules! wgsl_constants {
+    ($($kind:ident $name:ident),* $(,)?) => {
+        &[$((stringify!($name), WgslValue::$kind($name as _))),*]
+    };
+}
+
 /// Every constant shared with WGSL, by its name there (the same as here): the header of
 /// the generated shader source declares each (`gpu::shaders::source`), and no WGSL file
-/// writes one itself (`tests/gpurt/layout.rs`).
-pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = {
-    use WgslValue::{F32, U32};
-    &[
-        ("PRIM_SPHERE", U32(PRIM_SPHERE)),
-        ("PRIM_TRIANGLE", U32(PRIM_TRIANGLE)),
-        ("PRIM_CONE", U32(PRIM_CONE)),
-        ("PRIM_BOX", U32(PRIM_BOX)),
-        ("PRIM_KIND_SHIFT", U32(PRIM_KIND_SHIFT)),
-        ("PRIM_MATERIAL_MASK", U32(PRIM_MATERIAL_MASK)),
-        ("NODE_AXIS_SHIFT", U32(NODE_AXIS_SHIFT)),
-        ("NODE_COUNT_MASK", U32(NODE_COUNT_MASK)),
-        ("WIDE_LEAF", U32(WIDE_LEAF)),
-        ("WIDE_EMPTY", U32(WIDE_EMPTY)),
-        ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
-        ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
-        ("CWIDE_INNER", U32(CWIDE_INNER)),
-        ("CWIDE_COUNT_SHIFT", U32(CWIDE_COUNT_SHIFT)),
-        ("CWIDE_OFFSET_MASK", U32(CWIDE_OFFSET_MASK)),
-        ("LIGHT_POINT", U32(LIGHT_POINT)),
-        ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
-        ("LIGHT_AREA", U32(LIGHT_AREA)),
-        ("AOV_COLOR", U32(AOV_COLOR)),
-        ("AOV_NORMAL", U32(AOV_NORMAL)),
-        ("AOV_DEPTH", U32(AOV_DEPTH)),
-        ("AOV_COST", U32(AOV_COST)),
-        ("SHADING_PHONG", U32(SHADING_PHONG)),
-        ("SHADING_BLINN_PHONG", U32(SHADING_BLINN_PHONG)),
-        ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
-        ("PHASE_RAY", U32(PHASE_RAY)),
-        ("PHASE_LIGHT", U32(PHASE_LIGHT)),
-        ("PHASE_DONE", U32(PHASE_DONE)),
-        ("RESUME_BUDGET", U32(RESUME_BUDGET)),
-        ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
-        ("RESUME_X_MASK", U32(RESUME_X_MASK)),
-        ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
-        ("WAVE_ROUND", U32(WAVE_ROUND)),
-        ("WAVE_RAYS", U32(WAVE_RAYS)),
-        ("WAVE_NEXT", U32(WAVE_NEXT)),
-        ("WAVE_SHADOWS", U32(WAVE_SHADOWS)),
-        ("WAVE_COUNT_WORDS", U32(WAVE_COUNT_WORDS)),
-        ("WAVE_TRACED", U32(WAVE_TRACED)),
-        ("WAVE_CUT", U32(WAVE_CUT)),
-        ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
-        ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
-        ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
-        ("POOL_MAX_SIDE", U32(POOL_MAX_SIDE)),
-        ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
-        ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
-        ("RAY_STACK", U32(RAY_STACK as u32)),
-        ("NO_HIT", F32(NO_HIT)),
-        ("F32_MAX", F32(F32_MAX)),
-        ("PLANE_FLAG", U32(PLANE_FLAG)),
-        ("NO_PRIM", U32(NO_PRIM)),
-        ("SLAB_WIDEN", F32(SLAB_WIDEN)),
-    ]
-};
+/// writes one itself (`tests/gpurt/layout.rs`, which reads each back from naga's module).
+pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
+    U32 PRIM_SPHERE,
+    U32 PRIM_TRIANGLE,
+    U32 PRIM_CONE,
+    U32 PRIM_BOX,
+    U32 PRIM_KIND_SHIFT,
+    U32 PRIM_MATERIAL_MASK,
+    U32 NODE_AXIS_SHIFT,
+    U32 NODE_COUNT_MASK,
+    U32 WIDE_LEAF,
+    U32 WIDE_EMPTY,
+    U32 WIDE_FIRST_SHIFT,
+    U32 WIDE_COUNT_MASK,
+    U32 CWIDE_INNER,
+    U32 CWIDE_COUNT_SHIFT,
+    U32 CWIDE_OFFSET_MASK,
+    U32 LIGHT_POINT,
+    U32 LIGHT_DIRECTIONAL,
+    U32 LIGHT_AREA,
+    U32 AOV_COLOR,
+    U32 AOV_NORMAL,
+    U32 AOV_DEPTH,
+    U32 AOV_COST,
+    U32 SHADING_PHONG,
+    U32 SHADING_BLINN_PHONG,
+    U32 PHASE_SAMPLE,
+    U32 PHASE_RAY,
+    U32 PHASE_LIGHT,
+    U32 PHASE_DONE,
+    U32 RESUME_BUDGET,
+    U32 RESUME_Y_SHIFT,
+    U32 RESUME_X_MASK,
+    U32 PIXEL_CUT_SHORT,
+    U32 WAVE_ROUND,
+    U32 WAVE_RAYS,
+    U32 WAVE_NEXT,
+    U32 WAVE_SHADOWS,
+    U32 WAVE_COUNT_WORDS,
+    U32 WAVE_TRACED,
+    U32 WAVE_CUT,
+    U32 WAVE_SENDS_SHIFT,
+    U32 WORKGROUP_SIDE,
+    U32 WORKGROUP_INVOCATIONS,
+    U32 POOL_MAX_SIDE,
+    U32 TRAVERSAL_STACK,
+    U32 TEXTURE_WIDTH,
+    U32 RAY_STACK,
+    F32 NO_HIT,
+    F32 F32_MAX,
+    U32 PLANE_FLAG,
+    U32 NO_PRIM,
+    F32 SLAB_WIDEN,
+];
 
 const _: () = {
     assert!(size_of::<GpuPrim>() == 48);

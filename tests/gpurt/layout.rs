@@ -178,70 +178,14 @@ fn wgsl_const(module: &naga::Module, name: &str) -> naga::Literal {
     }
 }
 
-/// Every constant shared with WGSL, as the shader must see it: (WGSL name, Rust value).
-fn shared_constants() -> Vec<(&'static str, WgslValue)> {
-    use WgslValue::{F32, U32};
-    vec![
-        ("PRIM_SPHERE", U32(PRIM_SPHERE)),
-        ("PRIM_TRIANGLE", U32(PRIM_TRIANGLE)),
-        ("PRIM_CONE", U32(PRIM_CONE)),
-        ("PRIM_BOX", U32(PRIM_BOX)),
-        ("PRIM_KIND_SHIFT", U32(PRIM_KIND_SHIFT)),
-        ("PRIM_MATERIAL_MASK", U32(PRIM_MATERIAL_MASK)),
-        ("NODE_AXIS_SHIFT", U32(NODE_AXIS_SHIFT)),
-        ("NODE_COUNT_MASK", U32(NODE_COUNT_MASK)),
-        ("WIDE_LEAF", U32(WIDE_LEAF)),
-        ("WIDE_EMPTY", U32(WIDE_EMPTY)),
-        ("WIDE_FIRST_SHIFT", U32(WIDE_FIRST_SHIFT)),
-        ("WIDE_COUNT_MASK", U32(WIDE_COUNT_MASK)),
-        ("CWIDE_INNER", U32(CWIDE_INNER)),
-        ("CWIDE_COUNT_SHIFT", U32(CWIDE_COUNT_SHIFT)),
-        ("CWIDE_OFFSET_MASK", U32(CWIDE_OFFSET_MASK)),
-        ("LIGHT_POINT", U32(LIGHT_POINT)),
-        ("LIGHT_DIRECTIONAL", U32(LIGHT_DIRECTIONAL)),
-        ("LIGHT_AREA", U32(LIGHT_AREA)),
-        ("AOV_COLOR", U32(AOV_COLOR)),
-        ("AOV_NORMAL", U32(AOV_NORMAL)),
-        ("AOV_DEPTH", U32(AOV_DEPTH)),
-        ("AOV_COST", U32(AOV_COST)),
-        ("SHADING_PHONG", U32(SHADING_PHONG)),
-        ("SHADING_BLINN_PHONG", U32(SHADING_BLINN_PHONG)),
-        ("PHASE_SAMPLE", U32(PHASE_SAMPLE)),
-        ("PHASE_RAY", U32(PHASE_RAY)),
-        ("PHASE_LIGHT", U32(PHASE_LIGHT)),
-        ("PHASE_DONE", U32(PHASE_DONE)),
-        ("RESUME_BUDGET", U32(RESUME_BUDGET)),
-        ("RESUME_Y_SHIFT", U32(RESUME_Y_SHIFT)),
-        ("RESUME_X_MASK", U32(RESUME_X_MASK)),
-        ("PIXEL_CUT_SHORT", U32(PIXEL_CUT_SHORT)),
-        ("WAVE_ROUND", U32(WAVE_ROUND)),
-        ("WAVE_RAYS", U32(WAVE_RAYS)),
-        ("WAVE_NEXT", U32(WAVE_NEXT)),
-        ("WAVE_SHADOWS", U32(WAVE_SHADOWS)),
-        ("WAVE_COUNT_WORDS", U32(WAVE_COUNT_WORDS)),
-        ("WAVE_TRACED", U32(WAVE_TRACED)),
-        ("WAVE_CUT", U32(WAVE_CUT)),
-        ("WAVE_SENDS_SHIFT", U32(WAVE_SENDS_SHIFT)),
-        ("WORKGROUP_SIDE", U32(WORKGROUP_SIDE)),
-        ("WORKGROUP_INVOCATIONS", U32(WORKGROUP_INVOCATIONS)),
-        ("POOL_MAX_SIDE", U32(POOL_MAX_SIDE)),
-        ("TRAVERSAL_STACK", U32(TRAVERSAL_STACK as u32)),
-        ("TEXTURE_WIDTH", U32(TEXTURE_WIDTH)),
-        ("RAY_STACK", U32(RAY_STACK as u32)),
-        ("NO_HIT", F32(NO_HIT)),
-        ("F32_MAX", F32(F32_MAX)),
-        ("PLANE_FLAG", U32(PLANE_FLAG)),
-        ("NO_PRIM", U32(NO_PRIM)),
-        ("SLAB_WIDEN", F32(SLAB_WIDEN)),
-    ]
-}
-
-/// The constants the two sides must agree on have the Rust value in the generated shader,
-/// of the same type (an `f32` to the bit), and the generator writes exactly these.
+/// The constants the two sides share (`gpu_types::WGSL_CONSTANTS`, each named by its own
+/// identifier) have their Rust value in the shader naga reads from the generated source,
+/// of the same type (an `f32` to the bit).
 #[test]
 fn shared_constants_match() {
     let (module, _) = shaders::validate(shaders::Fetch::Textures).expect("shader validates");
-    for (name, value) in shared_constants() {
+    assert!(WGSL_CONSTANTS.len() > 40, "the list of shared constants");
+    for &(name, value) in WGSL_CONSTANTS {
         let want = match value {
             WgslValue::U32(v) => naga::Literal::U32(v),
             WgslValue::F32(v) => naga::Literal::F32(v),
@@ -252,9 +196,6 @@ fn shared_constants_match() {
             assert_eq!(g.to_bits(), w.to_bits(), "{name}: the bits of the f32");
         }
     }
-    let listed: Vec<&str> = shared_constants().iter().map(|(n, _)| *n).collect();
-    let generated: Vec<&str> = WGSL_CONSTANTS.iter().map(|(n, _)| *n).collect();
-    assert_eq!(generated, listed, "gpu_types::WGSL_CONSTANTS");
     assert_eq!(
         wgsl_const(&module, "TRACE_STACK"),
         naga::Literal::U32(RAY_STACK as u32),
@@ -318,7 +259,7 @@ fn literal_value(lit: &str) -> Option<WgslValue> {
 fn no_wgsl_file_writes_a_shared_constant() {
     for (file, text) in shaders::FILES {
         let code = strip_comments(text);
-        for (name, value) in shared_constants() {
+        for &(name, value) in WGSL_CONSTANTS {
             for decl in ["const", "override", "let", "var<private>"] {
                 assert!(
                     !code.contains(&format!("{decl} {name}:"))
