@@ -320,6 +320,108 @@ fn packets_find_the_single_ray_walks_hits_and_shadows_on_every_scene() {
     );
 }
 
+/// A scene of every kind of primitive among infinite planes: a floor, a tilted wall and a
+/// glass plane that cuts through the rest (so random rays start on both sides of it), with
+/// boxes, spheres, triangles and cones, some of them glass, under two lights.
+fn planes_and_boxes() -> String {
+    let mut src = String::from(
+        "v\nfrom 0 -14 6\nat 0 0 1\nup 0 0 1\nangle 45\nhither 0.01\nresolution 8 8\n\
+         b 0.1 0.1 0.1\nl 4 -6 12\nl -6 2 9 0.5 0.5 0.5\n\
+         f 0.8 0.8 0.7 0.8 0.2 10 0 1\npl 0 0 0  1 0 0  0 1 0\n\
+         f 0.5 0.6 0.9 0.7 0.3 20 0 1\npl 6 0 0  6 1 0  7 0 3\n\
+         f 0.9 0.9 1 0 0.1 30 0.8 1.4\npl 0 0 1.5  0 1 1.6  1 0 1.4\n",
+    );
+    let mut rng = XorShift(11);
+    for i in 0..80 {
+        let c = rng.point_in(Vec3::new(-5.0, -4.0, 0.2), Vec3::new(5.0, 4.0, 3.5));
+        let r = rng.range(0.15, 0.6);
+        if i % 9 == 0 {
+            src += "f 1 0.95 0.9 0 0.1 40 0.7 1.5\n";
+        } else if i % 9 == 1 {
+            src += "f 0.8 0.3 0.2 0.7 0.3 15 0 1\n";
+        }
+        src += &match i % 4 {
+            0 => format!(
+                "aabb {} {} {} {} {} {}\n",
+                c.x - r,
+                c.x + r,
+                c.y - r * 0.7,
+                c.y + r * 0.7,
+                c.z - r * 0.4,
+                c.z + r
+            ),
+            1 => format!("s {} {} {} {r}\n", c.x, c.y, c.z),
+            2 => format!(
+                "p 3\n{} {} {}\n{} {} {}\n{} {} {}\n",
+                c.x - r,
+                c.y,
+                c.z,
+                c.x + r,
+                c.y - r,
+                c.z + r * 0.5,
+                c.x,
+                c.y + r,
+                c.z - r * 0.3
+            ),
+            _ => format!(
+                "c\n{} {} {} {r}\n{} {} {} {}\n",
+                c.x,
+                c.y,
+                c.z - r,
+                c.x + r * 0.2,
+                c.y,
+                c.z + r,
+                r * 0.3
+            ),
+        };
+    }
+    src
+}
+
+/// The random and coherent rays of a scene with infinite planes, boxes and glass (which no
+/// bundled or shared scene has together) get the single-ray walk's answers from every
+/// kernel, and the random rays do meet the planes and the boxes.
+#[test]
+fn packets_find_the_single_ray_walks_hits_among_planes_and_boxes() {
+    let dir = crate::common::temp_dir("packet-planes");
+    let path = dir.join("planes.nff");
+    std::fs::write(&path, planes_and_boxes()).unwrap();
+    let buffers = load(&path);
+    assert_eq!(buffers.planes.len(), 3);
+    let opts = RenderOptions {
+        width: 24,
+        height: 18,
+        ..RenderOptions::for_camera(&buffers.camera)
+    };
+    let globals = frame::globals(&buffers, &opts);
+    let b = Bindings::new(&buffers, &globals);
+    let (mut planes, mut boxes) = (0, 0);
+    for k in &all_kernels() {
+        for seed in [3, 4, 5] {
+            let groups = random_groups(&buffers, k.lanes(), seed);
+            check_closest(&b, k, &groups, "planes and boxes");
+            check_shadows(&b, k, &groups, "planes and boxes");
+            for (ray, tmin, tmax) in groups.iter().flatten() {
+                let h = closest_hit(&b, ray, *tmin, *tmax);
+                if h.t < *tmax && h.prim & PLANE_FLAG != 0 {
+                    planes += 1;
+                } else if h.t < *tmax && buffers.prims[h.prim as usize].kind() == PRIM_BOX {
+                    boxes += 1;
+                }
+            }
+        }
+        let [eye, shadow, mirror] = coherent_groups(&b, k.lanes());
+        check_closest(&b, k, &eye, "planes and boxes");
+        check_closest(&b, k, &mirror, "planes and boxes");
+        check_shadows(&b, k, &shadow, "planes and boxes");
+    }
+    println!("random rays met planes {planes} and boxes {boxes} times");
+    assert!(
+        planes > 100 && boxes > 100,
+        "random rays met planes {planes} and boxes {boxes} times"
+    );
+}
+
 /// A glass panel of one material between a light and the floor, a glass sphere of that
 /// material under it, and with `two`, a glass sphere of another.
 fn glass(two: bool) -> String {
