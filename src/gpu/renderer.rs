@@ -277,6 +277,7 @@ impl GpuRenderer {
             node_bytes: gpu_node_bytes(globals.traversal),
             wave,
             counted: Mutex::new(None),
+            resumed: Default::default(),
         })
     }
 

@@ -5,6 +5,7 @@
 //! it (the loop notes in it a finer cut when dispatches run long), so it sits below all
 //! three.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -39,6 +40,8 @@ pub struct GpuScene {
     pub(super) wave: Option<Wave>,
     /// What the last trace counted, when its frame counts (`GpuGlobals::counters`).
     pub(super) counted: Mutex<Option<Counters>>,
+    /// Pixels the last trace finished in `resume` (`resumed`).
+    pub(super) resumed: AtomicU64,
 }
 
 impl GpuScene {
@@ -58,6 +61,14 @@ impl GpuScene {
     /// set, the frame's last trace only.
     pub fn counters(&self) -> Option<Counters> {
         *self.counted.lock().expect("counts lock")
+    }
+
+    /// Pixels the last trace handed to `resume` (main.wgsl) because their first dispatch
+    /// did not finish them: those a driver's loop limit cut short (lavapipe's), and on the
+    /// wavefront kernels those whose paths outgrew the wave. The tests of those pixels
+    /// check that they were met, not only that the images agree.
+    pub fn resumed(&self) -> u64 {
+        self.resumed.load(Ordering::Relaxed)
     }
 
     /// Times each wavefront kernel of the frames traced from now on (timestamp queries

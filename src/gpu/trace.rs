@@ -205,6 +205,9 @@ async fn trace_band_rows(
     }
     accum.samples = samples.end;
     *scene.counted.lock().expect("counts lock") = counted;
+    scene
+        .resumed
+        .store(unfinished.len() as u64, Ordering::Relaxed);
     Ok(rays)
 }
 

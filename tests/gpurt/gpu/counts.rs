@@ -18,7 +18,7 @@ use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Scene};
 
-use crate::common::versus::{Gpu, features_scene, gpu};
+use crate::common::versus::{Gpu, expect_resumed, features_scene, gpu};
 use crate::common::{own_scenes, shared_scenes};
 
 /// What the CPU twin of the GPU's walk `globals.traversal` counts on the frame, its
@@ -283,8 +283,15 @@ fn pixels_continued_across_dispatches_are_counted() {
         counters: 1,
         ..g.renderer.frame(&buffers, &frame::globals(&buffers, &opts))
     };
-    let (_, rays, counted) = on_gpu(g, &g.renderer, &buffers, &globals);
-    let counted = counted.expect("counts");
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let up = g
+        .renderer
+        .upload(device, queue, &buffers, &globals)
+        .expect("uploads");
+    let never = AtomicBool::new(false);
+    let (_, rays) = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+    expect_resumed(g, "glass at depth 16", up.resumed());
+    let counted = up.counters().expect("counts");
     assert_eq!(counted.total_rays(), rays, "every ray is counted by kind");
     // Pixels `resume` finishes are counted in all but not by warps (`Counters::add_band`).
     let in_all = |c: Counters| Counters {

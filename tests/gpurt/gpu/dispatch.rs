@@ -7,13 +7,14 @@
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+use gpurt::compare::DiffStats;
 use gpurt::frame::{self, RenderOptions, Shading};
 use gpurt::gpu::GpuRenderer;
 use gpurt::gpu_types::*;
 use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
-use crate::common::versus::{Gpu, Outcome, check_all, features_scene, gpu, opts};
+use crate::common::versus::{Gpu, Outcome, check_all, expect_resumed, features_scene, gpu, opts};
 use crate::common::{own_scenes, shared_scenes};
 
 /// Renders on both backends and checks agreement (with the noise floor) and ray counts:
@@ -21,22 +22,28 @@ use crate::common::{own_scenes, shared_scenes};
 /// normalize and sqrt are not the CPU's; 47 of 2.65 million shadow rays in the thousand
 /// lights case), where dropped samples or bounces lose a tenth or more.
 fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Outcome {
+    check_heavy_resumed(g, label, scene, opts).map(|(outcome, _)| outcome)
+}
+
+/// `check_heavy`, and the pixels the GPU finished in `resume` (`GpuScene::resumed`).
+fn check_heavy_resumed(
+    g: &Gpu,
+    label: &str,
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> Result<((String, DiffStats), u64), String> {
     let buffers = pack::pack(scene.clone()).expect("scene packs");
     let globals = g.renderer.frame(&buffers, &frame::globals(&buffers, opts));
     let never = AtomicBool::new(false);
     let (cpu, counts) =
         gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");
-    let (gpu, rays) = g
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let failed = |e: gpurt::Error| format!("{label}: GPU render failed: {e}");
+    let up = g
         .renderer
-        .render(
-            &g.ctx.device,
-            &g.ctx.queue,
-            &buffers,
-            &globals,
-            &|_| {},
-            &never,
-        )
-        .map_err(|e| format!("{label}: GPU render failed: {e}"))?;
+        .upload(device, queue, &buffers, &globals)
+        .map_err(failed)?;
+    let (gpu, rays) = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).map_err(failed)?;
     let a = gpurt::agreement::agreement(&buffers, &globals, &cpu, &gpu).expect("compares");
     a.verdict
         .map_err(|why| format!("{label}: {why} ({})", a.stats))?;
@@ -47,7 +54,7 @@ fn check_heavy(g: &Gpu, label: &str, scene: &Scene, opts: &RenderOptions) -> Out
             counts.total()
         ));
     }
-    Ok((label.to_string(), a.stats))
+    Ok(((label.to_string(), a.stats), up.resumed()))
 }
 
 /// An 8x8 area light over a glass sphere and a box: 64 shadow rays per hit.
@@ -121,10 +128,19 @@ fn heavy_single_samples_match_cpu() {
     };
     let glass = scene::load(&own_scenes().join("glass.nff")).expect("loads");
     let mut cases = Vec::new();
+    // Each case's label and the pixels `resume` finished.
+    let mut resumed = Vec::new();
+    let mut heavy = |label: String, scene: &Scene, opts: &RenderOptions| {
+        cases.push(
+            check_heavy_resumed(g, &label, scene, opts).map(|(outcome, n)| {
+                resumed.push((label, n));
+                outcome
+            }),
+        );
+    };
     for shading in Shading::ALL {
-        cases.push(check_heavy(
-            g,
-            &format!("glass at depth 16, {}", shading.name()),
+        heavy(
+            format!("glass at depth 16, {}", shading.name()),
             &glass,
             &RenderOptions {
                 width: 64,
@@ -133,7 +149,7 @@ fn heavy_single_samples_match_cpu() {
                 shading,
                 ..RenderOptions::for_camera(&glass.camera)
             },
-        ));
+        );
     }
     if let Some(root) = shared_scenes() {
         let mut src = std::fs::read_to_string(root.join("spd/balls-3.nff")).expect("reads");
@@ -150,11 +166,18 @@ fn heavy_single_samples_match_cpu() {
                 shading,
                 ..RenderOptions::for_camera(&lights.camera)
             };
-            let label = format!("balls-3 with 1000 lights, {}", shading.name());
-            cases.push(check_heavy(g, &label, &lights, &opts));
+            heavy(
+                format!("balls-3 with 1000 lights, {}", shading.name()),
+                &lights,
+                &opts,
+            );
         }
     }
     check_all(cases);
+    for (label, n) in resumed {
+        println!("{label}: {n} pixels finished by resume");
+        expect_resumed(g, &label, n);
+    }
 }
 
 /// A ray whose one traversal is too long for lavapipe's loop limit cannot be split

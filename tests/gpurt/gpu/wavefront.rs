@@ -20,7 +20,9 @@ use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Light, Scene};
 
 use crate::common::own_scenes;
-use crate::common::versus::{Gpu, check_all, check_scene, features_scene, gpu};
+use crate::common::versus::{
+    Gpu, check_all, check_scene, check_scene_resumed, features_scene, gpu,
+};
 
 /// The same device with renderers taking the wavefront kernels and the one kernel.
 fn both(g: &Gpu, traversal: u32) -> [Gpu; 2] {
@@ -202,10 +204,12 @@ fn aov_and_area_light_frames_keep_the_main_kernel() {
     assert_eq!(takes(&without, AOV_COLOR), 1);
 }
 
-/// Glass at depth 16: paths whose rays outgrow the wave's room (each glass hit sends two)
-/// and pixels too heavy for one invocation on lavapipe are flagged by the wavefront
-/// kernels and finished by `resume`; many samples a pixel take several passes. Both agree
-/// with the CPU.
+/// Glass at depth 16 (each glass hit sends two rays) and many samples a pixel (several
+/// passes) on the wavefront kernels agree with the CPU. Paths that outgrow a wave's room
+/// are flagged and finished by `resume`; on lavapipe these frames fit their waves and
+/// resume none (the test says how many), so the flagging is shown by the CPU twin
+/// (`paths_that_outgrow_the_wave_are_flagged_and_the_rest_are_traced`) and `resume`
+/// itself by the one kernel's tests (`dispatch.rs`, `counts.rs`), which assert it.
 #[test]
 fn heavy_pixels_and_many_samples_on_the_wavefront_kernels_match_cpu() {
     let Some(g) = gpu() else {
@@ -225,10 +229,11 @@ fn heavy_pixels_and_many_samples_on_the_wavefront_kernels_match_cpu() {
         spp: 24,
         ..RenderOptions::for_camera(&glass.camera)
     };
-    check_all([
-        check_scene(&wave, "glass at depth 16", &glass, &deep),
-        check_scene(&wave, "glass at 24 spp", &glass, &many),
-    ]);
+    let (deep, resumed) = check_scene_resumed(&wave, "glass at depth 16", &glass, &deep);
+    check_all([deep, check_scene(&wave, "glass at 24 spp", &glass, &many)]);
+    // None on lavapipe: its wave holds every path's rays here (the CPU twin's test below
+    // shows a wave of a GPU's room cutting such paths short and flagging them).
+    println!("glass at depth 16: {resumed} pixels finished by resume");
 }
 
 /// The bundled glass scene at 24x20 and depth 16, `spp` samples a pixel: paths of many
