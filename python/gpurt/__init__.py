@@ -13,7 +13,8 @@ Scene errors raise :class:`gpurt.SceneError` (a ``ValueError``) whose message is
 command line's ``FILE:LINE:COL: message``.
 """
 
-from typing import Literal, Optional
+import os
+from typing import List, Literal, Optional, Union
 
 import numpy as np
 
@@ -64,3 +65,29 @@ class Image(np.ndarray):
     def to_srgb8(self) -> np.ndarray:
         """The 8-bit image of these values: see :func:`gpurt.to_srgb8`."""
         return to_srgb8(np.asarray(self))
+
+    def save(self, path: "Union[str, os.PathLike[str]]") -> None:
+        """Writes the image as the PNG the command line writes for the same render.
+
+        Only ``.png`` is written (the command line's other formats, EXR among them, come
+        from ``gpurt SCENE -o``); the file is written whole or not at all.
+        """
+        png = self._repr_png_()
+        if png is None:
+            raise ValueError("not an image of shape (height, width, 3)")
+        target = os.fspath(path)
+        if not target.lower().endswith(".png"):
+            raise ValueError(f"{target}: Image.save writes PNG; give a path ending in .png")
+        temp = f"{target}.{os.getpid()}.tmp"
+        try:
+            with open(temp, "wb") as f:
+                f.write(png)
+            os.replace(temp, target)
+        finally:
+            if os.path.exists(temp):
+                os.remove(temp)
+
+
+def __dir__() -> List[str]:
+    """The public names only (not the modules and typing helpers this file imports)."""
+    return sorted(__all__)

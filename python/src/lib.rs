@@ -68,9 +68,6 @@ fn float_image<'py>(array: &Bound<'py, PyAny>) -> PyResult<PyReadonlyArray3<'py,
     Ok(image.readonly())
 }
 
-/// to_srgb8(array)
-/// --
-///
 /// The 8-bit image the command line writes as PNG for these linear values: each channel
 /// clamped to [0, 1], scaled by 255 and rounded (gpurt's images carry no transfer
 /// curve: see the shading model). Returns a new uint8 array of the same shape.
@@ -82,9 +79,6 @@ fn to_srgb8<'py>(array: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyArray3<u8>>
     Ok(PyArray3::from_owned_array(array.py(), bytes))
 }
 
-/// png(array, aov=None)
-/// --
-///
 /// The PNG file (bytes) the command line writes for these linear values and AOV: depth
 /// as grey and cost as a heat ramp, scaled by their largest value; colour and normals as
 /// they are. Used by `Image._repr_png_`.

@@ -39,9 +39,6 @@ impl Renderer {
 
 #[pymethods]
 impl Renderer {
-    /// Renderer(scene, *, width=None, height=None, spp=None, depth=None, ambient=None, backend="auto", shading=None)
-    /// --
-    ///
     /// Reads (when `scene` is a path) and packs the scene for frames of this size (the
     /// scene's resolution by default) on `backend` ("auto", "gpu" or "cpu"). `spp`,
     /// `depth`, `ambient` and `shading` ("phong" or "blinn-phong") are the frames'
@@ -88,9 +85,6 @@ impl Renderer {
         })
     }
 
-    /// render(*, spp=None, depth=None, ambient=None, aov=None, shading=None, camera=None)
-    /// --
-    ///
     /// Traces one frame into a `gpurt.Image` (float32, (height, width, 3), linear).
     /// `camera` is a dict with any of `eye`, `look_at`, `up` (three numbers each) and `fov`
     /// (the vertical angle in degrees); what it leaves out is the scene's. Only the frame's

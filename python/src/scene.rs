@@ -90,9 +90,6 @@ pub fn render_scene<'py>(
 
 #[pymethods]
 impl Scene {
-    /// Scene.open(path)
-    /// --
-    ///
     /// Reads a scene file (str or os.PathLike): NFF, STL or OBJ by its extension, gzip
     /// too. A malformed file raises `SceneError` with `FILE:LINE:COL: message`.
     #[staticmethod]
@@ -102,9 +99,6 @@ impl Scene {
         })
     }
 
-    /// Scene.from_string(text, format="nff", name="<string>")
-    /// --
-    ///
     /// Reads a scene from a string (or bytes, for binary STL) in `format`: "nff" (and its
     /// P3D dialect), "stl" or "obj". `name` names it in error messages; an NFF `mesh`
     /// include is looked for in the current directory.
@@ -131,9 +125,6 @@ impl Scene {
         Ok(Scene { scene })
     }
 
-    /// info()
-    /// --
-    ///
     /// What the scene holds, as the dict `gpurt info --json` prints: camera, resolution,
     /// background, ambient, bounds, counts, lights, materials, warnings.
     fn info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -152,9 +143,6 @@ impl Scene {
         self.scene.warnings.clone()
     }
 
-    /// render(*, width=None, height=None, spp=None, depth=None, ambient=None, backend="auto", shading=None, aov=None)
-    /// --
-    ///
     /// Renders the scene from its own camera: see `gpurt.render`.
     #[pyo3(signature = (*, width=None, height=None, spp=None, depth=None, ambient=None,
                         backend="auto", shading=None, aov=None))]
@@ -198,9 +186,6 @@ impl Scene {
     }
 }
 
-/// render(scene, *, width=None, height=None, spp=None, depth=None, ambient=None, backend="auto", shading=None, aov=None)
-/// --
-///
 /// Renders a scene (a path, str or os.PathLike, or a `Scene`) into a `gpurt.Image`: a
 /// float32 numpy array of shape (height, width, 3) holding the linear values the command
 /// line's EXR of the same render holds. `None` keeps the scene's resolution and the
@@ -241,9 +226,6 @@ pub fn render<'py>(
     render_scene(py, scene, &frame, backend)
 }
 
-/// info(path)
-/// --
-///
 /// `Scene.open(path).info()`: the dict `gpurt info --json` prints for the file.
 #[pyfunction]
 pub fn info<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {

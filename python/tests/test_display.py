@@ -49,3 +49,25 @@ def test_derived_arrays_keep_their_aov_and_odd_shapes_show_nothing():
     img = gpurt.render(SCENES / "spheres.nff", width=8, height=8, backend="cpu", aov="depth")
     assert (img * 2).aov == "depth" and img[:4].aov == "depth"
     assert img[:, :, 0]._repr_png_() is None
+
+
+def test_save_writes_the_cli_png_and_refuses_other_formats(tmp_path):
+    want = cli_png(tmp_path)
+    img = gpurt.render(SCENES / "glass.nff", width=40, height=30, backend="cpu")
+    img.save(tmp_path / "saved.png")
+    got = np.asarray(PILImage.open(tmp_path / "saved.png").convert("RGB"))
+    assert (got == want).all()
+    with pytest.raises(ValueError, match="PNG"):
+        img.save(tmp_path / "saved.jpg")
+    assert not (tmp_path / "saved.jpg").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cli.png", "saved.png"]
+
+
+def test_help_shows_each_signature_once_and_dir_the_public_names():
+    for f in (gpurt.render, gpurt.info, gpurt.to_srgb8, gpurt.Renderer.render, gpurt.Scene.render):
+        doc = f.__doc__ or ""
+        assert "\n--\n" not in doc and not doc.startswith(f.__name__ + "("), doc[:120]
+        assert f.__text_signature__, f.__name__
+    names = dir(gpurt)
+    assert "render" in names and "Image" in names
+    assert not {"np", "Literal", "Optional", "os"} & set(names), names
