@@ -51,7 +51,7 @@ pub struct SceneBuffers {
     /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
     wide: OnceLock<Vec<WideNode>>,
-    /// The CPU renderer's triangle leaves in blocks of four (`bvh::blocks`), built from
+    /// The CPU renderer's triangle leaves in blocks of up to four (`bvh::blocks`), built from
     /// `wide`'s leaves.
     blocks: OnceLock<Blocks>,
     /// `nodes` collapsed four wide as the GPU's wide walk reads them (`gpu_wide_nodes`),

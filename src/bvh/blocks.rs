@@ -33,10 +33,16 @@ pub struct TriangleBlock {
 }
 
 impl TriangleBlock {
+    /// Whether `leaf` makes a block: two to four primitives, all triangles.
+    #[inline(always)]
+    pub fn fits(leaf: &[GpuPrim]) -> bool {
+        (2..=4).contains(&leaf.len()) && leaf.iter().all(|p| p.kind() == PRIM_TRIANGLE)
+    }
+
     /// The block of a leaf of two to four primitives, `None` unless all are triangles.
     #[inline(always)]
     pub fn of_leaf(leaf: &[GpuPrim]) -> Option<Self> {
-        if !(2..=4).contains(&leaf.len()) || leaf.iter().any(|p| p.kind() != PRIM_TRIANGLE) {
+        if !Self::fits(leaf) {
             return None;
         }
         let p: [&GpuPrim; 4] = std::array::from_fn(|k| leaf.get(k).unwrap_or(&leaf[0]));
@@ -75,7 +81,7 @@ impl Blocks {
         let blocks = || {
             wide.iter()
                 .flat_map(WideNode::leaves)
-                .filter(|l| TriangleBlock::of_leaf(leaf(l)).is_some())
+                .filter(|l| TriangleBlock::fits(leaf(l)))
         };
         let mut covered = vec![Covered::default(); prims.len().div_ceil(64)];
         for (first, count) in blocks() {

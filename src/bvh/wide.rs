@@ -252,21 +252,24 @@ fn collapse_into<N: Copy>(
 
 /// The CPU renderer's eight-wide tree over the binary `nodes`.
 pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
-    let set = |node: &mut WideNode, lane: usize, c: &GpuNode, wide: u32| {
-        for axis in 0..3 {
-            node.lo[axis][lane / 4][lane % 4] = c.min[axis];
-            node.hi[axis][lane / 4][lane % 4] = c.max[axis];
-        }
-        (node.child[lane], node.count[lane]) = if c.count() > 0 {
-            (c.offset, c.count())
-        } else {
-            (wide, 0)
-        };
-        true
-    };
     let optimal = Optimal::new(nodes);
     let children = |i, kids: &mut Vec<u32>| optimal.children_into(i, kids);
-    collapse(nodes, children, WideNode::empty(), set).expect("every lane is taken")
+    collapse(nodes, children, WideNode::empty(), set_lane).expect("every lane is taken")
+}
+
+/// Lane `lane` of a CPU wide node for binary child `c` (`collapse`'s `set`), the wide node
+/// `wide` standing for it when it is inner; every lane is taken.
+fn set_lane(node: &mut WideNode, lane: usize, c: &GpuNode, wide: u32) -> bool {
+    for axis in 0..3 {
+        node.lo[axis][lane / 4][lane % 4] = c.min[axis];
+        node.hi[axis][lane / 4][lane % 4] = c.max[axis];
+    }
+    (node.child[lane], node.count[lane]) = if c.count() > 0 {
+        (c.offset, c.count())
+    } else {
+        (wide, 0)
+    };
+    true
 }
 
 /// The binary `nodes` collapsed four wide, as the GPU's `TRAVERSAL_WIDE` walk reads them
@@ -554,19 +557,7 @@ mod tests {
                 let nodes = &binary.nodes;
                 let optimal = build(nodes);
                 let children = |i, kids: &mut Vec<u32>| children_into(nodes, i, WIDTH, kids);
-                let set = |node: &mut WideNode, lane: usize, c: &GpuNode, wide: u32| {
-                    for axis in 0..3 {
-                        node.lo[axis][lane / 4][lane % 4] = c.min[axis];
-                        node.hi[axis][lane / 4][lane % 4] = c.max[axis];
-                    }
-                    (node.child[lane], node.count[lane]) = if c.count() > 0 {
-                        (c.offset, c.count())
-                    } else {
-                        (wide, 0)
-                    };
-                    true
-                };
-                let greedy = collapse(nodes, children, WideNode::empty(), set).unwrap();
+                let greedy = collapse(nodes, children, WideNode::empty(), set_lane).unwrap();
                 check(&binary, &cpu_lanes(&greedy), true);
                 let (o, g) = (sah(&optimal), sah(&greedy));
                 assert!(

@@ -89,7 +89,7 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
     if gpu.is_none() && !wireframe_only && args.overlay.is_none() {
         // Its eight-wide tree and blocks are built here, counted with the BVH.
         let t = Instant::now();
-        buffers.for_cpu_alone(args.options(&buffers.camera).aov);
+        buffers.for_cpu_alone(opts.aov);
         build_time += t.elapsed();
     }
     let buffers = Arc::new(buffers);
