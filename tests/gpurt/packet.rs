@@ -274,6 +274,17 @@ fn coherent_groups(b: &Bindings, lanes: usize) -> [Vec<Group>; 3] {
     [eye, shadow, mirror]
 }
 
+/// The frame whose coherent rays the per-ray comparisons trace: 24x18 from the scene's
+/// camera.
+fn small_frame(buffers: &SceneBuffers) -> GpuGlobals {
+    let opts = RenderOptions {
+        width: 24,
+        height: 18,
+        ..RenderOptions::for_camera(&buffers.camera)
+    };
+    frame::globals(buffers, &opts)
+}
+
 /// Every scene, every kernel: the packets' answers are the single-ray walk's, and the
 /// packets answer nearly all coherent rays themselves (not handing them to the single walk).
 #[test]
@@ -286,12 +297,7 @@ fn packets_find_the_single_ray_walks_hits_and_shadows_on_every_scene() {
     assert!(paths.len() >= least, "only {} scenes", paths.len());
     for path in &paths {
         let buffers = load(path);
-        let opts = RenderOptions {
-            width: 24,
-            height: 18,
-            ..RenderOptions::for_camera(&buffers.camera)
-        };
-        let globals = frame::globals(&buffers, &opts);
+        let globals = small_frame(&buffers);
         let b = Bindings::new(&buffers, &globals);
         let what = path.display().to_string();
         for k in &kernels {
@@ -388,12 +394,7 @@ fn packets_find_the_single_ray_walks_hits_among_planes_and_boxes() {
     std::fs::write(&path, planes_and_boxes()).unwrap();
     let buffers = load(&path);
     assert_eq!(buffers.planes.len(), 3);
-    let opts = RenderOptions {
-        width: 24,
-        height: 18,
-        ..RenderOptions::for_camera(&buffers.camera)
-    };
-    let globals = frame::globals(&buffers, &opts);
+    let globals = small_frame(&buffers);
     let b = Bindings::new(&buffers, &globals);
     let (mut planes, mut boxes) = (0, 0);
     for k in &all_kernels() {

@@ -15,7 +15,7 @@ use gpurt::agreement::noise_floor;
 use gpurt::compare::{self, DiffStats, Thresholds};
 use gpurt::film::{self, Film};
 use gpurt::frame::{self, RenderOptions, Shading};
-use gpurt::gpu::{GpuContext, GpuRenderer};
+use gpurt::gpu::{GpuContext, GpuRenderer, GpuScene};
 use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::Scene;
@@ -75,15 +75,24 @@ pub fn render_both_resumed(
 ) -> (Film, Film, u64) {
     let never = AtomicBool::new(false);
     let (cpu, _) = gpurt::cpu::render(buffers, globals, &|_| {}, &never).expect("CPU renders");
-    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
-    let failed = |e: gpurt::Error| -> ! { panic!("{}: GPU render failed: {e}", scene.name) };
-    let up = g
-        .renderer
-        .upload(device, queue, buffers, globals)
-        .unwrap_or_else(|e| failed(e));
-    let (gpu, _) =
-        gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).unwrap_or_else(|e| failed(e));
+    let (gpu, _, up) = trace_on(g, &g.renderer, buffers, globals)
+        .unwrap_or_else(|e| panic!("{}: GPU render failed: {e}", scene.name));
     (cpu, gpu, up.resumed())
+}
+
+/// The frame `globals` of `buffers` uploaded by `renderer` to `g`'s device and traced:
+/// the film, the rays, and the uploaded scene, whose record of the trace (`counters`,
+/// `resumed`) the caller reads.
+pub fn trace_on(
+    g: &Gpu,
+    renderer: &GpuRenderer,
+    buffers: &SceneBuffers,
+    globals: &GpuGlobals,
+) -> gpurt::Result<(Film, u64, GpuScene)> {
+    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
+    let up = renderer.upload(device, queue, buffers, globals)?;
+    let (film, rays) = gpurt::gpu::trace(device, queue, &up, &|_| {}, &AtomicBool::new(false))?;
+    Ok((film, rays, up))
 }
 
 /// Checks that `resume` finished some of a frame's pixels (`resumed` of them) where the

@@ -4,8 +4,6 @@
 //! pass for another walk's; counting changes no pixel; and pixels continued across
 //! dispatches are counted too.
 
-use std::sync::atomic::AtomicBool;
-
 use glam::Vec3;
 use gpurt::counters::{Counters, KINDS, gpu_node_bytes};
 use gpurt::cpu::RayCounts;
@@ -18,7 +16,7 @@ use gpurt::gpu_types::*;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::{self, Scene};
 
-use crate::common::versus::{Gpu, expect_resumed, features_scene, gpu};
+use crate::common::versus::{Gpu, expect_resumed, features_scene, gpu, trace_on};
 use crate::common::{own_scenes, shared_scenes};
 
 /// What the CPU twin of the GPU's walk `globals.traversal` counts on the frame, its
@@ -63,13 +61,8 @@ fn on_gpu(
     buffers: &SceneBuffers,
     globals: &GpuGlobals,
 ) -> (Film, u64, Option<Counters>) {
-    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
-    let scene = renderer
-        .upload(device, queue, buffers, globals)
-        .expect("uploads");
-    let never = AtomicBool::new(false);
-    let (film, rays) = gpurt::gpu::trace(device, queue, &scene, &|_| {}, &never).expect("traces");
-    (film, rays, scene.counters())
+    let (film, rays, up) = trace_on(g, renderer, buffers, globals).expect("traces");
+    (film, rays, up.counters())
 }
 
 /// Counts equal kind by kind within one in 10^4 for rays (the drift of lights grazing a
@@ -283,13 +276,7 @@ fn pixels_continued_across_dispatches_are_counted() {
         counters: 1,
         ..g.renderer.frame(&buffers, &frame::globals(&buffers, &opts))
     };
-    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
-    let up = g
-        .renderer
-        .upload(device, queue, &buffers, &globals)
-        .expect("uploads");
-    let never = AtomicBool::new(false);
-    let (_, rays) = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).expect("traces");
+    let (_, rays, up) = trace_on(g, &g.renderer, &buffers, &globals).expect("traces");
     expect_resumed(g, "glass at depth 16", up.resumed());
     let counted = up.counters().expect("counts");
     assert_eq!(counted.total_rays(), rays, "every ray is counted by kind");

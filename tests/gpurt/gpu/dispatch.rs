@@ -14,7 +14,9 @@ use gpurt::gpu_types::*;
 use gpurt::pack;
 use gpurt::scene::{self, Scene};
 
-use crate::common::versus::{Gpu, Outcome, check_all, expect_resumed, features_scene, gpu, opts};
+use crate::common::versus::{
+    Gpu, Outcome, check_all, expect_resumed, features_scene, gpu, opts, trace_on,
+};
 use crate::common::{own_scenes, shared_scenes};
 
 /// Renders on both backends and checks agreement (with the noise floor) and ray counts:
@@ -37,13 +39,8 @@ fn check_heavy_resumed(
     let never = AtomicBool::new(false);
     let (cpu, counts) =
         gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).expect("CPU renders");
-    let (device, queue) = (&g.ctx.device, &g.ctx.queue);
-    let failed = |e: gpurt::Error| format!("{label}: GPU render failed: {e}");
-    let up = g
-        .renderer
-        .upload(device, queue, &buffers, &globals)
-        .map_err(failed)?;
-    let (gpu, rays) = gpurt::gpu::trace(device, queue, &up, &|_| {}, &never).map_err(failed)?;
+    let (gpu, rays, up) = trace_on(g, &g.renderer, &buffers, &globals)
+        .map_err(|e| format!("{label}: GPU render failed: {e}"))?;
     let a = gpurt::agreement::agreement(&buffers, &globals, &cpu, &gpu).expect("compares");
     a.verdict
         .map_err(|why| format!("{label}: {why} ({})", a.stats))?;
