@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [wavefront] [pooled] [goals] [compile] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [collapse] [wavefront] [pooled] [goals] [compile] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -19,7 +19,10 @@
 # then balls-6 and mount-9 at 4K and 1 spp on the high-quality tree (GPURT_BVH=high),
 # through `main` and `pooled`. `goals` benches balls-6 and mount-9 alone (where the
 # issue's goals were last missed) at both sizes and sample counts, GPU only, on the usual
-# tree and on the high-quality one. `compile` prints each walk's and kernel's cold
+# tree and on the high-quality one. `collapse` benches the seven scenes, GPU only, at
+# 1080p and 4K, 1 and 16 spp, on the wide trees of the greedy collapse (the default)
+# and then of the SAH-optimal one (GPURT_COLLAPSE=optimal), each capped at
+# COLLAPSE_TIMEOUT seconds (150 by default). `compile` prints each walk's and kernel's cold
 # compile time (the driver's shader cache off) on five scenes. `qwide` times the seven scenes on the quantised four-wide
 # walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
 # `pooled` step's rows on the wide walk. `tune` runs `gpurt tune` on the seven scenes at
@@ -80,6 +83,20 @@ scenes=()
 for s in balls-4 gears-4 mount-7 teapot-6 tree-11 balls-6 mount-9; do
     scenes+=("$(ls "$spd/$s".nff* | head -1)")
 done
+
+if [[ $what == *collapse* ]]; then
+    # The GPU's wide trees gathered greedily and SAH-optimally, one after the other on one
+    # binary: rates by ray kind and the nodes a ray fetched, counted on the device.
+    echo "== collapse"
+    for c in greedy optimal; do
+        GPURT_COLLAPSE=$c timeout "${COLLAPSE_TIMEOUT:-150}" ./.device/gpurt bench "${scenes[@]}" \
+            --sizes "$sizes" --spp "$spps" --frames 3 --backend gpu >"$OUT/collapse-$c.md" \
+            2>"$OUT/collapse-$c.log"
+        echo "$c: exit $?"
+        grep -E '^(adapter|traversal|bvh) ' "$OUT/collapse-$c.log"
+        cat "$OUT/collapse-$c.md"
+    done
+fi
 
 if [[ $what == *wavefront* ]]; then
     echo "== wavefront"
@@ -245,6 +262,10 @@ if [[ $what == *tests* ]]; then
     if ! command -v xvfb-run >/dev/null; then
         skips+=(--skip window::)
         echo "skipped, no xvfb-run here: window::"
+    fi
+    if ! command -v zsh >/dev/null || ! command -v fish >/dev/null; then
+        skips+=(--skip cli::shell::completion_scripts)
+        echo "skipped, no zsh or fish here: cli::shell::completion_scripts*"
     fi
     if ! command -v groff >/dev/null; then
         skips+=(--skip cli::shell::the_manual_page)

@@ -43,6 +43,8 @@ pub struct SceneBuffers {
     pub bvh_depth: usize,
     /// The build the BVH got (for the render it was packed for).
     pub bvh_quality: bvh::Quality,
+    /// How the GPU's wide trees gather the binary tree's nodes (`GPURT_COLLAPSE`).
+    pub gpu_collapse: wide::Collapse,
     /// The scene's camera, background and `am` (`None`: the default), kept here so that
     /// the `Scene` can be dropped once packed.
     pub camera: Camera,
@@ -143,6 +145,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let lights = pack_lights(&scene.lights);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
     let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
+    let gpu_collapse = wide::Collapse::for_gpu().map_err(Error::Render)?;
     let FlatBvh {
         nodes,
         order,
@@ -168,6 +171,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         epsilon,
         bvh_depth: depth,
         bvh_quality: quality,
+        gpu_collapse,
         camera,
         background,
         ambient,
@@ -267,7 +271,7 @@ impl SceneBuffers {
 
     fn gpu_wide(&self) -> Option<&(Vec<GpuWideNode>, u32)> {
         self.gpu_wide
-            .get_or_init(|| wide::gpu_nodes(&self.nodes))
+            .get_or_init(|| wide::gpu_nodes(&self.nodes, self.gpu_collapse))
             .as_ref()
     }
 
@@ -286,7 +290,7 @@ impl SceneBuffers {
     pub fn gpu_cwide(&self) -> Option<&GpuCwide> {
         self.gpu_cwide
             .get_or_init(|| {
-                let tree = cwide::build(&self.nodes)?;
+                let tree = cwide::build(&self.nodes, self.gpu_collapse)?;
                 Some(GpuCwide {
                     nodes: tree.nodes,
                     prims: tree.order.iter().map(|&i| self.prims[i as usize]).collect(),

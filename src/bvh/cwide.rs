@@ -1,7 +1,7 @@
 //! The compressed eight-wide tree of the GPU's `TRAVERSAL_CWIDE` walk (`GpuCwideNode`,
 //! after Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal on GPUs Through
 //! Compressed Wide BVHs", HPG 2017): the binary tree collapsed eight wide as the CPU's
-//! tree is (`wide::children`), each child's box quantised to a byte an axis on its
+//! tree is (`wide::Gather`), each child's box quantised to a byte an axis on its
 //! node's grid (80 bytes a node instead of 112 for four children uncompressed), each child
 //! placed in the lane of the octant of ray directions that should visit it first, and the
 //! leaves' primitives laid out node by node so that a node finds them all from one base.
@@ -14,7 +14,7 @@
 
 use std::collections::VecDeque;
 
-use super::wide::children;
+use super::wide::{Collapse, Gather};
 use crate::gpu_types::{CWIDE_COUNT_SHIFT, CWIDE_INNER, GpuCwideNode, GpuNode, TRAVERSAL_STACK};
 
 /// Children of a node.
@@ -115,17 +115,20 @@ fn lanes(nodes: &[GpuNode], kids: &[u32]) -> [Option<u32>; WIDTH] {
 /// node's inner children together, in lane order); `None` where the walk cannot take
 /// the tree: no tree, a leaf of more primitives than a lane's count holds, a grid beyond
 /// an f32's exponents, or a tree too deep for the traversal stack.
-pub fn build(nodes: &[GpuNode]) -> Option<Cwide> {
+pub fn build(nodes: &[GpuNode], how: Collapse) -> Option<Cwide> {
     if nodes.is_empty() {
         return None;
     }
+    let gather = Gather::new(nodes, WIDTH, how);
+    let mut kids = Vec::with_capacity(WIDTH + 1);
     let mut out = vec![GpuCwideNode::default()];
     let mut order = Vec::new();
     let mut todo = VecDeque::from([(0u32, 0usize, 0u32)]);
     let mut deepest = 0;
     while let Some((binary, at, depth)) = todo.pop_front() {
         deepest = deepest.max(depth);
-        let slots = lanes(nodes, &children(nodes, binary, WIDTH));
+        gather.children_into(binary, &mut kids);
+        let slots = lanes(nodes, &kids);
         let kids = slots.iter().flatten().map(|&k| &nodes[k as usize]);
         let lo = kids.clone().fold(glam::Vec3::INFINITY, |m, n| m.min(n.min));
         let hi = kids.fold(glam::Vec3::NEG_INFINITY, |m, n| m.max(n.max));
@@ -271,12 +274,14 @@ mod tests {
         for n in [1, 2, 3, 5, 17, 1000, 5000] {
             for quality in [Quality::Medium, Quality::High] {
                 let binary = bvh::build(&boxes(n), quality);
-                let tree = build(&binary.nodes).expect("a shallow tree fits");
-                check(&binary, &tree);
-                assert!(tree.nodes.len() * 4 <= binary.nodes.len().max(4));
+                for how in [Collapse::Greedy, Collapse::Optimal] {
+                    let tree = build(&binary.nodes, how).expect("a shallow tree fits");
+                    check(&binary, &tree);
+                    assert!(tree.nodes.len() * 4 <= binary.nodes.len().max(4));
+                }
             }
         }
-        assert!(build(&[]).is_none());
+        assert!(build(&[], Collapse::Optimal).is_none());
     }
 
     /// Flat boxes (a grid of quads in z = 1) get a zero step on their flat axis and
@@ -293,7 +298,7 @@ mod tests {
             })
             .collect();
         let binary = bvh::build(&quads, Quality::High);
-        let tree = build(&binary.nodes).expect("fits");
+        let tree = build(&binary.nodes, Collapse::Optimal).expect("fits");
         check(&binary, &tree);
         assert_eq!(tree.nodes[0].exp_inner >> 16 & 0xff, 0, "z is flat");
         let far: Vec<Aabb> = boxes(300)
@@ -304,7 +309,10 @@ mod tests {
             })
             .collect();
         let binary = bvh::build(&far, Quality::Medium);
-        check(&binary, &build(&binary.nodes).expect("fits"));
+        check(
+            &binary,
+            &build(&binary.nodes, Collapse::Optimal).expect("fits"),
+        );
     }
 
     /// Each child goes to the lane of the octant that meets it first: of two boxes apart
@@ -322,7 +330,7 @@ mod tests {
             },
         ];
         let binary = bvh::build(&two, Quality::High);
-        let tree = build(&binary.nodes).expect("fits");
+        let tree = build(&binary.nodes, Collapse::Optimal).expect("fits");
         let root = &tree.nodes[0];
         let low_x = binary.order.iter().position(|&i| i == 0).unwrap() as u32;
         for lane in 0..WIDTH {

@@ -95,7 +95,7 @@ mod tests {
         }
         let tree = bvh::build(&aabbs, bvh::Quality::Medium);
         let nodes: Vec<GpuNode> = tree.nodes;
-        let (wide, _) = wide::gpu_nodes(&nodes).expect("fits the stack");
+        let (wide, _) = wide::gpu_nodes(&nodes, wide::Collapse::Optimal).expect("fits the stack");
         let quantised = build(&wide).expect("quantises");
         assert_eq!(quantised.len(), wide.len());
         for (w, q) in wide.iter().zip(&quantised) {

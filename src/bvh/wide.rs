@@ -64,16 +64,9 @@ fn area(n: &GpuNode) -> f32 {
 }
 
 /// The binary nodes that stand as the children of binary node `i` in a wide node of up to
-/// `width` children: its two children, then repeatedly the two children of the largest
-/// inner one in its place while a lane is free. A tree that is one leaf gives itself.
-pub(crate) fn children(nodes: &[GpuNode], i: u32, width: usize) -> Vec<u32> {
-    let mut kids = Vec::with_capacity(width + 1);
-    children_into(nodes, i, width, &mut kids);
-    kids
-}
-
-/// `children` into `kids`, whose earlier contents are dropped (the collapse reuses one
-/// vector for every node).
+/// `width` children, into `kids` (emptied first; the collapse reuses one vector for every
+/// node): its two children, then repeatedly the two children of the largest inner one in
+/// its place while a lane is free. A tree that is one leaf gives itself.
 fn children_into(nodes: &[GpuNode], i: u32, width: usize, kids: &mut Vec<u32>) {
     let n = &nodes[i as usize];
     kids.clear();
@@ -94,25 +87,27 @@ fn children_into(nodes: &[GpuNode], i: u32, width: usize, kids: &mut Vec<u32>) {
     }
 }
 
-/// The lanes that cost rays the fewest node visits, for the CPU's eight-wide tree: the
+/// The lanes that cost rays the fewest node visits, for every wide tree: the
 /// SAH-optimal collapse of Ylitie, Karras and Laine (2017, "Efficient Incoherent Ray
 /// Traversal on GPUs Through Compressed Wide BVHs"), without their merging of leaves (the
 /// leaves stay the binary tree's, which the triangle blocks and every other walk share).
 /// A wide node stands for the binary node it replaces, and a ray visits it as often as
 /// that node's surface area says; the cost of a subtree given up to `i` lanes of the node
 /// above it is the least total area of the wide nodes it then needs (0 for a leaf, which
-/// takes one lane). Greedy opening of the largest child, as the GPU's four-wide collapse
-/// does (`children_into`), leaves the lowest wide nodes of a balanced tree two to four
-/// lanes full: on a 2M-triangle terrain this makes 40% fewer nodes, and fewer fetched a
-/// ray (docs/bvh.md).
+/// takes one lane). Greedy opening of the largest child (`children_into`, which the GPU's
+/// trees used before) leaves the lowest wide nodes of a balanced tree two to four lanes
+/// full: eight wide on a 2M-triangle terrain this makes 40% fewer nodes, and fewer fetched
+/// a ray (docs/bvh.md).
 ///
 /// What is kept is each inner node's choices, a word a node: for each number of lanes
-/// from 2 to `WIDTH`, 0 for a wide node of its own or the lanes its first child takes,
+/// from 2 to the width, 0 for a wide node of its own or the lanes its first child takes,
 /// and in the place of 1 lane, the first child's lanes in a node of its own. The costs
 /// live only on a stack while the tree is walked children first, so the collapse never
 /// holds more than the tree it makes and this word.
 struct Optimal<'a> {
     nodes: &'a [GpuNode],
+    /// Lanes of a wide node, at most `WIDTH`.
+    width: usize,
     choices: Vec<u32>,
 }
 
@@ -120,7 +115,8 @@ struct Optimal<'a> {
 const CHOICE_BITS: usize = 3;
 
 impl<'a> Optimal<'a> {
-    fn new(nodes: &'a [GpuNode]) -> Self {
+    fn new(nodes: &'a [GpuNode], width: usize) -> Self {
+        assert!((2..=WIDTH).contains(&width), "a wide node of {width} lanes");
         let mut choices = vec![0u32; nodes.len()];
         // Nodes are in depth-first order, the first child right after its parent and the
         // second after the first's subtree: backwards, a node comes right after its first
@@ -143,14 +139,14 @@ impl<'a> Optimal<'a> {
                     .min_by(|a, b| a.0.total_cmp(&b.0))
                     .expect("two lanes or more")
             };
-            let (spread, own) = split(WIDTH);
+            let (spread, own) = split(width);
             // In f64: a scene's coordinates may reach 1e35 (the chain of the walks' tests),
             // whose areas overflow f32 and would leave every choice tied at infinity.
             let d = (node.max - node.min).as_dvec3();
             let open = d.x * d.y + d.y * d.z + d.z * d.x + spread;
             let mut row = [open; WIDTH];
             let mut word = own as u32;
-            for lanes in 2..=WIDTH {
+            for lanes in 2..=width {
                 let (cost, k) = split(lanes);
                 if cost <= open {
                     row[lanes - 1] = cost;
@@ -160,7 +156,11 @@ impl<'a> Optimal<'a> {
             choices[n] = word;
             stack.push(row);
         }
-        Optimal { nodes, choices }
+        Optimal {
+            nodes,
+            width,
+            choices,
+        }
     }
 
     /// For inner node `n` in up to `lanes` lanes: 0 for a wide node of its own, else the
@@ -177,7 +177,7 @@ impl<'a> Optimal<'a> {
         if self.nodes[i as usize].count() > 0 {
             kids.push(i);
         } else {
-            self.spread(i, self.choice(i, 1), WIDTH, kids);
+            self.spread(i, self.choice(i, 1), self.width, kids);
         }
     }
 
@@ -196,6 +196,58 @@ impl<'a> Optimal<'a> {
                 }
                 _ => kids.push(child),
             }
+        }
+    }
+}
+
+/// How the binary tree's nodes are gathered into the GPU's wide nodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Collapse {
+    /// The largest inner child opened while a lane is free (`children_into`).
+    Greedy,
+    /// The SAH-optimal gathering (`Optimal`).
+    Optimal,
+}
+
+impl Collapse {
+    /// The GPU's wide trees: `Greedy`, unless `GPURT_COLLAPSE=optimal`. On an H200 the
+    /// optimal trees fetched 1 to 31% fewer node bytes a ray but traced gears-4 20 to 26%
+    /// slower and teapot-6 5 to 18% faster (docs/bvh.md), so the walk's own speed, not
+    /// the bytes, decides there; the setting measures both on one binary. The CPU's tree
+    /// is always the optimal one.
+    pub fn for_gpu() -> Result<Collapse, String> {
+        match std::env::var("GPURT_COLLAPSE").as_deref() {
+            Err(_) | Ok("") | Ok("greedy") => Ok(Collapse::Greedy),
+            Ok("optimal") => Ok(Collapse::Optimal),
+            Ok(v) => Err(format!("GPURT_COLLAPSE={v}: expected greedy or optimal")),
+        }
+    }
+}
+
+/// The lanes of each wide node of `width` over `nodes`, gathered as `collapse` says, for
+/// `collapse`'s `children`.
+pub(crate) struct Gather<'a> {
+    nodes: &'a [GpuNode],
+    width: usize,
+    optimal: Option<Optimal<'a>>,
+}
+
+impl<'a> Gather<'a> {
+    pub(crate) fn new(nodes: &'a [GpuNode], width: usize, collapse: Collapse) -> Self {
+        let optimal = (collapse == Collapse::Optimal).then(|| Optimal::new(nodes, width));
+        Gather {
+            nodes,
+            width,
+            optimal,
+        }
+    }
+
+    /// The binary nodes that stand as the lanes of the wide node for binary node `i`, into
+    /// `kids` (emptied first); a tree that is one leaf gives itself.
+    pub(crate) fn children_into(&self, i: u32, kids: &mut Vec<u32>) {
+        match &self.optimal {
+            Some(optimal) => optimal.children_into(i, kids),
+            None => children_into(self.nodes, i, self.width, kids),
         }
     }
 }
@@ -252,7 +304,7 @@ fn collapse_into<N: Copy>(
 
 /// The CPU renderer's eight-wide tree over the binary `nodes`.
 pub fn build(nodes: &[GpuNode]) -> Vec<WideNode> {
-    let optimal = Optimal::new(nodes);
+    let optimal = Optimal::new(nodes, WIDTH);
     let children = |i, kids: &mut Vec<u32>| optimal.children_into(i, kids);
     collapse(nodes, children, WideNode::empty(), set_lane).expect("every lane is taken")
 }
@@ -278,7 +330,7 @@ fn set_lane(node: &mut WideNode, lane: usize, c: &GpuNode, wide: u32) -> bool {
 /// `TRAVERSAL_STACK` (see `next_leaf_wide` in traverse.wgsl: a node leaves at most three
 /// children waiting, and its pushes write up to two slots past those it keeps), a leaf of
 /// more than four primitives, a first primitive beyond the entry's 29 bits, or no tree.
-pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
+pub fn gpu_nodes(nodes: &[GpuNode], how: Collapse) -> Option<(Vec<GpuWideNode>, u32)> {
     let empty = GpuWideNode {
         lo: [Vec4::INFINITY; 3],
         hi: [Vec4::NEG_INFINITY; 3],
@@ -298,7 +350,8 @@ pub fn gpu_nodes(nodes: &[GpuNode]) -> Option<(Vec<GpuWideNode>, u32)> {
         };
         true
     };
-    let children = |i, kids: &mut Vec<u32>| children_into(nodes, i, 4, kids);
+    let gather = Gather::new(nodes, 4, how);
+    let children = |i, kids: &mut Vec<u32>| gather.children_into(i, kids);
     let out = collapse(nodes, children, empty, set)?;
     if out.is_empty() {
         return None;
@@ -460,8 +513,10 @@ mod tests {
             for quality in [Quality::Medium, Quality::High] {
                 let binary = bvh::build(&boxes(n), quality);
                 check(&binary, &cpu_lanes(&build(&binary.nodes)), false);
-                let (gpu, _) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
-                check(&binary, &gpu_lanes(&gpu), true);
+                for how in [Collapse::Greedy, Collapse::Optimal] {
+                    let (gpu, _) = gpu_nodes(&binary.nodes, how).expect("a shallow tree fits");
+                    check(&binary, &gpu_lanes(&gpu), how == Collapse::Greedy);
+                }
             }
         }
         // A chain deeper than obvhs keeps, rebuilt by median splits (bvh.rs): the deepest
@@ -491,7 +546,7 @@ mod tests {
         let binary = bvh::build(&wide, Quality::Medium);
         check(&binary, &cpu_lanes(&build(&binary.nodes)), false);
         assert!(build(&[]).is_empty());
-        assert!(gpu_nodes(&[]).is_none());
+        assert!(gpu_nodes(&[], Collapse::Optimal).is_none());
     }
 
     /// A binary tree whose path to its deepest leaf passes `depth` inner nodes, each with
@@ -526,10 +581,9 @@ mod tests {
 
     /// The GPU's wide walk takes trees whose waiting children fit the traversal stack,
     /// and refuses the others, which then walk the binary tree in pairs.
-    /// The SAH cost of an eight-wide tree: the surface area of each node's box (the union
-    /// of its lanes'), which a ray visits as often as that area says.
-    fn sah(wide: &[WideNode]) -> f64 {
-        let lanes = cpu_lanes(wide);
+    /// The SAH cost of a wide tree: the surface area of each node's box (the union of its
+    /// lanes'), which a ray visits as often as that area says.
+    fn sah(lanes: &[Vec<(Vec3, Vec3, Child)>]) -> f64 {
         lanes
             .iter()
             .map(|node| {
@@ -559,11 +613,16 @@ mod tests {
                 let children = |i, kids: &mut Vec<u32>| children_into(nodes, i, WIDTH, kids);
                 let greedy = collapse(nodes, children, WideNode::empty(), set_lane).unwrap();
                 check(&binary, &cpu_lanes(&greedy), true);
-                let (o, g) = (sah(&optimal), sah(&greedy));
+                let (o, g) = (sah(&cpu_lanes(&optimal)), sah(&cpu_lanes(&greedy)));
                 assert!(
                     o <= g * (1.0 + 1e-6),
                     "{n} boxes: SAH {o} against greedy {g}"
                 );
+                // The GPU's four-wide tree too.
+                let gpu = |how| gpu_lanes(&gpu_nodes(nodes, how).expect("fits").0);
+                let (o4, g4) = (gpu(Collapse::Optimal), gpu(Collapse::Greedy));
+                assert!(sah(&o4) <= sah(&g4) * (1.0 + 1e-6), "{n} boxes, four wide");
+                assert!(o4.len() <= g4.len(), "{n} boxes, four wide");
                 if n >= 1000 {
                     assert!(
                         optimal.len() < greedy.len(),
@@ -580,15 +639,21 @@ mod tests {
     fn the_gpu_wide_tree_is_refused_where_it_could_overflow_the_stack() {
         for n in [1, 17, 1000] {
             let binary = bvh::build(&boxes(n), Quality::High);
-            let (gpu, need) = gpu_nodes(&binary.nodes).expect("a shallow tree fits");
-            check(&binary, &gpu_lanes(&gpu), true);
-            assert!((3..=TRAVERSAL_STACK as u32).contains(&need));
+            for how in [Collapse::Greedy, Collapse::Optimal] {
+                let (gpu, need) = gpu_nodes(&binary.nodes, how).expect("a shallow tree fits");
+                check(&binary, &gpu_lanes(&gpu), how == Collapse::Greedy);
+                assert!((3..=TRAVERSAL_STACK as u32).contains(&need));
+            }
         }
         // Two binary levels a wide node, three waiting each: 20 levels need 3 * 10 + 3
         // entries, 42 need 66, more than the stack.
-        assert_eq!(gpu_nodes(&comb(20)).map(|(_, need)| need), Some(33));
-        let deep = comb(42);
-        assert!(deep.len() < 4 * 42 + 2);
-        assert!(gpu_nodes(&deep).is_none());
+        // The optimal collapse gathers the comb otherwise (the large two-leaf subtrees
+        // beside the path cost more as nodes of their own), with more children waiting.
+        for (how, need) in [(Collapse::Greedy, 33), (Collapse::Optimal, 41)] {
+            assert_eq!(gpu_nodes(&comb(20), how).map(|(_, need)| need), Some(need));
+            let deep = comb(42);
+            assert!(deep.len() < 4 * 42 + 2);
+            assert!(gpu_nodes(&deep, how).is_none());
+        }
     }
 }

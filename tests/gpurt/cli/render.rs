@@ -350,7 +350,7 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
 /// scene the high one unless `medium` is; the same image either way (the trees differ,
 /// the hits do not), and a value it does not know is refused before anything is written.
 #[test]
-fn gpurt_bvh_forces_the_trees_quality_for_measuring() {
+fn gpurt_bvh_and_gpurt_collapse_choose_the_trees_for_measuring() {
     let d = workdir("bvh-quality");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     let n = gpurt::bvh::THOROUGH_BUILD_MAX_PRIMS + 1;
@@ -396,6 +396,42 @@ fn gpurt_bvh_forces_the_trees_quality_for_measuring() {
         stderr(&o).contains("GPURT_BVH=mid: expected medium or high"),
         "{}",
         stderr(&o)
+    );
+    assert!(!d.join("bad.png").exists());
+
+    // The GPU's wide tree, gathered greedily (the default) or SAH-optimally: another
+    // tree, so other node counts, and the same image.
+    let walk = |collapse: &str, out: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["many.nff", "--backend", "gpu", "--stats", "-o", out])
+            .args(["--width", "48", "--height", "48"])
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_TRAVERSAL", "wide")
+            .env("GPURT_COLLAPSE", collapse)
+            .output()
+            .expect("gpurt runs");
+        assert!(o.status.success(), "{collapse}: {}", stderr(&o));
+        let err = stderr(&o);
+        let line = err.lines().find(|l| l.starts_with("gpu eye"));
+        line.expect("an eye-ray line").to_string()
+    };
+    let greedy = walk("", "greedy.png");
+    assert_eq!(walk("greedy", "greedy-named.png"), greedy);
+    assert_ne!(walk("optimal", "optimal.png"), greedy);
+    let same = gpurt(&["diff", "greedy.png", "optimal.png"], &d);
+    assert!(same.status.success(), "{}", stderr(&same));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["ball.nff", "--backend", "gpu", "-o", "bad.png"])
+        .current_dir(&d)
+        .env("GPURT_COLLAPSE", "best")
+        .output()
+        .expect("gpurt runs");
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("GPURT_COLLAPSE=best: expected greedy or optimal"),
+        "{err}"
     );
     assert!(!d.join("bad.png").exists());
 }
