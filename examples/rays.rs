@@ -33,10 +33,10 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
-use gpurt::cpu::main::camera_ray;
+use gpurt::cpu::fast::wide_ray::{closest_hit, transmission};
 use gpurt::cpu::packet::{Kernels, MAX_LANES, Packet};
+use gpurt::cpu::pixel::camera_ray;
 use gpurt::cpu::shade::{light_ray, offset_origin, reflect_dir, surface};
-use gpurt::cpu::traverse::{closest_hit, transmission};
 use gpurt::cpu::types::{Bindings, Hit, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;

@@ -158,7 +158,7 @@ var<private> counts: PixelCounts;
 // SIMD batch together, so eight budgets plus one traversal must stay under 65535.
 var<private> work: u32;
 
-// A pixel whose work continues across dispatches (`resume` in main.wgsl): its samples so
+// A pixel whose work continues across dispatches (`resume` in pixel.wgsl): its samples so
 // far, the sample under way with its pending rays, and the hit whose lights are being
 // sampled. Mirrors GpuPixelState in src/gpu_types.rs.
 struct PixelState {

@@ -16,7 +16,7 @@ use crate::gpu_types::{
 pub const KINDS: [&str; 3] = ["eye", "shadow", "secondary"];
 
 /// The pixels, across and down, that one 32-lane warp of a GPU traces: a workgroup's 64
-/// invocations cover 8x8 pixels in 4x2 blocks (`main` in shaders/main.wgsl), so its
+/// invocations cover 8x8 pixels in 4x2 blocks (`main` in shaders/pixel.wgsl), so its
 /// invocations 0 to 31 trace the top 8x4 pixels and 32 to 63 the bottom ones. Tiles and
 /// bands start on multiples of 8 pixels, so a frame's warps tile it from its corner.
 pub const WARP_PIXELS: [usize; 2] = [8, 4];
@@ -47,7 +47,7 @@ pub struct Counters {
 }
 
 /// Where pixel `p` of a pooled workgroup's square of `side` pixels lies in it, as
-/// `pool_pixel` in shaders/main.wgsl lays it out: 8x8 blocks in row order, each in 4x2
+/// `pool_pixel` in shaders/pixel.wgsl lays it out: 8x8 blocks in row order, each in 4x2
 /// runs of lanes.
 fn pool_offset(p: usize, side: usize) -> (usize, usize) {
     let blocks = side / WORKGROUP_SIDE as usize;

@@ -236,7 +236,7 @@ impl GpuTile {
     }
 }
 
-/// Pixels a workgroup of `main.wgsl` covers along each axis, and its invocations (8 x 8,
+/// Pixels a workgroup of `pixel.wgsl` covers along each axis, and its invocations (8 x 8,
 /// in 4 x 2 blocks of neighbouring pixels).
 pub const WORKGROUP_SIDE: u32 = 8;
 pub const WORKGROUP_INVOCATIONS: u32 = WORKGROUP_SIDE * WORKGROUP_SIDE;

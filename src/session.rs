@@ -110,7 +110,7 @@ impl CpuRenderer {
 
 impl Renderer for CpuRenderer {
     fn describe(&self) -> String {
-        let packets = match crate::cpu::packet::Kernels::from_env() {
+        let packets = match crate::cpu::fast::packet::Kernels::from_env() {
             Ok(Some(k)) => format!("packets of {} rays ({})", k.lanes(), k.isa().name()),
             Ok(None) => "no packets".to_string(),
             Err(e) => e.to_string(),

@@ -2,30 +2,26 @@
 //! adapter exists. It reads only `SceneBuffers` and `GpuGlobals`, never the scene tree,
 //! so it checks the packing and BVH layout as much as the shader.
 //!
-//! One module per WGSL file, same function names, same order of operations:
-//! `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the compressed
-//! tree's walk), `traverse`, `shade`, `main`, `wavefront` (the wavefront kernels' steps
-//! over queues of pixels); and `wide`, the CPU's own walk of the same tree eight children
-//! at a time, which finds the same hits, with `packet` (coherent rays in SIMD lanes),
-//! `coherent` (tiles traced with packets) and `tracer` (where the shading gets its
-//! rays' answers).
+//! Two rooms. Here, the twins: one module per WGSL file, same function names, same order
+//! of operations: `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the
+//! compressed tree's walk), `traverse`, `shade`, `pixel` (a pixel's camera rays),
+//! `wave` (a wave's records) and `wavefront` (the wavefront kernels' steps over queues of
+//! pixels). In `fast/`, what
+//! only the CPU has, which finds the same hits faster: its eight-wide walk, coherent rays
+//! in SIMD packets, and where the shading gets its rays' answers (`fast/mod.rs`).
 
-mod coherent;
 pub mod cwide;
+pub mod fast;
 pub mod intersect;
-#[cfg(target_arch = "x86_64")]
-mod isa;
-mod leaf;
-mod lights;
-pub mod main;
-pub mod packet;
+pub mod pixel;
 pub mod shade;
-pub mod tracer;
 pub mod traverse;
 pub mod types;
 pub mod walk;
+pub mod wave;
 pub mod wavefront;
-pub mod wide;
+
+pub use fast::{packet, tracer, wide};
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -186,7 +182,7 @@ pub fn render_rows_with(
                             .flat_map(|(_, p)| p.iter().map(|&s| Vec3::from(s)))
                             .collect()
                     };
-                    coherent::render_tile(
+                    fast::coherent::render_tile(
                         &b,
                         k,
                         (x0, x1),
@@ -208,10 +204,10 @@ pub fn render_rows_with(
                     for (y, piece) in tile {
                         for (dx, px) in piece.iter_mut().enumerate() {
                             let x = tx as u32 * TILE + dx as u32;
-                            let sum = main::sample_sum(
+                            let sum = pixel::sample_sum(
                                 &b,
-                                x,
-                                y,
+                                &mut fast::tracer::Alone,
+                                (x, y),
                                 samples.clone(),
                                 if fresh { Vec3::ZERO } else { Vec3::from(*px) },
                                 &mut counts,

@@ -4,22 +4,17 @@
 use glam::{Vec3, Vec4};
 
 use super::cwide::next_leaf_cwide;
-use super::intersect::{self, lanes_of};
-#[cfg(target_arch = "x86_64")]
-use super::isa;
-use super::leaf::{crossings, leaf_triangles4, transmit_leaf};
+use super::intersect;
 use super::types::{Bindings, GpuWide, Hit, Ray};
 use super::walk::{Walk, start_walk};
-use super::wide::{self, Slabs};
 use crate::bvh::qwide;
-use crate::bvh::wide::WideNode;
 use crate::gpu_types::{
     GpuNode, GpuQwideNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
     WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
 /// First crossing of `(t0, t1)` inside `(tmin, tmax)`, or `NO_HIT`.
-fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
+pub fn first_in(t: Vec4, tmin: f32, tmax: f32) -> f32 {
     if t.x > tmin && t.x < tmax {
         t.x
     } else if t.y > tmin && t.y < tmax {
@@ -210,89 +205,37 @@ impl Walk {
     }
 }
 
-/// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
+/// The nearest plane within `(tmin, tmax)`: its distance (`tmax` where none) and `prim`
+/// (`NO_PRIM`). The planes' share of `closest_hit`, which the CPU's eight-wide walk
+/// starts from too (`fast::wide_ray`).
 #[inline(always)]
-fn closest_in_leaf(
-    b: &Bindings,
-    ray: &Ray,
-    inv_dir: Vec3,
-    first: u32,
-    count: u32,
-    tmin: f32,
-    hit: &mut Hit,
-) {
-    let leaf = &b.prims[first as usize..(first + count) as usize];
-    if let Some((t, u, v)) = leaf_triangles4(b, first, leaf, ray) {
-        // Four lanes at once, then those in the interval taken in order, as the loop below
-        // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
-        for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
-            if t[k] < hit.t {
-                hit.t = t[k];
-                hit.prim = first + k as u32;
-                hit.u = u[k];
-                hit.v = v[k];
-            }
-        }
-        return;
-    }
-    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
-        // Four spheres at once, then taken in order, as the loop below would.
-        for k in 0..leaf.len() {
-            let t_first = first_in(Vec4::new(t0[k], t1[k], 0.0, 0.0), tmin, hit.t);
-            if t_first != NO_HIT {
-                hit.t = t_first;
-                hit.prim = first + k as u32;
-                (hit.u, hit.v) = (0.0, 0.0);
-            }
-        }
-        return;
-    }
-    for i in first..first + count {
-        let p = &b.prims[i as usize];
-        let t = intersect::intersect_prim(p, ray, inv_dir);
-        let t_first = first_in(t, tmin, hit.t);
-        if t_first != NO_HIT {
-            hit.t = t_first;
-            hit.prim = i;
-            hit.u = t.z;
-            hit.v = t.w;
+pub fn closest_plane(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> (f32, u32) {
+    let (mut t_near, mut prim) = (tmax, NO_PRIM);
+    for (i, pl) in b.planes.iter().enumerate() {
+        let t = intersect::intersect_plane(pl, ray);
+        if t > tmin && t < t_near {
+            t_near = t;
+            prim = PLANE_FLAG | i as u32;
         }
     }
+    (t_near, prim)
 }
 
-/// Nearest surface along the ray within `(tmin, tmax)`.
+/// Nearest surface along the ray within `(tmin, tmax)`, through the binary tree a
+/// primitive at a time, as the shader walks it (the CPU renders through its eight-wide
+/// tree: `fast::wide_ray`).
 pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
+    let (t, prim) = closest_plane(b, ray, tmin, tmax);
     let mut hit = Hit {
-        t: tmax,
-        prim: NO_PRIM,
+        t,
+        prim,
         u: 0.0,
         v: 0.0,
         cost: 0,
         nodes: 0,
     };
-    for (i, pl) in b.planes.iter().enumerate() {
-        let t = intersect::intersect_plane(pl, ray);
-        if t > tmin && t < hit.t {
-            hit.t = t;
-            hit.prim = PLANE_FLAG | i as u32;
-        }
-    }
     if b.globals.n_nodes == 0 {
         return hit;
-    }
-    if let Some(wide) = b.wide {
-        // The planes' answer goes over as its two values, not as the `Hit` just written:
-        // read back whole, in other widths than its fields were written in, it stalled
-        // on store forwarding.
-        let planes = (hit.t, hit.prim);
-        #[cfg(target_arch = "x86_64")]
-        if isa::x86_64_v3() {
-            // SAFETY: the processor has the features the function is compiled for.
-            return unsafe { closest_wide_v3(b, wide, ray, tmin, planes) };
-        }
-        let inv_dir = intersect::safe_inverse(ray.dir);
-        let slabs = Slabs::new(ray.origin, inv_dir);
-        return closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes);
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut walk = start_walk(ray);
@@ -301,124 +244,22 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         if count == 0 {
             break;
         }
-        closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
+        for i in first..first + count {
+            let t = intersect::intersect_prim(&b.prims[i as usize], ray, inv_dir);
+            let t_first = first_in(t, tmin, hit.t);
+            if t_first != NO_HIT {
+                hit.t = t_first;
+                hit.prim = i;
+                hit.u = t.z;
+                hit.v = t.w;
+            }
+        }
         if !walk.walk_on(b) {
             break;
         }
     }
     hit.nodes = walk.fetched;
     hit
-}
-
-/// `closest_hit` through the CPU's eight-wide tree (`wide.rs`), the planes done (the
-/// nearest plane's distance, or `tmax`, and its `prim`), with the slab test `slabs`:
-/// inlined whole into its callers, so that `closest_wide_v3` is the same walk in AVX's
-/// encoding.
-#[inline(always)]
-fn closest_wide(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
-    tmin: f32,
-    (tmax, prim): (f32, u32),
-) -> Hit {
-    let mut hit = Hit {
-        t: tmax,
-        prim,
-        u: 0.0,
-        v: 0.0,
-        cost: 0,
-        nodes: 0,
-    };
-    let mut nodes = 0;
-    // The closure inlined too: called once a leaf, it would otherwise stay a call.
-    wide::walk::<true>(
-        wide,
-        slabs,
-        tmin,
-        tmax,
-        &mut nodes,
-        #[inline(always)]
-        |first, count| {
-            closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
-            Some(hit.t)
-        },
-    );
-    // Built whole, `nodes` from its register: writing it into `hit` and returning that
-    // made the copy out read it back in one load with `cost`, which stalls on the store
-    // just made (store forwarding), a twentieth of a walk.
-    Hit {
-        t: hit.t,
-        prim: hit.prim,
-        u: hit.u,
-        v: hit.v,
-        cost: hit.cost,
-        nodes,
-    }
-}
-
-/// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
-/// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
-/// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
-/// result: the bits are the baseline's.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_wide_v3(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    tmin: f32,
-    planes: (f32, u32),
-) -> Hit {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: the function's features include AVX.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
-}
-
-/// `transmission` through the eight-wide tree, the planes' factor `light` done; inlined
-/// as `closest_wide` is.
-#[inline(always)]
-fn transmission_wide(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
-    (tmax, nodes): (f32, &mut u32),
-    mut light: Vec3,
-) -> Vec3 {
-    let mut blocked = false;
-    wide::walk::<false>(
-        wide,
-        slabs,
-        0.0,
-        tmax,
-        nodes,
-        #[inline(always)]
-        |first, count| {
-            blocked = !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light);
-            (!blocked).then_some(tmax)
-        },
-    );
-    if blocked { Vec3::ZERO } else { light }
-}
-
-/// `transmission_wide` compiled for x86-64-v3, as `closest_wide_v3` is.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn transmission_wide_v3(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    tmax: f32,
-    nodes: &mut u32,
-    light: Vec3,
-) -> Vec3 {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: as in `closest_wide_v3`.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
 }
 
 /// Stack entries the GPU's walk (`b.globals.traversal`) writes for a ray that visits every
@@ -455,23 +296,14 @@ pub fn transmit_planes(b: &Bindings, ray: &Ray, tmax: f32) -> Option<Vec3> {
 
 /// Light reaching the end of the segment `origin + t*dir, t in (0, tmax)`: an opaque
 /// occluder blocks it, each crossing of a transmitting surface multiplies it by `T * C`.
-/// Adds the nodes the walk fetched to `nodes`.
+/// Adds the nodes the walk fetched to `nodes`. Through the binary tree, as the shader
+/// walks it (the CPU renders through its eight-wide tree: `fast::wide_ray`).
 pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
     let Some(mut light) = transmit_planes(b, ray, tmax) else {
         return Vec3::ZERO;
     };
     if b.globals.n_nodes == 0 {
         return light;
-    }
-    if let Some(wide) = b.wide {
-        #[cfg(target_arch = "x86_64")]
-        if isa::x86_64_v3() {
-            // SAFETY: as in `closest_hit`.
-            return unsafe { transmission_wide_v3(b, wide, ray, tmax, nodes, light) };
-        }
-        let inv_dir = intersect::safe_inverse(ray.dir);
-        let slabs = Slabs::new(ray.origin, inv_dir);
-        return transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light);
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let mut walk = start_walk(ray);
@@ -481,9 +313,20 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3
         if count == 0 {
             break;
         }
-        if !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light) {
-            *nodes += walk.fetched;
-            return Vec3::ZERO;
+        for i in first..first + count {
+            let p = &b.prims[i as usize];
+            let t = intersect::intersect_prim(p, ray, inv_dir);
+            let crossings = u32::from(t.x > 0.0 && t.x < tmax) + u32::from(t.y > 0.0 && t.y < tmax);
+            if crossings > 0 {
+                let m = &b.materials[p.material() as usize];
+                if m.t <= 0.0 {
+                    *nodes += walk.fetched;
+                    return Vec3::ZERO;
+                }
+                for _ in 0..crossings {
+                    light *= m.t * m.color;
+                }
+            }
         }
         if !walk.walk_on(b) {
             break;

@@ -10,128 +10,16 @@
 
 use glam::Vec3;
 
-use super::main::sample_ray;
+use super::pixel::sample_ray;
 use super::shade::{
     Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface,
 };
 use super::traverse::{closest_hit, transmission};
-use super::types::{Bindings, Hit, Ray, RayCounts};
+use super::types::{Bindings, Ray, RayCounts};
+use super::wave::{W, Wave, WaveHit, WavePath, WaveRay, WaveShadow};
 use crate::gpu_types::*;
 
-/// A path of the wave: one pixel sample's colour so far, its rays, counts, and whether any
-/// of its work was cut short (the shader's `WavePath`; `GpuWavePath` on the host).
-#[derive(Clone, Copy, Default)]
-struct WavePath {
-    colour: Vec3,
-    rays: u32,
-    counts: RayCounts,
-    cut: u32,
-}
-
-/// A ray of a round (`WaveRay`).
-#[derive(Clone, Copy, Default)]
-struct WaveRay {
-    origin: Vec3,
-    weight: f32,
-    dir: Vec3,
-    path: u32,
-}
-
-/// What `wf_extend` found for the ray of the same index, and the ambient term `wf_shade`
-/// found (`WaveHit`; the walk's node fetches are the CPU hit's `nodes`).
-#[derive(Clone, Copy, Default)]
-struct WaveHit {
-    hit: Hit,
-    flags: u32,
-    children: u32,
-    ambient: Vec3,
-}
-
-/// The shadow ray of one light at one hit (`WaveShadow`).
-#[derive(Clone, Copy, Default)]
-struct WaveShadow {
-    origin: Vec3,
-    dist: f32,
-    dir: Vec3,
-    flags: u32,
-    light: Vec3,
-    nodes: u32,
-}
-
-/// A tile's wave, as the shader's group 2 and 3 hold it, and the output it adds to.
-struct Wave<'w, 'a> {
-    b: &'w Bindings<'a>,
-    tile: GpuTile,
-    paths: Vec<WavePath>,
-    rays: Vec<WaveRay>,
-    hits: Vec<WaveHit>,
-    shadows: Vec<WaveShadow>,
-    queue: Vec<u32>,
-    scan: Vec<u32>,
-    counts: [u32; WAVE_COUNT_WORDS as usize],
-    args: [u32; 6],
-    out: Vec<(Vec3, u32, RayCounts)>,
-}
-
-const W: u32 = WORKGROUP_INVOCATIONS;
-
 impl Wave<'_, '_> {
-    fn wave_capacity(&self) -> u32 {
-        self.rays.len() as u32 / 2
-    }
-
-    fn wave_ray_index(&self, d: u32, k: u32) -> usize {
-        ((d % 2) * self.wave_capacity() + k) as usize
-    }
-
-    fn wave_material(&self, hit: &Hit) -> &GpuMaterial {
-        let b = self.b;
-        let material = if hit.prim & PLANE_FLAG != 0 {
-            b.planes[(hit.prim & !PLANE_FLAG) as usize].material
-        } else {
-            b.prims[hit.prim as usize].material()
-        };
-        &b.materials[material as usize]
-    }
-
-    fn wave_children(&self, d: u32, hit: &Hit) -> u32 {
-        if hit.prim == NO_PRIM || d >= self.b.globals.max_depth {
-            return 0;
-        }
-        let m = self.wave_material(hit);
-        u32::from(m.ks > 0.0) + u32::from(m.t > 0.0)
-    }
-
-    fn wave_child_index(&self, k: u32) -> u32 {
-        self.scan[(k / W) as usize] + self.hits[k as usize].children
-    }
-
-    /// Pixel i of the tile: strips of `WORKGROUP_SIDE` rows, each column by column.
-    fn wave_xy(&self, i: u32) -> (u32, u32, usize) {
-        let t = &self.tile;
-        let strip = WORKGROUP_SIDE * t.width;
-        let full = t.height / WORKGROUP_SIDE;
-        let (rows, s, j) = if i / strip >= full {
-            (t.height - full * WORKGROUP_SIDE, full, i - full * strip)
-        } else {
-            (WORKGROUP_SIDE, i / strip, i % strip)
-        };
-        let (x, y) = (j / rows, s * WORKGROUP_SIDE + j % rows);
-        (
-            t.x + x,
-            t.y + y,
-            (t.out_base + y * t.out_stride + x) as usize,
-        )
-    }
-
-    /// The dispatch size for `n` invocations, at word `at` of the args; the twin's host
-    /// loop runs that many workgroups, as the GPU does.
-    fn wave_dispatch(&mut self, at: usize, n: u32) {
-        self.args[at] = n.div_ceil(W);
-        self.args[at + 1] = 1;
-        self.args[at + 2] = 1;
-    }
-
     fn wf_generate(&mut self, p: u32) {
         let t = self.tile;
         let paths = t.width * t.height * t.sample_count;

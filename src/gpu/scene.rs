@@ -63,7 +63,7 @@ impl GpuScene {
         *self.counted.lock().expect("counts lock")
     }
 
-    /// Pixels the last trace handed to `resume` (main.wgsl) because their first dispatch
+    /// Pixels the last trace handed to `resume` (pixel.wgsl) because their first dispatch
     /// did not finish them: those a driver's loop limit cut short (lavapipe's), and on the
     /// wavefront kernels those whose paths outgrew the wave. The tests of those pixels
     /// check that they were met, not only that the images agree.

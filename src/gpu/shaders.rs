@@ -5,7 +5,7 @@
 use crate::gpu_types::{WGSL_CONSTANTS, WgslValue};
 
 /// The files, in the order they are joined; each is mirrored by `src/cpu/<name>.rs`.
-pub const FILES: [(&str, &str); 8] = [
+pub const FILES: [(&str, &str); 9] = [
     ("types.wgsl", include_str!("../../shaders/types.wgsl")),
     (
         "intersect.wgsl",
@@ -15,7 +15,8 @@ pub const FILES: [(&str, &str); 8] = [
     ("cwide.wgsl", include_str!("../../shaders/cwide.wgsl")),
     ("traverse.wgsl", include_str!("../../shaders/traverse.wgsl")),
     ("shade.wgsl", include_str!("../../shaders/shade.wgsl")),
-    ("main.wgsl", include_str!("../../shaders/main.wgsl")),
+    ("pixel.wgsl", include_str!("../../shaders/pixel.wgsl")),
+    ("wave.wgsl", include_str!("../../shaders/wave.wgsl")),
     (
         "wavefront.wgsl",
         include_str!("../../shaders/wavefront.wgsl"),

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use super::RAY_STACK;
 
-/// A pixel whose work continues across dispatches (`resume` in `shaders/main.wgsl`). The
+/// A pixel whose work continues across dispatches (`resume` in `shaders/pixel.wgsl`). The
 /// host reads `sum` (of the samples traced, once `phase` is `PHASE_DONE`), `rays` and `cut`;
 /// the rest is the shader's own bookkeeping, kept as words here (`ray_in` and `stack` hold
 /// WGSL `Pending` structs of 12 words).
@@ -63,13 +63,13 @@ pub const PHASE_LIGHT: u32 = 2;
 /// `GpuPixelState::phase` of a finished pixel.
 pub const PHASE_DONE: u32 = 3;
 
-/// Loop iterations after which `resume` (main.wgsl) suspends a pixel until the next
+/// Loop iterations after which `resume` (pixel.wgsl) suspends a pixel until the next
 /// dispatch. Lavapipe ends every loop once an invocation has run 65535 loop iterations,
 /// and counts the iterations of all eight invocations of a SIMD batch together, so eight
 /// budgets plus one traversal must stay under 65535.
 pub const RESUME_BUDGET: u32 = 2048;
 
-/// A pixel to resume, as `resume_pixels` (main.wgsl) holds it: `x | y << RESUME_Y_SHIFT`.
+/// A pixel to resume, as `resume_pixels` (pixel.wgsl) holds it: `x | y << RESUME_Y_SHIFT`.
 pub const RESUME_Y_SHIFT: u32 = 16;
 pub const RESUME_X_MASK: u32 = (1 << RESUME_Y_SHIFT) - 1;
 

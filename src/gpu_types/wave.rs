@@ -1,4 +1,4 @@
-//! The records of the wavefront path (`shaders/wavefront.wgsl`): a path per pixel sample
+//! The records of the wavefront path (`shaders/wave.wgsl`): a path per pixel sample
 //! (`GpuWavePath`), the rays of a round (`GpuWaveRay`), their hits (`GpuWaveHit`) and
 //! their shadow rays (`GpuWaveShadow`), and the words of the wave's counts. The host only
 //! sizes and allocates them; the CPU twin (`cpu::wavefront`) keeps the same records. Part

@@ -5,7 +5,7 @@
 //! plane. `project` is the vertex stage on the CPU, for the tests that prove the sync.
 //!
 //! The primary ray of pixel (x, y) goes through `cam_forward + sx cam_right + sy cam_up`
-//! with `sx = (x - W/2) pitch` and `sy = (H/2 - y) pitch` (`cpu::main::camera_ray`). A
+//! with `sx = (x - W/2) pitch` and `sy = (H/2 - y) pitch` (`cpu::pixel::camera_ray`). A
 //! point at camera coordinates (u, v, z) lies on the ray of x = W/2 + u / (z pitch) and
 //! y = H/2 - v / (z pitch); the matrix below gives exactly that after the perspective
 //! divide and the viewport transform, which puts pixel centres at half-integers as the

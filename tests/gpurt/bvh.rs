@@ -8,8 +8,9 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use gpurt::bvh::{self, MAX_LEAF_PRIMS};
+use gpurt::cpu::fast::wide_ray::{closest_hit, transmission};
 use gpurt::cpu::intersect;
-use gpurt::cpu::traverse::{closest_hit, stack_high_water, transmission};
+use gpurt::cpu::traverse::stack_high_water;
 use gpurt::cpu::types::{Bindings, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;

@@ -402,26 +402,6 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "Bindings for the binary walk: the CPU renders through the wide tree (wide.rs)",
     ),
     (
-        "closest_in_leaf",
-        "a leaf's primitives, shared by the CPU's binary and wide walks; inline in WGSL",
-    ),
-    (
-        "closest_wide",
-        "closest_hit through the CPU's eight-wide tree (wide.rs)",
-    ),
-    (
-        "closest_wide_v3",
-        "closest_wide compiled for x86-64-v3, chosen at run time",
-    ),
-    (
-        "transmission_wide",
-        "transmission through the CPU's eight-wide tree (wide.rs)",
-    ),
-    (
-        "transmission_wide_v3",
-        "transmission_wide compiled for x86-64-v3, chosen at run time",
-    ),
-    (
         "stack_high_water",
         "the tests' probe of the stack bound; the shader's slice is sized from it",
     ),
@@ -450,6 +430,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
     (
+        "closest_plane",
+        "closest_hit's planes, which the CPU's eight-wide walk (fast/wide_ray.rs) starts from too",
+    ),
+    (
         "transmit_planes",
         "transmission's planes, which the CPU's occlusion packets test lane by lane first",
     ),
@@ -469,11 +453,11 @@ fn function_names(src: &str) -> Vec<String> {
         })
         .filter_map(|l| {
             let l = l.trim_start();
-            let l = l
-                .strip_prefix("pub(crate) ")
-                .or_else(|| l.strip_prefix("pub(super) "))
-                .or_else(|| l.strip_prefix("pub "))
-                .unwrap_or(l);
+            // `pub`, `pub(crate)`, `pub(super)`, `pub(in path)`.
+            let l = match l.strip_prefix("pub(") {
+                Some(rest) => rest.split_once(") ").map_or(l, |(_, f)| f),
+                None => l.strip_prefix("pub ").unwrap_or(l),
+            };
             let rest = l.strip_prefix("fn ")?;
             let end = rest.find(|c: char| !(c.is_alphanumeric() || c == '_'))?;
             Some(rest[..end].to_string())
@@ -493,7 +477,7 @@ fn wgsl_functions_have_cpu_twins_in_order() {
         .chain(module.entry_points.iter().map(|e| e.name.clone()))
         .collect();
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut seen = Vec::new();
+    let (mut seen, mut seen_cpu) = (Vec::new(), Vec::new());
     for (file, text) in shaders::FILES {
         let stem = file.trim_end_matches(".wgsl");
         let wgsl = function_names(text);
@@ -503,6 +487,7 @@ fn wgsl_functions_have_cpu_twins_in_order() {
         seen.extend(wgsl.iter().cloned());
         let cpu_src = std::fs::read_to_string(root.join(format!("src/cpu/{stem}.rs")))
             .expect("the CPU twin exists");
+        seen_cpu.extend(function_names(&cpu_src));
         let keep = |names: Vec<String>, except: &[(&str, &str)]| -> Vec<String> {
             names
                 .into_iter()
@@ -517,5 +502,8 @@ fn wgsl_functions_have_cpu_twins_in_order() {
     }
     for (name, _) in WGSL_ONLY {
         assert!(seen.iter().any(|s| s == name), "stale exception {name}");
+    }
+    for (name, _) in CPU_ONLY {
+        assert!(seen_cpu.iter().any(|s| s == name), "stale exception {name}");
     }
 }

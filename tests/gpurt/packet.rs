@@ -10,10 +10,10 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use glam::Vec3;
-use gpurt::cpu::main::camera_ray;
+use gpurt::cpu::fast::wide_ray::{closest_hit, transmission};
 use gpurt::cpu::packet::{Isa, Kernels, MAX_LANES, Packet};
+use gpurt::cpu::pixel::camera_ray;
 use gpurt::cpu::shade::{light_ray, offset_origin, reflect_dir, surface};
-use gpurt::cpu::traverse::{closest_hit, transmission};
 use gpurt::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use gpurt::film::Accumulator;
 use gpurt::frame::{self, RenderOptions};

@@ -2,8 +2,8 @@
 //! show a scene from one camera, proved point by point.
 
 use glam::{Vec2, Vec3};
-use gpurt::cpu::main::camera_ray;
-use gpurt::cpu::traverse::closest_hit;
+use gpurt::cpu::fast::wide_ray::closest_hit;
+use gpurt::cpu::pixel::camera_ray;
 use gpurt::cpu::types::{Bindings, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::{GpuGlobals, NO_HIT, PRIM_TRIANGLE};

@@ -7,7 +7,8 @@
 use glam::Vec3;
 use gpurt::counters::{Counters, KINDS, gpu_node_bytes};
 use gpurt::cpu::RayCounts;
-use gpurt::cpu::main::sample_sum;
+use gpurt::cpu::pixel::sample_sum;
+use gpurt::cpu::tracer::Alone;
 use gpurt::cpu::types::Bindings;
 use gpurt::film::Film;
 use gpurt::frame::{self, RenderOptions};
@@ -28,7 +29,14 @@ fn twin(buffers: &SceneBuffers, globals: &GpuGlobals) -> Counters {
     for y in 0..globals.height {
         for x in 0..globals.width {
             let mut pixel = RayCounts::default();
-            sample_sum(&b, x, y, 0..globals.spp, Vec3::ZERO, &mut pixel);
+            sample_sum(
+                &b,
+                &mut Alone,
+                (x, y),
+                0..globals.spp,
+                Vec3::ZERO,
+                &mut pixel,
+            );
             counts.add(&pixel);
             let k = pixel.counters(0);
             let n = |v: u64| u32::try_from(v).expect("a pixel's count fits");

@@ -9,7 +9,8 @@ use std::sync::atomic::AtomicBool;
 use glam::Vec3;
 use gpurt::counters::Counters;
 use gpurt::cpu::RayCounts;
-use gpurt::cpu::main::sample_sum;
+use gpurt::cpu::pixel::sample_sum;
+use gpurt::cpu::tracer::Alone;
 use gpurt::cpu::types::Bindings;
 use gpurt::cpu::wavefront::wave_sums;
 use gpurt::film::Film;
@@ -295,7 +296,7 @@ fn the_cpu_twin_of_the_kernels_traces_what_the_cpu_traces() {
             let (x, y) = (t.x + i as u32 % t.width, t.y + i as u32 / t.width);
             let mut want = RayCounts::default();
             let samples = t.sample_start..t.sample_start + t.sample_count;
-            let expect = sample_sum(&b, x, y, samples, Vec3::ZERO, &mut want);
+            let expect = sample_sum(&b, &mut Alone, (x, y), samples, Vec3::ZERO, &mut want);
             assert!(
                 rounding_apart(sum, expect),
                 "{name}: pixel ({x}, {y}): {sum} against {expect}"
@@ -335,7 +336,7 @@ fn paths_that_outgrow_the_wave_are_flagged_and_the_rest_are_traced() {
         }
         let (x, y) = (i as u32 % opts.width, i as u32 / opts.width);
         let mut want = RayCounts::default();
-        let expect = sample_sum(&b, x, y, 0..opts.spp, Vec3::ZERO, &mut want);
+        let expect = sample_sum(&b, &mut Alone, (x, y), 0..opts.spp, Vec3::ZERO, &mut want);
         assert!(rounding_apart(sum, expect), "pixel ({x}, {y})");
         assert_eq!(counts, want, "pixel ({x}, {y})");
         assert_eq!(u64::from(rays), want.total(), "pixel ({x}, {y})");

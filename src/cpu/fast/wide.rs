@@ -308,7 +308,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn eight_lanes_in_avx_match_two_halves_of_four() {
-        if !crate::cpu::isa::x86_64_v3() {
+        if !crate::cpu::fast::isa::x86_64_v3() {
             eprintln!("skipped: this processor has no AVX2");
             return;
         }

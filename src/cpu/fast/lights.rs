@@ -17,10 +17,10 @@
 
 use glam::Vec3;
 
-use super::intersect::lanes_of;
 use super::packet::{MAX_LANES, Packet};
-use super::shade::{Surface, light_samples};
-use super::types::{Bindings, Ray};
+use crate::cpu::intersect::lanes_of;
+use crate::cpu::shade::{Surface, light_samples};
+use crate::cpu::types::{Bindings, Ray};
 use crate::gpu_types::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, NO_HIT, SHADING_BLINN_PHONG};
 
 /// One value a lane.

@@ -9,10 +9,10 @@ use glam::Vec3;
 
 use super::rays::Occluded;
 use crate::bvh::wide::WideNode;
+use crate::cpu::fast::leaf::{leaf_crossings, leaf_triangles4};
+use crate::cpu::fast::wide::{self, Slabs};
 use crate::cpu::intersect;
-use crate::cpu::leaf::{leaf_crossings, leaf_triangles4};
 use crate::cpu::types::{Bindings, Ray};
-use crate::cpu::wide::{self, Slabs};
 
 /// One lane's nearest hit so far, as `Best` holds it in lanes.
 #[derive(Clone, Copy, Debug)]

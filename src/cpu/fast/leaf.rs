@@ -1,18 +1,19 @@
 //! A leaf's primitives against one ray, for the CPU's single-ray walks of either tree
 //! (`traverse.rs`) and the packets' lanes that walk alone (`packet/single.rs`): four
 //! triangles at once from the leaf's block, and the surfaces a shadow ray crosses in the
-//! order `transmission` multiplies their factors. (The closest-hit test of a leaf,
-//! `closest_in_leaf`, stays beside `first_in`, the twin of traverse.wgsl's that it calls.)
+//! order `transmission` multiplies their factors, and the closest hit in a leaf
+//! (`closest_in_leaf`, with traverse.wgsl's `first_in` from its twin).
 
 use glam::{Vec3, Vec4};
 
-use super::intersect::{self, lanes_of};
-use super::types::{Bindings, Ray};
-use crate::gpu_types::GpuPrim;
+use crate::cpu::intersect::{self, lanes_of};
+use crate::cpu::traverse::first_in;
+use crate::cpu::types::{Bindings, Hit, Ray};
+use crate::gpu_types::{GpuPrim, NO_HIT};
 
 /// The lanes of the first `len` whose `t` lies in `(tmin, tmax)`, a bit each.
 #[inline(always)]
-pub(super) fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> u32 {
+pub(crate) fn crossings(t: Vec4, tmin: f32, tmax: f32, len: usize) -> u32 {
     let inside = t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
     inside.bitmask() & ((1 << len) - 1)
 }
@@ -85,7 +86,7 @@ pub(crate) fn leaf_crossings(
 /// Multiplies `light` by the transmission of each crossing of the leaf's primitives within
 /// `(0, tmax)`; false when one of them is opaque.
 #[inline(always)]
-pub(super) fn transmit_leaf(
+pub(crate) fn transmit_leaf(
     b: &Bindings,
     ray: &Ray,
     inv_dir: Vec3,
@@ -111,4 +112,54 @@ pub(super) fn transmit_leaf(
             true
         },
     )
+}
+
+/// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.
+#[inline(always)]
+pub(crate) fn closest_in_leaf(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    first: u32,
+    count: u32,
+    tmin: f32,
+    hit: &mut Hit,
+) {
+    let leaf = &b.prims[first as usize..(first + count) as usize];
+    if let Some((t, u, v)) = leaf_triangles4(b, first, leaf, ray) {
+        // Four lanes at once, then those in the interval taken in order, as the loop below
+        // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
+        for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
+            if t[k] < hit.t {
+                hit.t = t[k];
+                hit.prim = first + k as u32;
+                hit.u = u[k];
+                hit.v = v[k];
+            }
+        }
+        return;
+    }
+    if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
+        // Four spheres at once, then taken in order, as the loop below would.
+        for k in 0..leaf.len() {
+            let t_first = first_in(Vec4::new(t0[k], t1[k], 0.0, 0.0), tmin, hit.t);
+            if t_first != NO_HIT {
+                hit.t = t_first;
+                hit.prim = first + k as u32;
+                (hit.u, hit.v) = (0.0, 0.0);
+            }
+        }
+        return;
+    }
+    for i in first..first + count {
+        let p = &b.prims[i as usize];
+        let t = intersect::intersect_prim(p, ray, inv_dir);
+        let t_first = first_in(t, tmin, hit.t);
+        if t_first != NO_HIT {
+            hit.t = t_first;
+            hit.prim = i;
+            hit.u = t.z;
+            hit.v = t.w;
+        }
+    }
 }

@@ -34,8 +34,8 @@ mod x86_walks;
 
 use glam::Vec3;
 
-use super::intersect::lanes_of;
-use super::types::{Bindings, Hit, Ray};
+use crate::cpu::intersect::lanes_of;
+use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::error::{Error, Result};
 pub use lanes::MAX_LANES;
 use rays::Rows;

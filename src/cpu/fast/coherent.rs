@@ -19,11 +19,13 @@ use std::ops::Range;
 use glam::Vec3;
 
 use super::lights::{Surfaces, light_rays};
-use super::main::{aov, sample_ray};
 use super::packet::{Kernels, MAX_LANES, Packet};
-use super::shade::{Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace};
 use super::tracer::Alone;
-use super::types::{Bindings, Hit, Ray, RayCounts};
+use crate::cpu::pixel::{aov, sample_ray};
+use crate::cpu::shade::{
+    Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace,
+};
+use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
 
 /// A ray traced in a packet, and its answer.

@@ -112,8 +112,8 @@ mod tests {
     use super::super::rays::Rows;
     use super::*;
     use crate::bvh::wide::EMPTY;
+    use crate::cpu::fast::wide::{Boxes, Slabs};
     use crate::cpu::intersect::lanes_of;
-    use crate::cpu::wide::{Boxes, Slabs};
     use glam::Vec3;
 
     /// A node of eight random boxes (some empty) around the origin.

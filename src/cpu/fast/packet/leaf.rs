@@ -391,8 +391,8 @@ pub fn occlusion<L: Lanes>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cpu::fast::packet::lanes::Portable;
     use crate::cpu::intersect::intersect_cone;
-    use crate::cpu::packet::lanes::Portable;
     use crate::cpu::xorshift;
     use crate::gpu_types::PRIM_KIND_SHIFT;
     use glam::Vec3;
@@ -488,7 +488,7 @@ mod tests {
         cones_match_the_scalar_test(Portable);
         #[cfg(target_arch = "x86_64")]
         {
-            use crate::cpu::packet::x86::{Avx2, Avx512, Sse};
+            use crate::cpu::fast::packet::x86::{Avx2, Avx512, Sse};
             cones_match_the_scalar_test(Sse::new());
             match Avx2::detect() {
                 Some(l) => cones_match_the_scalar_test(l),

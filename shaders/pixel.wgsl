@@ -1,7 +1,7 @@
-// main.wgsl: the compute entry point. One invocation per pixel of the current tile
+// pixel.wgsl: the compute entry point. One invocation per pixel of the current tile
 // (workgroups of 8x8 pixels; the host dispatches one bounded tile at a time, a band of
 // tiles per submission): camera rays (stratified, jittered samples and the thin lens,
-// from the shared hash), traced and averaged, or an AOV (CPU twin: src/cpu/main.rs).
+// from the shared hash), traced and averaged, or an AOV (CPU twin: src/cpu/pixel.rs).
 // `pooled` computes the same colours with a larger square of pixels a workgroup, shared
 // out among its lanes, and `resume` finishes pixels a driver's loop limit cut short (both
 // GPU only).

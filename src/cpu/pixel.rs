@@ -1,10 +1,9 @@
-//! CPU twin of `shaders/main.wgsl`: one pixel = its camera rays (stratified, jittered
+//! CPU twin of `shaders/pixel.wgsl`: one pixel = its camera rays (stratified, jittered
 //! samples and the thin lens, drawn from the shared hash), traced and averaged, or an AOV.
 
 use glam::{Vec2, Vec3};
 
 use super::shade::{Tracer, count_nodes, surface, trace};
-use super::tracer::Alone;
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 
@@ -62,11 +61,12 @@ pub fn sample_ray(g: &GpuGlobals, px: u32, py: u32, s: u32, rng: &mut u32) -> Ra
 }
 
 /// `sum` plus samples `samples` of one pixel, added in sample order (as `main` in
-/// main.wgsl does within a band), and the rays traced for them.
+/// pixel.wgsl does within a band), and the rays traced for them, each answered by
+/// `tracer` (`fast::tracer::Alone` when the CPU renders).
 pub fn sample_sum(
     b: &Bindings,
-    px: u32,
-    py: u32,
+    tracer: &mut impl Tracer,
+    (px, py): (u32, u32),
     samples: std::ops::Range<u32>,
     mut sum: Vec3,
     counts: &mut RayCounts,
@@ -77,9 +77,9 @@ pub fn sample_sum(
         let ray = sample_ray(g, px, py, s, &mut rng);
         counts.eye += 1;
         sum += if g.aov == AOV_COLOR {
-            trace(b, &mut Alone, ray, &mut rng, counts)
+            trace(b, tracer, ray, &mut rng, counts)
         } else {
-            aov(b, &mut Alone, &ray, counts)
+            aov(b, tracer, &ray, counts)
         };
     }
     sum

@@ -7,7 +7,7 @@
 use std::arch::x86_64::*;
 
 use super::lanes::{Lanes, Row};
-use crate::cpu::isa;
+use crate::cpu::fast::isa;
 
 /// SSE2, the x86-64 baseline: four lanes.
 #[derive(Clone, Copy, Debug)]

@@ -4,9 +4,9 @@
 
 use glam::Vec3;
 
-use super::shade::Tracer;
-use super::traverse;
-use super::types::{Bindings, Hit, Ray};
+use super::wide_ray;
+use crate::cpu::shade::Tracer;
+use crate::cpu::types::{Bindings, Hit, Ray};
 
 /// Every ray walked alone, when it is asked for.
 pub struct Alone;
@@ -14,10 +14,10 @@ pub struct Alone;
 impl Tracer for Alone {
     #[inline]
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
-        traverse::closest_hit(b, ray, tmin, tmax)
+        wide_ray::closest_hit(b, ray, tmin, tmax)
     }
     #[inline]
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
-        traverse::transmission(b, ray, tmax, nodes)
+        wide_ray::transmission(b, ray, tmax, nodes)
     }
 }

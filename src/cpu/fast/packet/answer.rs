@@ -10,8 +10,9 @@ use glam::Vec3;
 use super::lanes::{Lanes, MAX_LANES};
 use super::rays::{Found, Rows};
 use super::walk;
+use crate::cpu::fast::wide_ray::{closest_hit, transmission};
 use crate::cpu::intersect::lanes_of;
-use crate::cpu::traverse::{closest_hit, transmission, transmit_planes};
+use crate::cpu::traverse::transmit_planes;
 use crate::cpu::types::{Bindings, Hit};
 
 /// Fewer lanes than this in a packet, and its rays are traced one at a time.

@@ -1,0 +1,163 @@
+//! One ray through the CPU's eight-wide tree (`fast/wide.rs`): `traverse`'s
+//! `closest_hit` and `transmission` as the CPU renders them, the same hits as the binary
+//! walk of the twin, with the x86-64-v3 copies chosen at run time.
+
+use glam::Vec3;
+
+#[cfg(target_arch = "x86_64")]
+use super::isa;
+use super::leaf::{closest_in_leaf, transmit_leaf};
+use super::wide::{self, Slabs};
+use crate::bvh::wide::WideNode;
+use crate::cpu::types::{Bindings, Hit, Ray};
+use crate::cpu::{intersect, traverse};
+
+/// `traverse::closest_hit` as the CPU renders it: through the eight-wide tree where the
+/// bindings hold one (`Bindings::wide`), else the binary walk.
+#[inline(always)]
+pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
+    let Some(wide) = b.wide.filter(|_| b.globals.n_nodes > 0) else {
+        return traverse::closest_hit(b, ray, tmin, tmax);
+    };
+    // The planes' answer goes over as its two values, not as a `Hit`: read back whole,
+    // in other widths than its fields were written in, it stalled on store forwarding.
+    let planes = traverse::closest_plane(b, ray, tmin, tmax);
+    #[cfg(target_arch = "x86_64")]
+    if isa::x86_64_v3() {
+        // SAFETY: the processor has the features the function is compiled for.
+        return unsafe { closest_wide_v3(b, wide, ray, tmin, planes) };
+    }
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    let slabs = Slabs::new(ray.origin, inv_dir);
+    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
+}
+
+/// `traverse::transmission` as the CPU renders it, as `closest_hit` is.
+#[inline(always)]
+pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
+    let Some(wide) = b.wide.filter(|_| b.globals.n_nodes > 0) else {
+        return traverse::transmission(b, ray, tmax, nodes);
+    };
+    let Some(light) = traverse::transmit_planes(b, ray, tmax) else {
+        return Vec3::ZERO;
+    };
+    #[cfg(target_arch = "x86_64")]
+    if isa::x86_64_v3() {
+        // SAFETY: as in `closest_hit`.
+        return unsafe { transmission_wide_v3(b, wide, ray, tmax, nodes, light) };
+    }
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    let slabs = Slabs::new(ray.origin, inv_dir);
+    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
+}
+
+/// `closest_hit` through the CPU's eight-wide tree (`fast/wide.rs`), the planes done (the
+/// nearest plane's distance, or `tmax`, and its `prim`), with the slab test `slabs`:
+/// inlined whole into its callers, so that `closest_wide_v3` is the same walk in AVX's
+/// encoding.
+#[inline(always)]
+fn closest_wide(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
+    tmin: f32,
+    (tmax, prim): (f32, u32),
+) -> Hit {
+    let mut hit = Hit {
+        t: tmax,
+        prim,
+        u: 0.0,
+        v: 0.0,
+        cost: 0,
+        nodes: 0,
+    };
+    let mut nodes = 0;
+    // The closure inlined too: called once a leaf, it would otherwise stay a call.
+    wide::walk::<true>(
+        wide,
+        slabs,
+        tmin,
+        tmax,
+        &mut nodes,
+        #[inline(always)]
+        |first, count| {
+            closest_in_leaf(b, ray, inv_dir, first, count, tmin, &mut hit);
+            Some(hit.t)
+        },
+    );
+    // Built whole, `nodes` from its register: writing it into `hit` and returning that
+    // made the copy out read it back in one load with `cost`, which stalls on the store
+    // just made (store forwarding), a twentieth of a walk.
+    Hit {
+        t: hit.t,
+        prim: hit.prim,
+        u: hit.u,
+        v: hit.v,
+        cost: hit.cost,
+        nodes,
+    }
+}
+
+/// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
+/// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
+/// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
+/// result: the bits are the baseline's.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+fn closest_wide_v3(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    tmin: f32,
+    planes: (f32, u32),
+) -> Hit {
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    // SAFETY: the function's features include AVX.
+    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
+}
+
+/// `transmission` through the eight-wide tree, the planes' factor `light` done; inlined
+/// as `closest_wide` is.
+#[inline(always)]
+fn transmission_wide(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    (inv_dir, slabs): (Vec3, &impl wide::Boxes),
+    (tmax, nodes): (f32, &mut u32),
+    mut light: Vec3,
+) -> Vec3 {
+    let mut blocked = false;
+    wide::walk::<false>(
+        wide,
+        slabs,
+        0.0,
+        tmax,
+        nodes,
+        #[inline(always)]
+        |first, count| {
+            blocked = !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light);
+            (!blocked).then_some(tmax)
+        },
+    );
+    if blocked { Vec3::ZERO } else { light }
+}
+
+/// `transmission_wide` compiled for x86-64-v3, as `closest_wide_v3` is.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+fn transmission_wide_v3(
+    b: &Bindings,
+    wide: &[WideNode],
+    ray: &Ray,
+    tmax: f32,
+    nodes: &mut u32,
+    light: Vec3,
+) -> Vec3 {
+    let inv_dir = intersect::safe_inverse(ray.dir);
+    // SAFETY: as in `closest_wide_v3`.
+    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
+}
