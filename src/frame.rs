@@ -5,9 +5,9 @@
 use glam::Vec3;
 
 use crate::gpu_types::*;
-use crate::limits::{DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP};
 use crate::pack::SceneBuffers;
 use crate::scene::{Camera, auto};
+use crate::util::limits::{DEFAULT_AMBIENT, DEFAULT_DEPTH, DEFAULT_SPP};
 
 /// How to render: everything that is not the scene.
 #[derive(Clone, Debug, PartialEq)]

@@ -16,7 +16,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-use crate::limits::MAX_DEPTH;
+use crate::util::limits::MAX_DEPTH;
 
 mod nodes;
 mod pixel;

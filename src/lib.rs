@@ -10,39 +10,30 @@
 //! is its core: `scene`, `bvh`, `pack`, `frame`, `film`, `info`, `gpu` and the viewer's
 //! camera; the CPU renderer, the sessions and the commands need threads and are left out.
 
-#[cfg(feature = "native")]
-pub mod agreement;
-pub mod atomic;
-#[cfg(feature = "native")]
-pub mod batch;
-#[cfg(feature = "native")]
-pub mod bench;
-pub mod bounded;
 pub mod bvh;
+pub mod commands;
 #[cfg(feature = "native")]
 pub mod compare;
-pub mod console;
 pub mod counters;
 #[cfg(feature = "native")]
 pub mod cpu;
-pub mod error;
-pub mod fault;
 pub mod film;
 pub mod frame;
 pub mod gpu;
 pub mod gpu_types;
-pub mod info;
-pub mod limits;
 pub mod pack;
-#[cfg(feature = "native")]
-pub mod run;
 pub mod scene;
 #[cfg(feature = "native")]
 pub mod session;
-#[cfg(feature = "native")]
-pub mod shard;
-#[cfg(feature = "native")]
-pub mod tune;
+pub mod util;
 pub mod view;
 
-pub use error::{Error, Result};
+// The layers' modules under their old names, for the Python module, the browser page,
+// the benches, the examples and the tests.
+pub use commands::info;
+#[cfg(feature = "native")]
+pub use commands::{batch, bench, run, shard, tune};
+#[cfg(feature = "native")]
+pub use compare::agreement;
+pub use util::error::{Error, Result};
+pub use util::{atomic, bounded, console, error, fault, limits};

@@ -42,7 +42,14 @@ fn main() -> ExitCode {
             scene,
             json,
             lenient,
-        }) => tools::info(&scene, json, &ReadOptions { lenient }),
+        }) => tools::info(
+            &scene,
+            json,
+            &ReadOptions {
+                lenient,
+                ..ReadOptions::default()
+            },
+        ),
         Some(Command::Diff(diff)) => tools::diff(diff),
         Some(Command::Bench(bench)) => tools::bench(bench),
         Some(Command::Tune(tune)) => tools::tune(tune),

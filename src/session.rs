@@ -16,12 +16,12 @@ use std::time::Duration;
 use crate::bvh::wide::WideNode;
 use crate::counters::{self, Counters};
 use crate::cpu::RayCounts;
-use crate::error::{Error, Result};
-use crate::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 use crate::film::Accumulator;
 use crate::gpu::{self, GpuContext, GpuScene};
 use crate::gpu_types::{AOV_COST, GpuGlobals};
 use crate::pack::SceneBuffers;
+use crate::util::error::{Error, Result};
+use crate::util::fault::{Fault, OUT_OF_MEMORY_MARGIN};
 
 /// A backend that traces frames of one packed scene.
 pub trait Renderer {

@@ -9,9 +9,11 @@ use clap::{Parser, Subcommand, ValueEnum};
 use gpurt::film;
 use gpurt::frame::{Overrides, RenderOptions};
 use gpurt::gpu_types as gt;
-use gpurt::limits::{DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS};
 use gpurt::scene::{Camera, ReadOptions};
 use gpurt::session::Backend;
+use gpurt::util::limits::{
+    DEFAULT_DEPTH, DEFAULT_SPP, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, MAX_THREADS,
+};
 
 mod shade;
 mod tools;
@@ -160,8 +162,8 @@ pub struct RenderArgs {
     /// for one scene the I-th of N bands of rows, written with its manifest into the
     /// directory -o names, for `gpurt merge`. `/N` takes I from SLURM_ARRAY_TASK_ID or
     /// JOB_COMPLETION_INDEX (a Slurm job array, a Kubernetes Indexed Job).
-    #[arg(long, value_name = "I/N", value_parser = gpurt::shard::Shard::parse)]
-    pub shard: Option<gpurt::shard::Shard>,
+    #[arg(long, value_name = "I/N", value_parser = gpurt::commands::shard::Shard::parse)]
+    pub shard: Option<gpurt::commands::shard::Shard>,
     /// How one image is split between shards: bands of rows, or runs of samples (each
     /// shard then stores one image per sample, spp/N of them).
     #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
@@ -235,6 +237,7 @@ impl RenderArgs {
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             lenient: self.lenient,
+            ..ReadOptions::default()
         }
     }
 

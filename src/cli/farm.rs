@@ -8,10 +8,10 @@ use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::Instant;
 
-use gpurt::batch::{self, BatchOptions};
-use gpurt::run::{self, Prepared};
+use gpurt::commands::batch::{self, BatchOptions};
+use gpurt::commands::run::{self, Prepared};
+use gpurt::commands::shard::{self, Manifest, Shard};
 use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
-use gpurt::shard::{self, Manifest, Shard};
 use gpurt::{Error, atomic, film, frame};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -199,7 +199,7 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
 pub fn merge(dir: &Path, output: &Path) -> gpurt::Result<ExitCode> {
     film::Format::from_path(output)?;
     atomic::check_writable(output)?;
-    let (accum, aov) = gpurt::shard::merge(dir)?;
+    let (accum, aov) = gpurt::commands::shard::merge(dir)?;
     accum.into_film().save_aov(output, aov)?;
     Ok(ExitCode::SUCCESS)
 }

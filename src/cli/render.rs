@@ -7,8 +7,8 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+use gpurt::commands::run::{self, Prepared};
 use gpurt::gpu_types::GpuGlobals;
-use gpurt::run::{self, Prepared};
 use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Probe, Renderer};
 use gpurt::view::wireframe::{self, Wireframe};
 use gpurt::{agreement, atomic, film, frame};
@@ -93,8 +93,9 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         build_time += t.elapsed();
     }
     let buffers = Arc::new(buffers);
-    let _copy = (gpurt::fault::Fault::from_env()? == Some(gpurt::fault::Fault::KeepPrimitives))
-        .then(|| buffers.prims.clone());
+    let _copy = (gpurt::util::fault::Fault::from_env()?
+        == Some(gpurt::util::fault::Fault::KeepPrimitives))
+    .then(|| buffers.prims.clone());
 
     // The renderers to run, in order: the CPU first, so that with `both` the GPU's
     // image is compared against it.
@@ -232,7 +233,10 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
 
 /// `scene.nff.gz` -> `scene.png` (in the current directory).
 fn default_output(scene: &Path) -> PathBuf {
-    PathBuf::from(format!("{}.png", gpurt::batch::output_stem(scene)))
+    PathBuf::from(format!(
+        "{}.png",
+        gpurt::commands::batch::output_stem(scene)
+    ))
 }
 
 /// A progress bar that appears only once a render has run for a second, and only on a

@@ -11,7 +11,7 @@ use codespan_reporting::diagnostic::{LabelStyle, Severity};
 use codespan_reporting::term::termcolor::NoColor;
 use codespan_reporting::term::{Chars, Config, Renderer};
 use gpurt::Error;
-use gpurt::error::Excerpt;
+use gpurt::util::error::Excerpt;
 
 /// Prints `gpurt: {e}`, then the excerpt of a parse error; `suffix` ends the first line.
 pub fn print_error(e: &Error, suffix: &str) {

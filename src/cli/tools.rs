@@ -6,11 +6,11 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use gpurt::bench::{self, BenchConfig};
+use gpurt::commands::bench::{self, BenchConfig};
+use gpurt::commands::run::{self, Prepared};
+use gpurt::commands::tune::{self, TuneConfig};
 use gpurt::compare::{self, Thresholds};
-use gpurt::run::{self, Prepared};
 use gpurt::scene::ReadOptions;
-use gpurt::tune::{self, TuneConfig};
 use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
@@ -21,9 +21,9 @@ use super::{print_threads, print_warnings};
 pub fn info(path: &Path, json: bool, read: &ReadOptions) -> gpurt::Result<ExitCode> {
     let s = gpurt::scene::summary_with(path, read)?;
     if json {
-        outln!("{}", gpurt::info::to_json(&s));
+        outln!("{}", gpurt::commands::info::to_json(&s));
     } else {
-        out!("{}", gpurt::info::to_text(&s));
+        out!("{}", gpurt::commands::info::to_text(&s));
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -117,6 +117,7 @@ pub fn tune(args: TuneArgs) -> gpurt::Result<ExitCode> {
         adapter: args.adapter,
         read: ReadOptions {
             lenient: args.lenient,
+            ..ReadOptions::default()
         },
     })?;
     Ok(ExitCode::SUCCESS)
@@ -135,6 +136,7 @@ pub fn bench(args: BenchArgs) -> gpurt::Result<ExitCode> {
         adapter: args.adapter,
         read: ReadOptions {
             lenient: args.lenient,
+            ..ReadOptions::default()
         },
     })?;
     Ok(ExitCode::SUCCESS)

@@ -30,10 +30,10 @@ use glam::Vec3;
 
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
+use crate::util::error::{Error, Result};
 use types::Bindings;
 pub use types::RayCounts;
 

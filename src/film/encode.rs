@@ -13,7 +13,7 @@ use std::path::Path;
 
 use image::{ExtendedColorType, ImageEncoder};
 
-use crate::atomic::write_atomic_with;
+use crate::util::atomic::write_atomic_with;
 use crate::{Error, Result};
 
 /// The image formats gpurt writes, chosen by file extension (case-insensitive): the one
@@ -66,7 +66,7 @@ impl Format {
                 match ext {
                     Some(ext) => format!(
                         "unsupported image extension '.{}'",
-                        crate::error::escape(ext.as_bytes())
+                        crate::util::error::escape(ext.as_bytes())
                     ),
                     None => "no image file extension".to_string(),
                 },

@@ -17,7 +17,7 @@ pub use encode::Format;
 use image::{ColorType, DynamicImage, ImageDecoder, ImageFormat, RgbImage};
 
 use crate::gpu_types::{AOV_COST, AOV_DEPTH};
-use crate::limits::MAX_IMAGE_SIDE;
+use crate::util::limits::MAX_IMAGE_SIDE;
 use crate::{Error, Result};
 
 /// A rendered image: linear RGB, row-major, top row first.
@@ -78,7 +78,7 @@ impl Film {
     /// the unclamped linear values. Rows go to the encoder one at a time (`encode`): no
     /// copy of the film is made.
     ///
-    /// The write is atomic (see [`crate::atomic::write_atomic`]): on any error no partial file is left and an
+    /// The write is atomic (see [`crate::util::atomic::write_atomic`]): on any error no partial file is left and an
     /// existing file at `path` is untouched.
     pub fn save(&self, path: &Path) -> Result<()> {
         self.save_mapped(path, Format::from_path(path)?, |p| p)

@@ -1,7 +1,7 @@
 //! Finding an adapter and opening a device. Kept apart from rendering so tests (and other
 //! programs) can pass in a device of their own to `render_gpu`.
 
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 
 /// A device and queue with the adapter they came from. Cloning shares the device.
 #[derive(Clone)]
@@ -232,7 +232,7 @@ async fn open_adapter_async(adapter: wgpu::Adapter) -> Result<GpuContext> {
             label: Some("gpurt"),
             required_features,
             required_limits: adapter.limits(),
-            memory_hints: crate::fault::memory_hints(),
+            memory_hints: crate::util::fault::memory_hints(),
             ..Default::default()
         })
         .await

@@ -5,10 +5,10 @@ use std::sync::atomic::AtomicBool;
 
 use super::renderer::GpuRenderer;
 use super::trace::trace;
-use crate::error::Result;
 use crate::film::Film;
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
+use crate::util::error::Result;
 
 impl GpuRenderer {
     /// Renders the image described by `globals` on `device`. Returns the film and the

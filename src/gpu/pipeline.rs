@@ -12,8 +12,8 @@ use super::cache::cache_dir;
 use super::device::{Device, Slot};
 use super::shaders::{self, Fetch};
 use super::specialization::Specialization;
-use crate::error::Result;
 use crate::gpu_types::GpuTile;
+use crate::util::error::Result;
 
 /// The most of a pipeline cache file that is read, far past any written: after the whole
 /// suite on an H200 the cache directory held under 1 MB.
@@ -39,7 +39,9 @@ impl DiskCache {
     /// `MAX_CACHE_BYTES` (a longer one, which `save` never writes, is left unread: an
     /// empty cache only costs compile time).
     pub(super) fn open(gpu: &Device, file: PathBuf) -> DiskCache {
-        let data = crate::bounded::read(&file, MAX_CACHE_BYTES).ok().flatten();
+        let data = crate::util::bounded::read(&file, MAX_CACHE_BYTES)
+            .ok()
+            .flatten();
         // SAFETY: the file is named by the adapter's cache key (`file`), and only `save`
         // writes it, with what `PipelineCache::get_data` gave.
         let cache = unsafe { gpu.pipeline_cache("gpurt", data.as_deref()) };
@@ -55,7 +57,7 @@ impl DiskCache {
         if let Some(data) = self.cache.get_data() {
             // Best effort: a cache that cannot be written only costs time next run.
             let _ = std::fs::create_dir_all(self.file.parent().unwrap_or(&self.file));
-            let _ = crate::atomic::write_atomic(&self.file, &data);
+            let _ = crate::util::atomic::write_atomic(&self.file, &data);
         }
     }
 }

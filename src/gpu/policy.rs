@@ -7,12 +7,12 @@
 
 use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
-use crate::error::{Error, Result};
 use crate::gpu_types::{
     AOV_COLOR, GpuGlobals, LIGHT_AREA, POOL_MAX_SIDE, POOL_SIDE, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
     WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
 };
 use crate::pack::SceneBuffers;
+use crate::util::error::{Error, Result};
 
 /// The walk of the BVH, the kernels of a colour frame and the way the shaders read the
 /// scene that a renderer takes on an adapter: `defaults` (what was measured for the kind

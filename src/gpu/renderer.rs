@@ -27,9 +27,9 @@ use super::tuning::Tuning;
 use super::upload::{SceneData, check_sizes, scene_bytes, upload_scene};
 use super::wavefront::{Wave, WavePipelines, wave_paths};
 use crate::counters::gpu_node_bytes;
-use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuTile, TEXTURE_WIDTH};
 use crate::pack::SceneBuffers;
+use crate::util::error::Result;
 
 /// The shader with its bind group layout, and the pipelines compiled from it so far, one
 /// per `Specialization`. Reusable across renders (and threads) on one device.

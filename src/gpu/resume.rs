@@ -8,11 +8,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use super::device::Gpu;
 use super::scene::GpuScene;
 use crate::counters::Counters;
-use crate::error::{Error, Result};
 use crate::film::Film;
 use crate::gpu_types::{
     GpuPixelState, GpuTile, PHASE_DONE, RESUME_X_MASK, RESUME_Y_SHIFT, WORKGROUP_INVOCATIONS,
 };
+use crate::util::error::{Error, Result};
 
 /// Pixels resumed per dispatch (their states take `GpuPixelState`'s 928 bytes each).
 pub(super) const RESUME_CHUNK: usize = 16384;

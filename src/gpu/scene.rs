@@ -16,8 +16,8 @@ use super::specialization::Specialization;
 use super::upload::SceneData;
 use super::wavefront::{Clock, ENTRIES, Wave};
 use crate::counters::Counters;
-use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, GpuPixelCounts, GpuTile};
+use crate::util::error::Result;
 
 /// A scene on the device with the bindings and pipeline for one frame's settings.
 pub struct GpuScene {

@@ -20,9 +20,9 @@ use super::scene::{Bound, GpuScene};
 #[cfg(feature = "native")]
 use super::waves;
 use crate::counters::Counters;
-use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::{GpuPixelCounts, GpuTile, PIXEL_CUT_SHORT, RESUME_X_MASK, RESUME_Y_SHIFT};
+use crate::util::error::{Error, Result};
 
 /// Bytes of a pixel's counts (`GpuPixelCounts`).
 const COUNT_BYTES: u64 = size_of::<GpuPixelCounts>() as u64;

@@ -22,8 +22,8 @@ use std::path::{Path, PathBuf};
 use super::cache::cache_dir;
 use super::policy::{Kernels, Strategy};
 use super::shaders::Fetch;
-use crate::error::{Error, Result};
 use crate::gpu_types::TRAVERSAL_NAMES;
+use crate::util::error::{Error, Result};
 
 /// What a tuning file holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -67,7 +67,7 @@ pub fn load(info: &wgpu::AdapterInfo) -> Result<Option<Tuning>> {
         return Ok(None);
     };
     // Read up to a bound: whatever the cache directory holds, no unbounded allocation.
-    let bytes = match crate::bounded::read(&path, MAX_BYTES) {
+    let bytes = match crate::util::bounded::read(&path, MAX_BYTES) {
         Ok(Some(bytes)) => bytes,
         Ok(None) => {
             return Err(Error::Scene {
@@ -96,7 +96,7 @@ pub fn save(
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let text = format(strategy, &adapter(info), measured);
-    crate::atomic::write_atomic(&path, text.as_bytes())?;
+    crate::util::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(Some(path))
 }
 

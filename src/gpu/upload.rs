@@ -5,10 +5,10 @@
 
 use super::device::Gpu;
 use super::shaders::Fetch;
-use crate::error::{Error, Result};
-use crate::fault::AddressSpaceCap;
 use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
+use crate::util::error::{Error, Result};
+use crate::util::fault::AddressSpaceCap;
 
 /// A scene's arrays on the device: uploaded once, bound into every frame rendered of it.
 pub(super) struct SceneData {

@@ -12,8 +12,8 @@ use super::device::{Device, Slot};
 use super::pipeline::{Modules, compile, storage_buffers};
 use super::shaders::Fetch;
 use super::specialization::Specialization;
-use crate::error::Result;
 use crate::gpu_types::{GpuGlobals, WAVE_COUNT_WORDS, wave_buffer_bytes};
+use crate::util::error::Result;
 
 /// Paths a wave holds for frames cut as `cut`: a tile's pixels times a pass's samples.
 pub(super) fn wave_paths(cut: &Cut) -> u32 {

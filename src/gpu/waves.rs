@@ -16,8 +16,8 @@ use super::wavefront::kernel::{
     ADVANCE, ADVANCE_SHADOWS, EXTEND, FINISH, GATHER, GENERATE, SCAN, SHADE, SHADOW,
 };
 use super::wavefront::{Clock, SHADOW_ARGS, Wave, wave_passes};
-use crate::error::Result;
 use crate::gpu_types::{GpuTile, WORKGROUP_INVOCATIONS};
+use crate::util::error::Result;
 
 /// `trace::submit_band` for the wavefront path: the band's tiles at row `y0` for
 /// `samples`, as `cut` cuts them, a submission per tile (each tile's record is written to

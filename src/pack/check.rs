@@ -2,9 +2,9 @@
 //! without runtime bounds checks.
 
 use super::SceneBuffers;
-use crate::error::{Error, Result};
 use crate::gpu_types::*;
-use crate::limits::MAX_DEPTH;
+use crate::util::error::{Error, Result};
+use crate::util::limits::MAX_DEPTH;
 
 impl SceneBuffers {
     /// `check`, for a GPU's frame: which also needs the binary tree (`for_cpu_alone`).

@@ -9,11 +9,11 @@ use crate::bvh::blocks::Blocks;
 use crate::bvh::wide::{self, WideNode};
 use crate::bvh::{self, FlatBvh};
 use crate::bvh::{cwide, qwide};
-use crate::error::{Error, Result};
 use crate::gpu_types::*;
-use crate::limits::{DEFAULT_SPP, MAX_DEPTH};
 use crate::scene::flat::{self, FlatScene};
 use crate::scene::{Bounds, Camera, Light, Scene, Sink};
+use crate::util::error::{Error, Result};
+use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH};
 
 mod check;
 
@@ -409,8 +409,8 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::limits::DEFAULT_DEPTH;
     use crate::scene::nff;
+    use crate::util::limits::DEFAULT_DEPTH;
 
     /// The render constants `check` compares with the buffers, as `frame::globals` sets
     /// them for the default options.

@@ -11,7 +11,7 @@ use glam::Vec3;
 use super::bounds::Bounds;
 use super::model::nff_default_camera;
 use super::model::{Camera, Light, Material, MaterialId, Plane, Scene, Triangle};
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 
 /// The part of the frame's width or height the framed mesh fills.
 pub const FILL: f32 = 0.875;

@@ -8,8 +8,8 @@
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
-use crate::limits::MAX_FILE_BYTES;
+use crate::util::error::{Error, Result};
+use crate::util::limits::MAX_FILE_BYTES;
 
 /// What a file holds, from its extension (after stripping `.gz`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -10,13 +10,13 @@ use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
 use super::palette::Palette;
 use super::sink::{Collect, MeshOut, Sink};
 use super::{obj, stl};
-use crate::error::Result;
+use crate::util::error::Result;
 
 /// Reads a mesh file's triangles into `out` as they are read (`name` in messages).
 pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Result<()> {
     match kind {
-        FileKind::Stl => stl::read(input, name, out.sink, out.default),
-        FileKind::Obj => obj::read(Lexer::from_input(input, name), out),
+        FileKind::Stl => stl::read(input, name, out.sink, (out.default, out.window)),
+        FileKind::Obj => obj::read(Lexer::through(input, name, out.window), out),
         FileKind::Nff => unreachable!("NFF is not a mesh format"),
     }
 }
@@ -34,6 +34,7 @@ pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
         default: MaterialId(0),
         mtl: false,
         dir: None,
+        window: None,
     };
     read(Input::bytes(bytes), kind, name, &mut out)?;
     Ok(Mesh {

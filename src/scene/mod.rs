@@ -35,7 +35,7 @@ pub use model::{
 pub use options::ReadOptions;
 pub use sink::{Collect, Sink};
 
-use crate::error::Result;
+use crate::util::error::Result;
 use io::FileKind;
 use palette::Palette;
 use sink::MeshOut;
@@ -122,7 +122,12 @@ fn read_input(
     opts: &ReadOptions,
 ) -> Result<Scene> {
     match kind {
-        FileKind::Nff => nff::read(lex::Lexer::from_input(input, name), dir, sink, opts),
+        FileKind::Nff => nff::read(
+            lex::Lexer::through(input, name, opts.window),
+            dir,
+            sink,
+            opts,
+        ),
         kind => {
             let mut scene = Scene::new(name, nff_default_camera());
             let mut palette = Palette::default();
@@ -135,6 +140,7 @@ fn read_input(
                 default: grey,
                 mtl: true,
                 dir: Some(dir),
+                window: opts.window,
             };
             mesh::read(input, kind, name, &mut out)?;
             auto::frame_mesh(&mut scene, sink.bounds())?;

@@ -15,8 +15,8 @@ use super::io;
 use super::lex::{Lexer, Token};
 use super::model::{Material, MaterialId};
 use super::sink::MeshOut;
-use crate::error::{Error, Result, escape};
-use crate::limits::MAX_SHINE;
+use crate::util::error::{Error, Result, escape};
+use crate::util::limits::MAX_SHINE;
 
 /// A library's materials by name (a later `newmtl` of a name replaces the earlier).
 pub type Library = HashMap<String, Material>;
@@ -227,7 +227,7 @@ impl ObjMaterials {
             };
             let file = path.expect("opened").display().to_string();
             read(
-                Lexer::from_input(input, &file),
+                Lexer::through(input, &file, out.window),
                 &mut self.library,
                 out.warnings,
             )?;

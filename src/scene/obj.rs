@@ -20,8 +20,8 @@ use super::mtl::ObjMaterials;
 use super::palette::Palette;
 use super::sink::{Collect, MeshOut};
 use super::triangulate::triangulate;
-use crate::error::Result;
-use crate::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
+use crate::util::error::Result;
+use crate::util::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
 
 /// One face corner: 0-based position and normal indices (not yet checked against the
 /// arrays, since a face may refer to vertices defined later), and where it was written.
@@ -52,6 +52,7 @@ pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
         default: MaterialId(0),
         mtl: false,
         dir: None,
+        window: None,
     };
     read(Lexer::new(bytes, name), &mut out)?;
     Ok(Mesh {

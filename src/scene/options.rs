@@ -10,4 +10,8 @@ pub struct ReadOptions {
     /// is skipped, with what follows it up to the next keyword gpurt knows, and one
     /// warning each, instead of ending the read with an error.
     pub lenient: bool,
+    /// Bytes of the window every reader reads its file through (`None`: the usual 256
+    /// KiB). The tests read through tiny ones, so that the window's ends cut tokens,
+    /// lines and binary records everywhere.
+    pub window: Option<usize>,
 }

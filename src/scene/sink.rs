@@ -42,6 +42,8 @@ pub struct MeshOut<'a> {
     /// The directory `mtllib` names are relative to (the OBJ's own; `None` for bytes that
     /// come from no file, whose libraries cannot be found).
     pub dir: Option<&'a Path>,
+    /// The window the mesh and its libraries are read through (`ReadOptions::window`).
+    pub window: Option<usize>,
 }
 
 /// The primitives as `Scene` holds them.

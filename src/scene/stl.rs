@@ -21,21 +21,27 @@ use super::io::Input;
 use super::lex::Lexer;
 use super::model::{MaterialId, Triangle, unit};
 use super::sink::{Collect, Sink};
-use crate::error::{Error, Result};
-use crate::limits::MAX_PRIMITIVES;
+use crate::util::error::{Error, Result};
+use crate::util::limits::MAX_PRIMITIVES;
 
 /// The triangles of an STL file's bytes (gzip-compressed or not).
 pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
     let mut tris = Collect::default();
-    read(Input::bytes(bytes), name, &mut tris, MaterialId(0))?;
+    read(Input::bytes(bytes), name, &mut tris, (MaterialId(0), None))?;
     Ok(tris.into_triangles())
 }
 
 /// How much of a file's start is looked at to tell binary from ASCII.
 const HEAD_BYTES: usize = 64 << 10;
 
-/// Reads an STL file's triangles, of `material`, into `sink` as they are read.
-pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink, material: MaterialId) -> Result<()> {
+/// Reads an STL file's triangles, of `material`, into `sink` as they are read, through a
+/// window of `window` bytes where given (`ReadOptions::window`).
+pub fn read(
+    mut input: Input,
+    name: &str,
+    sink: &mut dyn Sink,
+    (material, window): (MaterialId, Option<usize>),
+) -> Result<()> {
     let io = |e| super::io::read_error(name, e);
     let mut head = Vec::with_capacity(HEAD_BYTES);
     (&mut input.reader)
@@ -51,14 +57,14 @@ pub fn read(mut input: Input, name: &str, sink: &mut dyn Sink, material: Materia
         || !looks_like_text(&head);
     let rest = std::io::Cursor::new(head).chain(input.reader);
     if binary {
-        let rest = BufReader::with_capacity(256 << 10, rest);
+        let rest = BufReader::with_capacity(window.unwrap_or(256 << 10), rest);
         read_binary(rest, len, name, sink, material)
     } else {
         let input = Input {
             reader: Box::new(rest),
             len,
         };
-        read_ascii(Lexer::from_input(input, name), sink, material)
+        read_ascii(Lexer::through(input, name, window), sink, material)
     }
 }
 

@@ -13,10 +13,10 @@ use std::time::{Duration, Instant};
 
 use image::RgbImage;
 
-use crate::error::{Error, Result};
 use crate::film::Accumulator;
 use crate::gpu_types::GpuGlobals;
 use crate::session::Renderer;
+use crate::util::error::{Error, Result};
 
 /// How long one pass should take: long passes trace more samples per second, short ones
 /// answer a moving camera sooner.
@@ -277,7 +277,7 @@ mod tests {
         assert_eq!(s.next(), Some(9..10), "clipped to the frame");
         s.record(9..10, Duration::ZERO);
         assert_eq!((s.next(), s.done()), (None, 10));
-        let mut s = Schedule::new(crate::limits::MAX_SPP);
+        let mut s = Schedule::new(crate::util::limits::MAX_SPP);
         for _ in 0..20 {
             let r = s.next().unwrap();
             s.record(r, Duration::ZERO);
@@ -329,7 +329,7 @@ mod tests {
         });
         wait_for(&passes, |p| p.last().is_some_and(|p| p.samples == 7));
         // One step, as the offline render does it.
-        let whole = crate::run::render_frame(
+        let whole = crate::commands::run::render_frame(
             &mut CpuRenderer::new(buffers.clone()),
             &g,
             &|_| {},
@@ -367,7 +367,7 @@ mod tests {
     #[test]
     fn a_paused_tracer_traces_nothing_and_dropping_it_stops_the_worker() {
         let buffers = scene();
-        let spp = crate::limits::MAX_SPP;
+        let spp = crate::util::limits::MAX_SPP;
         let g = frame::globals(
             &buffers,
             &RenderOptions {

@@ -3,8 +3,8 @@
 
 use image::RgbImage;
 
-use crate::error::Result;
 use crate::gpu::device::Device;
+use crate::util::error::Result;
 
 /// A copy of an 8-bit RGBA or BGRA texture on its way to the host.
 pub struct TextureReadback {

@@ -14,7 +14,7 @@ use std::path::Path;
 
 use super::camera::{DragMode, Input};
 use super::controls::{Action, key_action};
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 
 /// Largest script read: a script is typed by hand or written by a test.
 const MAX_SCRIPT_BYTES: u64 = 1 << 20;
@@ -37,7 +37,7 @@ pub enum Event {
 /// Reads and parses a script file, read no further than `MAX_SCRIPT_BYTES` (a file's
 /// length says nothing of a pipe or a device such as /dev/zero).
 pub fn load(path: &Path) -> Result<Vec<Event>> {
-    let text = crate::bounded::read(path, MAX_SCRIPT_BYTES)
+    let text = crate::util::bounded::read(path, MAX_SCRIPT_BYTES)
         .map_err(|e| Error::io(path, e))?
         .ok_or_else(|| Error::Scene {
             file: path.display().to_string(),
@@ -64,7 +64,7 @@ pub fn parse(text: &str, file: &str) -> Result<Vec<Event>> {
             line: i as u32 + 1,
             col: col as u32,
             msg,
-            excerpt: Some(Box::new(crate::error::Excerpt::of_line(
+            excerpt: Some(Box::new(crate::util::error::Excerpt::of_line(
                 line.as_bytes(),
                 col - 1,
                 line[col - 1..]

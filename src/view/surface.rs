@@ -12,12 +12,12 @@ use winit::window::Window;
 
 use super::readback::TextureReadback;
 use super::wireframe::Wireframe;
-use crate::error::{Error, Result};
 use crate::film;
 use crate::gpu::device::Device;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
+use crate::util::error::{Error, Result};
 
 /// A window's surface and the device that draws into it.
 pub struct Surface {

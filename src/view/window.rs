@@ -22,13 +22,13 @@ use super::progressive::{Job, Pass, Tracer};
 use super::script::Event;
 use super::stats::Stats;
 use super::surface::{Drawn, Surface};
-use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu_types::GpuGlobals;
-use crate::limits::MAX_SPP;
 use crate::pack::SceneBuffers;
 use crate::scene::auto;
 use crate::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
+use crate::util::error::{Error, Result};
+use crate::util::limits::MAX_SPP;
 use crate::{film, outln};
 
 /// What `gpurt view` was asked for.

@@ -15,11 +15,11 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use image::RgbImage;
 
 use super::readback::TextureReadback;
-use crate::error::{Error, Result};
 use crate::gpu::device::Device;
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
+use crate::util::error::{Error, Result};
 
 /// Most line segments drawn; a scene with more draws every k-th primitive (the viewer's
 /// wireframe is for finding a view, not for counting edges). 4M segments take a 96 MiB

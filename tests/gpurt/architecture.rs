@@ -21,10 +21,10 @@ use graph::{Arrow, Graph, Module, circles};
 /// layers below its own, and those of its own layer as long as no circle forms.
 const LAYERS: &[&[&str]] = &[
     &["main", "cli"],
-    &["run", "batch", "shard", "bench", "tune", "info"],
+    &["commands"],
     &["view"],
     &["session"],
-    &["agreement", "compare"],
+    &["compare"],
     &["gpu"],
     &["cpu"],
     &["film", "counters"],
@@ -33,8 +33,7 @@ const LAYERS: &[&[&str]] = &[
     &["bvh"],
     &["scene"],
     &["gpu_types"],
-    &["limits"],
-    &["error", "atomic", "bounded", "console", "fault"],
+    &["util"],
 ];
 
 /// What the check finds, one line each: circles (with the arrows that close them, by

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 use gpurt::frame::Shading;
-use gpurt::limits::DEFAULT_AMBIENT;
+use gpurt::util::limits::DEFAULT_AMBIENT;
 
 use super::values::{parse_colour, shadings};
 

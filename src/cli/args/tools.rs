@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 
 use gpurt::frame::Shading;
-use gpurt::limits::{DEFAULT_DEPTH, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
 use gpurt::scene::ReadOptions;
 use gpurt::session::Backend;
+use gpurt::util::limits::{DEFAULT_DEPTH, MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
 
 use super::shade::ShadeArgs;
 use super::values::{backends, parse_limit, parse_size, shadings};
@@ -146,6 +146,7 @@ impl ViewArgs {
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             lenient: self.lenient,
+            ..ReadOptions::default()
         }
     }
 }

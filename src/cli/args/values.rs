@@ -3,8 +3,8 @@
 
 use glam::Vec3;
 use gpurt::frame::Shading;
-use gpurt::limits::MAX_IMAGE_SIDE;
 use gpurt::session::Backend;
+use gpurt::util::limits::MAX_IMAGE_SIDE;
 
 pub(super) fn parse_colour(s: &str) -> Result<Vec3, String> {
     let v: Vec<f32> = s

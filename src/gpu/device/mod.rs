@@ -17,7 +17,7 @@ mod resources;
 
 use std::ops::Deref;
 
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 
 pub(crate) use pipelines::Slot;
 pub(crate) use resources::TEXEL_FORMAT;

@@ -9,7 +9,6 @@ use std::sync::{Arc, Mutex};
 use web_time::Instant;
 
 use super::GpuRenderer;
-use crate::error::Result;
 use crate::gpu::cut::DISPATCH_BUDGET;
 use crate::gpu::device::Device;
 use crate::gpu::pipeline::{
@@ -24,6 +23,7 @@ use crate::gpu::upload;
 use crate::gpu::wavefront::{WavePipelines, wave_binds};
 use crate::gpu_types::TRAVERSAL_NAMES;
 use crate::pack::SceneBuffers;
+use crate::util::error::Result;
 
 impl GpuRenderer {
     /// Sets up the layouts. Shader modules and pipelines are made on first use by `render` (or

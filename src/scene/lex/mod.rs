@@ -12,10 +12,10 @@ use std::fmt::Display;
 
 mod window;
 
-use crate::error::{Error, Result, escape};
-use crate::limits::MAX_TOKEN_BYTES;
 use crate::scene::io::Input;
 pub use crate::scene::number::parse_f32;
+use crate::util::error::{Error, Result, escape};
+use crate::util::limits::MAX_TOKEN_BYTES;
 use window::Window;
 pub use window::{BOM, LINE_KEPT, Token};
 
@@ -52,6 +52,11 @@ impl<'a> Lexer<'a> {
     /// A lexer over a stream (`io::open`), which names `name` in its messages.
     pub fn from_input(input: Input<'a>, name: &'a str) -> Self {
         Self::with_buffer(input, name, BUFFER_BYTES)
+    }
+
+    /// `from_input` through a window of `window` bytes where given (`ReadOptions::window`).
+    pub fn through(input: Input<'a>, name: &'a str, window: Option<usize>) -> Self {
+        Self::with_buffer(input, name, window.unwrap_or(BUFFER_BYTES))
     }
 
     /// With a buffer of `bytes`, which must exceed the longest token and, for messages to

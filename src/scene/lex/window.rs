@@ -6,8 +6,8 @@
 
 use std::io::Read;
 
-use crate::error::{Error, Excerpt, Result};
 use crate::scene::io::{Input, read_error};
+use crate::util::error::{Error, Excerpt, Result};
 
 /// One whitespace-separated token and where it starts (1-based line and column). Its
 /// bytes are the lexer's (`Lexer::text`), there until the lexer reads past them.

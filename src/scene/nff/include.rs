@@ -7,11 +7,11 @@
 use glam::Vec3;
 
 use super::{Parser, keyword};
-use crate::error::{Error, Result, escape};
 use crate::scene::io::{self, FileKind};
 use crate::scene::lex::Token;
 use crate::scene::mesh::{self, MeshTransform, Placed};
 use crate::scene::sink::MeshOut;
+use crate::util::error::{Error, Result, escape};
 
 impl Parser<'_> {
     pub(super) fn mesh(&mut self, tok: &Token) -> Result<()> {
@@ -92,6 +92,7 @@ impl Parser<'_> {
             default: material,
             mtl,
             dir: path.parent(),
+            window: self.window,
         };
         let read = mesh::read(input, kind, &name, &mut out);
         let placed = placed.placed;

@@ -6,10 +6,10 @@
 use glam::Vec3;
 
 use super::Parser;
-use crate::error::Result;
-use crate::limits::MAX_SHINE;
 use crate::scene::lex::Token;
 use crate::scene::model::{Material, MaterialId};
+use crate::util::error::Result;
+use crate::util::limits::MAX_SHINE;
 
 impl Parser<'_> {
     /// `v` held to `[0, hi]`, with a warning naming the line when it was outside.

@@ -15,8 +15,6 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use crate::error::Result;
-use crate::limits::{MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
 use crate::scene::lex::{Lexer, Token, parse_f32};
 use crate::scene::model::{
     BoxPrim, Cone, Light, MaterialId, Plane, Scene, Sphere, nff_default_camera, unit,
@@ -25,6 +23,10 @@ use crate::scene::options::ReadOptions;
 use crate::scene::palette::Palette;
 use crate::scene::sink::{Collect, Sink};
 use crate::scene::triangulate::triangulate;
+use crate::util::error::Result;
+use crate::util::limits::{
+    MAX_AREA_LIGHT_SAMPLES, MAX_LIGHT, MAX_POLYGON_VERTICES, MAX_PRIMITIVES,
+};
 use keywords::{STATEMENTS, VIEW_KEYWORDS, closest, nff_word_for};
 
 /// Parses NFF text (gzip-compressed or not). `name` is used in messages; `base` is the
@@ -51,6 +53,7 @@ pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> 
         base,
         sink,
         lenient: opts.lenient,
+        window: opts.window,
         scene: Scene::new(name, nff_default_camera()),
         have_view: false,
         material: None,
@@ -80,6 +83,8 @@ struct Parser<'a> {
     sink: &'a mut dyn Sink,
     /// Unknown keywords are skipped with a warning (`ReadOptions::lenient`).
     lenient: bool,
+    /// The window a `mesh` include is read through (`ReadOptions::window`).
+    window: Option<usize>,
     scene: Scene,
     have_view: bool,
     /// The current material (`None` until the first `f` or the first primitive).

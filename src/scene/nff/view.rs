@@ -4,10 +4,10 @@
 
 use super::keywords::{STATEMENTS, VIEW_KEYWORDS, closest};
 use super::{Parser, keyword};
-use crate::error::Result;
-use crate::limits::MAX_IMAGE_SIDE;
 use crate::scene::lex::{Token, parse_f32};
 use crate::scene::model::nff_default_camera;
+use crate::util::error::Result;
+use crate::util::limits::MAX_IMAGE_SIDE;
 
 impl Parser<'_> {
     pub(super) fn view(&mut self, vtok: &Token) -> Result<()> {

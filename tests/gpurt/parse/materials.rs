@@ -221,7 +221,10 @@ fn lenient_skips_foreign_keywords_to_the_next_known_one_with_a_warning_each() {
         )),
         "{e}"
     );
-    let lenient = ReadOptions { lenient: true };
+    let lenient = ReadOptions {
+        lenient: true,
+        ..ReadOptions::default()
+    };
     let s = scene::load_with(&path, &lenient).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(s.spheres.len(), 2);
     let skipped: Vec<_> = s

@@ -11,6 +11,7 @@ use glam::Vec3;
 use gpurt::pack::{self, SceneBuffers};
 use gpurt::scene::io::{self, Input};
 use gpurt::scene::lex::Lexer;
+use gpurt::scene::options::ReadOptions;
 use gpurt::scene::{self, Collect, Scene, Triangle, nff, stl};
 
 use crate::common::inputs::{VIEW, gzip, write};
@@ -299,4 +300,95 @@ fn errors_quote_their_line_through_any_buffer() {
     );
     let x = excerpt(&degenerate, 1 << 20);
     assert_eq!((x.text.as_str(), x.span.clone()), ("v", 0..1));
+}
+
+/// Every reader through a tiny window (`ReadOptions::window`), as through the usual one:
+/// an OBJ with its `.mtl` library (materials, comments, every face form, polygons), an
+/// ASCII and a binary STL, and an NFF that includes all three with `mesh`. Windows of 61
+/// bytes and up cut tokens, lines and binary records everywhere.
+#[test]
+fn obj_mtl_stl_and_mesh_includes_read_the_same_through_a_tiny_window() {
+    let dir = temp_dir("tiny-window");
+    let mut mtl = String::new();
+    let mut obj = String::from("# a fan of polygons\nmtllib lib.mtl\n");
+    for m in 0..12 {
+        mtl.push_str(&format!(
+            "# material {m}\nnewmtl m{m}\nKd 0.{m} 0.5 0.25\nKs 0.125 0.125 0.125\nNs {}\n\n",
+            10 + m
+        ));
+    }
+    for i in 0..300 {
+        let (x, y) = ((i % 17) as f32 * 0.5, (i / 17) as f32 * 0.25);
+        obj.push_str(&format!(
+            "v {x} {y} {}\nvt 0.{} 0.5\nvn 0 0 1\n",
+            i % 3,
+            i % 10
+        ));
+    }
+    for i in 1..296 {
+        if i % 25 == 1 {
+            obj.push_str(&format!("usemtl m{}\n", i % 12));
+        }
+        obj.push_str(&match i % 4 {
+            0 => format!("f {i} {} {}\n", i + 1, i + 2),
+            1 => format!("f {i}/{i} {}/{} {}/{}\n", i + 1, i + 1, i + 2, i + 2),
+            2 => format!("f {i}//{i} {}//{} {}//{}\n", i + 1, i + 1, i + 2, i + 2),
+            _ => format!("f {i}/{i}/{i} {} {} {}  # a quad\n", i + 1, i + 3, i + 2),
+        });
+    }
+    let tris: Vec<Triangle> = (0..400)
+        .map(|i| {
+            let o = Vec3::new(i as f32 * 0.1, (i % 7) as f32, 0.5);
+            Triangle {
+                v: [o, o + Vec3::X, o + Vec3::Y],
+                n: (i % 2 == 0).then(|| Box::new([Vec3::Z; 3])),
+                material: scene::MaterialId(0),
+            }
+        })
+        .collect();
+    let mut ascii = String::from("solid fan\n");
+    for t in &tris {
+        let [a, b, c] = t.v;
+        ascii.push_str(&format!(
+            "facet normal 0 0 1\n outer loop\n  vertex {} {} {}\n  vertex {} {} {}\n  \
+             vertex {} {} {}\n endloop\nendfacet\n",
+            a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z
+        ));
+    }
+    ascii.push_str("endsolid fan\n");
+    let nff = format!(
+        "{VIEW}f 1 0 0 1 0 0 0 0\nmesh fan.obj translate 0 0 1\nf 0 1 0 1 0 0 0 0\n\
+         mesh fan.stl scale 2\nmesh bin.stl rotate 0 0 30\n"
+    );
+    write(&dir.join("lib.mtl"), mtl.as_bytes());
+    write(&dir.join("fan.obj"), obj.as_bytes());
+    write(&dir.join("fan.stl"), ascii.as_bytes());
+    write(&dir.join("bin.stl"), &stl::write_binary(&tris, &[b'x'; 80]));
+    write(&dir.join("all.nff"), nff.as_bytes());
+    for name in ["fan.obj", "fan.stl", "bin.stl", "all.nff"] {
+        let path = dir.join(name);
+        let usual = scene::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(usual.triangles.len() >= 295, "{name}");
+        if name == "fan.obj" {
+            assert!(
+                usual.materials.len() > 10,
+                "{name}: the library's materials"
+            );
+        }
+        for window in [61, 97, 333, 4099] {
+            let opts = ReadOptions {
+                window: Some(window),
+                ..ReadOptions::default()
+            };
+            let tiny = scene::load_with(&path, &opts).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(tiny, usual, "{name} through {window} bytes");
+        }
+    }
+    // The comparison sees a change: one vertex moved in the library-less copy.
+    let moved = obj.replacen("v 0 0 0\n", "v 0 0 0.5\n", 1);
+    write(&dir.join("moved.obj"), moved.as_bytes());
+    assert_ne!(
+        scene::load(&dir.join("moved.obj")).unwrap(),
+        scene::load(&dir.join("fan.obj")).unwrap()
+    );
 }

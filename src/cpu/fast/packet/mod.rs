@@ -36,7 +36,7 @@ use glam::Vec3;
 
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::{Bindings, Hit, Ray};
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 pub use lanes::MAX_LANES;
 use rays::Rows;
 

@@ -17,16 +17,16 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use web_time::Instant;
 
-use crate::bench::warm_up;
+use crate::commands::bench::warm_up;
+use crate::commands::run;
 use crate::compare::{self, Thresholds};
-use crate::error::{Error, Result};
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::shaders::Fetch;
 use crate::gpu::{self, GpuRenderer, Kernels, Strategy};
 use crate::gpu_types::{GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
-use crate::run;
 use crate::scene::ReadOptions;
+use crate::util::error::{Error, Result};
 use crate::{out, outln};
 
 /// How much faster (as a fraction of the defaults' time) the fastest candidate must be to

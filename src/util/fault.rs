@@ -5,7 +5,7 @@
 //! a real waste of memory, so that the test guarding the renderer's peak memory can show
 //! that it catches one.
 
-use crate::error::{Error, Result};
+use crate::util::error::{Error, Result};
 
 /// A fault `GPURT_FAULT` asks for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -35,16 +35,16 @@ mod table;
 use table::{CpuRow, GpuRow, Pass, Row};
 
 use crate::bvh::{self, wide::WideNode};
-use crate::error::{Error, Result};
+use crate::commands::run;
 use crate::frame::{self, Overrides, RenderOptions, Shading};
 use crate::gpu::{self, GpuContext, GpuRenderer};
 use crate::gpu_types::{
     AOV_COLOR, AOV_DEPTH, GpuGlobals, TRAVERSAL_NAMES, TRAVERSAL_QWIDE, TRAVERSAL_WIDE,
 };
 use crate::pack;
-use crate::run;
 use crate::scene::{Camera, ReadOptions};
 use crate::session::{self, Backend, Missing};
+use crate::util::error::{Error, Result};
 
 /// What to measure.
 pub struct BenchConfig {

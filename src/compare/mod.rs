@@ -1,6 +1,8 @@
 //! Comparing two 8-bit images (a GPU render against the CPU reference, or any two files):
 //! difference statistics, FLIP, the heat map, and the acceptance thresholds.
 
+pub mod agreement;
+
 use image::RgbImage;
 
 use crate::{Error, Result};

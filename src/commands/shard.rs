@@ -18,10 +18,10 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{Value, json};
 
-use crate::atomic;
-use crate::error::{Error, Result};
 use crate::film::{Accumulator, Film};
 use crate::frame::Shading;
+use crate::util::atomic;
+use crate::util::error::{Error, Result};
 
 /// This process's share, `I/N`: of a batch run as a job array, scenes `index`,
 /// `index + count`, `index + 2 count`, ... of the list every task is given (`take`); of
@@ -246,7 +246,7 @@ fn read_manifest(path: &Path) -> Result<Manifest> {
         msg: format!("not a gpurt shard manifest: {why}"),
     };
     // Read up to a bound: whatever a shard directory holds, no unbounded allocation.
-    let bytes = crate::bounded::read(path, MAX_MANIFEST_BYTES)
+    let bytes = crate::util::bounded::read(path, MAX_MANIFEST_BYTES)
         .map_err(|e| Error::io(path, e))?
         .ok_or_else(|| bad(&format!("longer than {MAX_MANIFEST_BYTES} bytes")))?;
     let text = std::io::read_to_string(bytes.as_slice()).map_err(|e| Error::io(path, e))?;

@@ -4,8 +4,8 @@
 use glam::Vec3;
 use serde_json::{Value, json};
 
-use crate::limits::DEFAULT_AMBIENT;
 use crate::scene::{FlatScene, Light};
+use crate::util::limits::DEFAULT_AMBIENT;
 
 /// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the
 /// `0.05000000074505806` its f64 widening prints); null when not finite.

@@ -7,10 +7,10 @@ use std::sync::atomic::AtomicBool;
 use image::RgbImage;
 
 use crate::compare::{self, DiffStats, Thresholds};
-use crate::error::Result;
 use crate::film::Film;
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
+use crate::util::error::Result;
 
 /// How a GPU image agrees with the CPU reference of the same render.
 pub struct Agreement {

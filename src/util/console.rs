@@ -14,7 +14,7 @@ pub fn out(args: std::fmt::Arguments) {
 #[macro_export]
 macro_rules! outln {
     ($($arg:tt)*) => {
-        $crate::console::out(format_args!("{}\n", format_args!($($arg)*)))
+        $crate::util::console::out(format_args!("{}\n", format_args!($($arg)*)))
     };
 }
 
@@ -22,6 +22,6 @@ macro_rules! outln {
 #[macro_export]
 macro_rules! out {
     ($($arg:tt)*) => {
-        $crate::console::out(format_args!($($arg)*))
+        $crate::util::console::out(format_args!($($arg)*))
     };
 }

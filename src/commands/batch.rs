@@ -7,13 +7,13 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
-use crate::error::{Error, Result};
+use crate::commands::run;
 use crate::film::Format;
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
-use crate::run;
 use crate::scene::{Camera, ReadOptions};
 use crate::session::{CpuRenderer, GpuSession, Renderer};
+use crate::util::error::{Error, Result};
 
 /// The name an image of `scene` gets: its file name without `.gz` and the scene's own
 /// extension (`parts/gear.stl.gz` -> `gear`).

@@ -7,13 +7,13 @@ use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use crate::cpu::RayCounts;
-use crate::error::Result;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
 use crate::scene::flat::FlatScene;
 use crate::scene::{self, Camera, ReadOptions};
 use crate::session::Renderer;
+use crate::util::error::Result;
 
 /// A scene read into the renderers' records, not yet packed: its camera says what a
 /// frame of it traces, and so the samples that choose its tree's build (`pack`).
