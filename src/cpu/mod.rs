@@ -52,9 +52,10 @@ pub fn render(
     cancel: &AtomicBool,
 ) -> Result<(Film, RayCounts)> {
     let mut accum = Accumulator::new(globals.width, globals.height);
-    let counts = render_samples(
+    let counts = render_rows(
         buffers,
         globals,
+        0..globals.height,
         0..globals.spp,
         &mut accum,
         progress,
@@ -63,23 +64,10 @@ pub fn render(
     Ok((accum.into_film(), counts))
 }
 
-/// Traces samples `samples` of every pixel and adds them to `accum`, which must hold
-/// samples `0..samples.start` of the same frame: progressive rendering, whose result is
-/// the one-step image to the bit.
-pub fn render_samples(
-    buffers: &SceneBuffers,
-    globals: &GpuGlobals,
-    samples: Range<u32>,
-    accum: &mut Accumulator,
-    progress: &(dyn Fn(u64) + Sync),
-    cancel: &AtomicBool,
-) -> Result<RayCounts> {
-    let rows = 0..globals.height;
-    render_rows(buffers, globals, rows, samples, accum, progress, cancel)
-}
-
-/// `render_samples` for the image rows `rows` only (a shard of the image): the other
-/// rows of `accum` stay as they are. A pixel's value never depends on which others are
+/// Traces samples `samples` of the pixels of image rows `rows` (all of them, or a shard
+/// of the image) and adds them to `accum`, which must hold samples `0..samples.start` of
+/// the same frame: progressive rendering, whose result is the one-step image to the bit.
+/// The other rows of `accum` stay as they are. A pixel's value never depends on which others are
 /// traced with it. Coherent rays go in packets with the kernels `GPURT_SIMD` picks
 /// (`packet::Kernels::from_env`: by default the widest this processor runs).
 ///
@@ -290,7 +278,7 @@ mod tests {
         let cancel_after_one = |start: u32, accum: &mut Accumulator| {
             let cancel = AtomicBool::new(false);
             let stop = |_| cancel.store(true, Ordering::Relaxed);
-            render_samples(&b, &g, start..start + 1, accum, &stop, &cancel)
+            render_rows(&b, &g, 0..48, start..start + 1, accum, &stop, &cancel)
         };
         let mut fresh = Accumulator::new(64, 48);
         assert!(matches!(
@@ -300,7 +288,7 @@ mod tests {
         assert_eq!(fresh, Accumulator::new(64, 48));
 
         let mut accum = Accumulator::new(64, 48);
-        render_samples(&b, &g, 0..1, &mut accum, &|_| {}, &never).unwrap();
+        render_rows(&b, &g, 0..48, 0..1, &mut accum, &|_| {}, &never).unwrap();
         let before = accum.clone();
         assert!(before.sums.pixels.iter().any(|p| *p != [0.0; 3]));
         assert!(matches!(
@@ -309,7 +297,7 @@ mod tests {
         ));
         assert_eq!(accum, before);
         // And the pass then runs as if never tried: the one-step image to the bit.
-        render_samples(&b, &g, 1..3, &mut accum, &|_| {}, &never).unwrap();
+        render_rows(&b, &g, 0..48, 1..3, &mut accum, &|_| {}, &never).unwrap();
         let (whole, _) = render(&b, &g, &|_| {}, &never).unwrap();
         assert_eq!(accum.into_film(), whole);
     }

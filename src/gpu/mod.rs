@@ -55,5 +55,5 @@ pub use policy::{Kernels, Strategy, defaults};
 pub use renderer::GpuRenderer;
 pub use scene::GpuScene;
 #[cfg(feature = "native")]
-pub use trace::{trace, trace_rows, trace_samples};
+pub use trace::{trace, trace_rows};
 pub use trace::{trace_on_device, trace_rows_async};

@@ -44,27 +44,10 @@ pub fn trace(
     Ok((accum.into_film(), rays))
 }
 
-/// Traces samples `samples` of every pixel of an uploaded scene and adds them to
-/// `accum`, which must hold samples `0..samples.start` of the same frame (progressive
-/// rendering). Returns the rays traced.
-#[cfg(feature = "native")]
-pub fn trace_samples(
-    device: &wgpu::Device,
-    queue: &wgpu::Queue,
-    scene: &GpuScene,
-    samples: Range<u32>,
-    accum: &mut Accumulator,
-    progress: &dyn Fn(u64),
-    cancel: &AtomicBool,
-) -> Result<u64> {
-    let rows = 0..scene.cut.height;
-    let gpu = Gpu::new(device, queue);
-    let trace = trace_band_rows(&gpu, scene, rows, samples, accum, progress, cancel);
-    pollster::block_on(trace)
-}
-
-/// `trace_samples` for the image rows `rows` only (a shard of the image): the other
-/// rows of `accum` stay as they are.
+/// Traces samples `samples` of the pixels of image rows `rows` (all of them, or a shard
+/// of the image) of an uploaded scene and adds them to `accum`, which must hold samples
+/// `0..samples.start` of the same frame (progressive rendering); the other rows of
+/// `accum` stay as they are. Returns the rays traced.
 #[allow(clippy::too_many_arguments)]
 #[cfg(feature = "native")]
 pub fn trace_rows(
