@@ -37,25 +37,30 @@ pub trait Tracer {
     }
 
     /// `shade::light_sample`.
-    #[allow(clippy::too_many_arguments)]
     #[inline]
     fn light_sample(
         &mut self,
         b: &Bindings,
-        s: &Surface,
-        m: &GpuMaterial,
-        dir: Vec3,
-        r: Vec3,
-        light: &GpuLight,
-        k: u32,
+        at: &Shaded,
+        (light, k): (&GpuLight, u32),
         rng: &mut u32,
         counts: &mut RayCounts,
     ) -> Option<Vec3>
     where
         Self: Sized,
     {
-        light_sample(b, self, s, m, dir, r, light, k, rng, counts)
+        light_sample(b, self, at, (light, k), rng, counts)
     }
+}
+
+/// A surface being shaded, what every light sample there shares: the surface, its material,
+/// the incoming direction and the mirror direction about the shading normal.
+#[derive(Clone, Copy, Debug)]
+pub struct Shaded<'a> {
+    pub s: &'a Surface,
+    pub m: &'a GpuMaterial,
+    pub dir: Vec3,
+    pub r: Vec3,
 }
 
 /// Surface data at a hit.
@@ -224,23 +229,19 @@ pub fn light_ray(
     })
 }
 
-/// Sample `k` of `light` at surface `s` (material `m`, incoming direction `dir`, mirror
-/// direction `r`): Lambert and the highlight scaled by the shadow ray's transmission, or
-/// `None` when the light is below the surface (no shadow ray is traced). The shadow ray is
-/// answered by `tracer`; adds its node fetches to `counts`.
-#[allow(clippy::too_many_arguments)]
+/// Sample `k` of `light` at the surface `at`: Lambert and the highlight scaled by the
+/// shadow ray's transmission, or `None` when the light is below the surface (no shadow
+/// ray is traced). The shadow ray is answered by `tracer`; adds its node fetches to
+/// `counts`.
 pub fn light_sample(
     b: &Bindings,
     tracer: &mut impl Tracer,
-    s: &Surface,
-    m: &GpuMaterial,
-    dir: Vec3,
-    r: Vec3,
-    light: &GpuLight,
-    k: u32,
+    at: &Shaded,
+    (light, k): (&GpuLight, u32),
     rng: &mut u32,
     counts: &mut RayCounts,
 ) -> Option<Vec3> {
+    let Shaded { s, m, dir, r } = *at;
     let lr = light_ray(b, s, m, dir, r, light, k, rng)?;
     let mut nodes = 0;
     let shadow = tracer.transmission(b, &lr.ray, lr.dist, &mut nodes);
@@ -261,10 +262,15 @@ fn direct(
     let g = b.globals;
     let m = &b.materials[s.material as usize];
     let mut colour = g.ambient * m.kd * m.color;
-    let r = reflect_dir(dir, s.ns);
+    let at = Shaded {
+        s,
+        m,
+        dir,
+        r: reflect_dir(dir, s.ns),
+    };
     for light in b.lights {
         for k in 0..light_samples(light) {
-            if let Some(c) = tracer.light_sample(b, s, m, dir, r, light, k, rng, counts) {
+            if let Some(c) = tracer.light_sample(b, &at, (light, k), rng, counts) {
                 counts.shadow += 1;
                 colour += c;
             }

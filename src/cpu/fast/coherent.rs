@@ -23,7 +23,7 @@ use super::packet::{Kernels, MAX_LANES, Packet};
 use super::tracer::Alone;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
-    Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace,
+    Shaded, Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace,
 };
 use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
@@ -109,12 +109,8 @@ impl Tracer for Known<'_> {
     fn light_sample(
         &mut self,
         b: &Bindings,
-        s: &Surface,
-        m: &GpuMaterial,
-        dir: Vec3,
-        r: Vec3,
-        light: &GpuLight,
-        k: u32,
+        at: &Shaded,
+        (light, k): (&GpuLight, u32),
         rng: &mut u32,
         counts: &mut RayCounts,
     ) -> Option<Vec3> {
@@ -130,7 +126,7 @@ impl Tracer for Known<'_> {
             }
             return lit.sample;
         }
-        light_sample(b, self, s, m, dir, r, light, k, rng, counts)
+        light_sample(b, self, at, (light, k), rng, counts)
     }
 }
 
