@@ -29,7 +29,55 @@ pub fn skip(why: &str) {
         .unwrap_or("a test")
         .to_string();
     let _ = writeln!(std::io::stderr(), "SKIPPED {test}: {why}");
+    if let Ok(mut skipped) = SKIPPED.lock() {
+        skipped.push((test, why.to_string()));
+    }
 }
+
+/// The tests that skipped, and why, for the summary printed after the harness's last line.
+static SKIPPED: std::sync::Mutex<Vec<(String, String)>> = std::sync::Mutex::new(Vec::new());
+
+/// After the harness's `test result` line, as the process exits: how many tests skipped
+/// and why, the reasons counted, so that a run that skipped says so in the last lines a
+/// reader sees rather than only among hundreds of test lines. (Run by the C library's
+/// exit, which the harness calls: a function in `.fini_array` on Linux,
+/// `__mod_term_func` on macOS; elsewhere the per-test lines stand alone.)
+extern "C" fn print_skipped() {
+    use std::io::Write;
+    let Ok(skipped) = SKIPPED.lock() else { return };
+    if skipped.is_empty() {
+        return;
+    }
+    let mut reasons: Vec<(usize, &str)> = Vec::new();
+    for (_, why) in skipped.iter() {
+        // A reason without its test-specific tail (a path's file name, an error's words).
+        let why = why.split(": ").next().unwrap_or(why);
+        match reasons.iter_mut().find(|(_, r)| *r == why) {
+            Some((n, _)) => *n += 1,
+            None => reasons.push((1, why)),
+        }
+    }
+    let mut err = std::io::stderr().lock();
+    let n = skipped.len();
+    let tests = if n == 1 { "test" } else { "tests" };
+    let _ = writeln!(
+        err,
+        "\n{n} {tests} skipped (their SKIPPED lines above say which):"
+    );
+    for (n, why) in reasons {
+        let _ = writeln!(err, "  {n:4}  {why}");
+    }
+}
+
+#[cfg(target_os = "linux")]
+#[used]
+#[unsafe(link_section = ".fini_array")]
+static PRINT_SKIPPED: extern "C" fn() = print_skipped;
+
+#[cfg(target_os = "macos")]
+#[used]
+#[unsafe(link_section = "__DATA,__mod_term_func")]
+static PRINT_SKIPPED: extern "C" fn() = print_skipped;
 
 /// A device for the tests that need one. Without an adapter they skip with a message,
 /// except under `GPURT_REQUIRE_GPU=1`, where they fail.
