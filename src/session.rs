@@ -243,7 +243,7 @@ impl Renderer for GpuSession {
         let progress = |pixels| {
             progress(pixels);
             if lose_device {
-                device.destroy();
+                gpu::device::Device::new(device).lose();
             }
         };
         gpu::trace_rows(

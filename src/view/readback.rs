@@ -16,19 +16,14 @@ pub struct TextureReadback {
 
 impl TextureReadback {
     /// Encodes the copy of `texture` into `enc`; `read` it once `enc` is submitted.
-    pub fn encode(
-        device: &wgpu::Device,
+    pub(crate) fn encode(
+        device: &Device,
         enc: &mut wgpu::CommandEncoder,
         texture: &wgpu::Texture,
     ) -> Self {
         let (width, height) = (texture.width(), texture.height());
         let row = (4 * width).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("texture readback"),
-            size: u64::from(row) * u64::from(height),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let buffer = device.readback("texture readback", u64::from(row) * u64::from(height));
         enc.copy_texture_to_buffer(
             texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
@@ -50,10 +45,10 @@ impl TextureReadback {
     }
 
     /// The copied pixels as RGB, the texture being of `format`.
-    pub fn read(&self, device: &wgpu::Device, format: wgpu::TextureFormat) -> Result<RgbImage> {
+    pub(crate) fn read(&self, device: &Device, format: wgpu::TextureFormat) -> Result<RgbImage> {
         let bgra = format == wgpu::TextureFormat::Bgra8Unorm;
         let bytes = u64::from(self.row) * u64::from(self.height);
-        Device::new(device).read(&self.buffer, bytes, |view| {
+        device.read(&self.buffer, bytes, |view| {
             let mut img = RgbImage::new(self.width, self.height);
             for (y, line) in view.chunks(self.row as usize).enumerate() {
                 for x in 0..self.width as usize {

@@ -13,7 +13,7 @@ use winit::window::Window;
 use super::readback::TextureReadback;
 use super::wireframe::Wireframe;
 use crate::film;
-use crate::gpu::device::Device;
+use crate::gpu::device::Gpu;
 use crate::gpu::{self, GpuContext};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::SceneBuffers;
@@ -168,42 +168,32 @@ impl Surface {
                 return Err(Error::Gpu("the window's surface texture is invalid".into()));
             }
         };
-        let (w, h) = self.size();
-        let (device, queue) = (&self.ctx.device, &self.ctx.queue);
+        let gpu = Gpu::new(&self.ctx.device, &self.ctx.queue);
         let target = frame.texture.create_view(&wgpu::TextureViewDescriptor {
             format: Some(self.view_format),
             ..Default::default()
         });
-        let shot = Device::new(device).scoped("drawing the window", || {
-            let mut enc = device.create_command_encoder(&Default::default());
+        let shot = gpu.scoped("drawing the window", || {
+            let mut enc = gpu.encoder();
             if let Some(image) = image {
-                queue.write_texture(
-                    frame.texture.as_image_copy(),
-                    image,
-                    wgpu::TexelCopyBufferLayout {
-                        offset: 0,
-                        bytes_per_row: Some(4 * w),
-                        rows_per_image: Some(h),
-                    },
-                    frame.texture.size(),
-                );
+                gpu.write_image(&frame.texture, image);
             } else {
                 clear(&mut enc, &target);
             }
             if let Some(globals) = lines {
-                self.wireframe.encode(queue, &mut enc, &target, globals);
+                self.wireframe.encode(&gpu, &mut enc, &target, globals);
             }
             let shot = screenshot
                 .is_some()
-                .then(|| TextureReadback::encode(device, &mut enc, &frame.texture));
-            queue.submit([enc.finish()]);
+                .then(|| TextureReadback::encode(&gpu, &mut enc, &frame.texture));
+            gpu.run(enc);
             shot
         })?;
         if let (Some(shot), Some(path)) = (shot, screenshot) {
-            let img = shot.read(device, self.view_format)?;
+            let img = shot.read(&gpu, self.view_format)?;
             film::save_rgb8(&img, path)?;
         }
-        queue.present(frame);
+        gpu.show(frame);
         Ok(Drawn::Shown)
     }
 }

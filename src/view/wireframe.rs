@@ -15,7 +15,7 @@ use glam::{Mat4, Vec2, Vec3, Vec4};
 use image::RgbImage;
 
 use super::readback::TextureReadback;
-use crate::gpu::device::Device;
+use crate::gpu::device::{Device, Gpu};
 use crate::gpu_types::{GpuGlobals, PRIM_BOX, PRIM_CONE, PRIM_SPHERE, PRIM_TRIANGLE};
 use crate::pack::SceneBuffers;
 use crate::scene::Bounds;
@@ -221,80 +221,18 @@ impl Wireframe {
     ) -> Result<Self> {
         let points = segments(scene);
         // Pipeline or buffer errors become `Error::Gpu`, not wgpu's panicking handler.
-        Device::new(device).scoped("building the wireframe", || {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("wireframe"),
-                source: wgpu::ShaderSource::Wgsl(
-                    include_str!("../../shaders/wireframe.wgsl").into(),
-                ),
-            });
-            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("wireframe"),
-                entries: &[wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                }],
-            });
-            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("wireframe"),
-                bind_group_layouts: &[Some(&layout)],
-                immediate_size: 0,
-            });
-            let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("wireframe"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(wgpu::VertexBufferLayout {
-                        array_stride: size_of::<Vec3>() as u64,
-                        step_mode: wgpu::VertexStepMode::Vertex,
-                        attributes: &wgpu::vertex_attr_array![0 => Float32x3],
-                    })],
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_main"),
-                    compilation_options: Default::default(),
-                    targets: &[Some(format.into())],
-                }),
-                primitive: wgpu::PrimitiveState {
-                    topology: wgpu::PrimitiveTopology::LineList,
-                    ..Default::default()
-                },
-                depth_stencil: None,
-                multisample: Default::default(),
-                multiview_mask: None,
-                cache: None,
-            });
-            let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("wireframe frame"),
-                size: size_of::<FrameUniform>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("wireframe"),
-                layout: &layout,
-                entries: &[wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                }],
-            });
+        let d = Device::new(device);
+        d.scoped("building the wireframe", || {
+            let uniform = d.uniform("wireframe frame", size_of::<FrameUniform>() as u64);
+            let source = include_str!("../../shaders/wireframe.wgsl");
+            let (pipeline, bind_group) = d.line_pipeline("wireframe", source, format, &uniform);
             // wgpu cannot make an empty buffer: an empty scene draws one degenerate segment.
             let flat: Vec<[f32; 3]> = if points.is_empty() {
                 vec![[0.0; 3]; 2]
             } else {
                 points.iter().map(|p| p.to_array()).collect()
             };
-            let vertices = Device::new(device).buffer_from(
+            let vertices = d.buffer_from(
                 "wireframe vertices",
                 bytemuck::cast_slice(&flat),
                 wgpu::BufferUsages::VERTEX,
@@ -312,9 +250,9 @@ impl Wireframe {
     }
 
     /// Encodes the lines of the frame `g` into `target`, over what it holds.
-    pub fn encode(
+    pub(crate) fn encode(
         &self,
-        queue: &wgpu::Queue,
+        gpu: &Gpu,
         enc: &mut wgpu::CommandEncoder,
         target: &wgpu::TextureView,
         g: &GpuGlobals,
@@ -324,7 +262,7 @@ impl Wireframe {
             view_proj: view_projection(g, near, far).to_cols_array_2d(),
             color: LINE_COLOR,
         };
-        queue.write_buffer(&self.uniform, 0, bytemuck::bytes_of(&frame));
+        gpu.write(&self.uniform, 0, bytemuck::bytes_of(&frame));
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("wireframe"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -357,22 +295,8 @@ impl Wireframe {
         background: Option<&RgbImage>,
     ) -> Result<RgbImage> {
         let (w, h) = (g.width, g.height);
-        let texture = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("wireframe image"),
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: IMAGE_FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        });
+        let gpu = Gpu::new(device, queue);
+        let texture = gpu.image_texture("wireframe image", (w, h), IMAGE_FORMAT);
         let mut rgba = vec![0u8; (w * h * 4) as usize];
         if let Some(bg) = background {
             if bg.dimensions() != (w, h) {
@@ -389,26 +313,13 @@ impl Wireframe {
         for px in rgba.chunks_mut(4) {
             px[3] = 255;
         }
-        queue.write_texture(
-            texture.as_image_copy(),
-            &rgba,
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(4 * w),
-                rows_per_image: Some(h),
-            },
-            texture.size(),
-        );
-        let mut enc = device.create_command_encoder(&Default::default());
-        self.encode(
-            queue,
-            &mut enc,
-            &texture.create_view(&Default::default()),
-            g,
-        );
-        let readback = TextureReadback::encode(device, &mut enc, &texture);
-        queue.submit([enc.finish()]);
-        readback.read(device, IMAGE_FORMAT)
+        gpu.write_image(&texture, &rgba);
+        let mut enc = gpu.encoder();
+        let view = texture.create_view(&Default::default());
+        self.encode(&gpu, &mut enc, &view, g);
+        let readback = TextureReadback::encode(&gpu, &mut enc, &texture);
+        gpu.run(enc);
+        readback.read(&gpu, IMAGE_FORMAT)
     }
 }
 

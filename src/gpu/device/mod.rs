@@ -13,6 +13,7 @@
 //! (bind group layouts, shader modules, pipelines and their cache).
 
 mod pipelines;
+mod raster;
 mod resources;
 
 use std::ops::Deref;
@@ -158,6 +159,13 @@ impl<'a> Device<'a> {
     }
 
     // ---- what the device is ----
+
+    /// Destroys the device, work in flight included: `GPURT_FAULT=lose-device`'s fault
+    /// (`util/fault.rs`), which the tests bring about to see a lost device reported.
+    #[cfg(feature = "native")]
+    pub(crate) fn lose(&self) {
+        self.device.destroy();
+    }
 
     /// Whether the device is a CPU (lavapipe and the like): the renderer cuts its work
     /// smaller there, and sets no dispatch budget.
