@@ -7,8 +7,7 @@ use super::bounds::Bounds;
 use super::io::{FileKind, Input};
 use super::lex::Lexer;
 use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
-use super::palette::Palette;
-use super::sink::{Collect, MeshOut, Sink};
+use super::sink::{MeshOut, Sink};
 use super::{obj, stl};
 use crate::util::error::Result;
 
@@ -24,23 +23,7 @@ pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Resu
 /// Parses a mesh file's bytes (gzip-compressed or not) into triangles with material 0;
 /// an OBJ's materials are not read.
 pub fn parse_mesh(bytes: &[u8], kind: FileKind, name: &str) -> Result<Mesh> {
-    let mut tris = Collect::default();
-    let mut warnings = Vec::new();
-    let mut out = MeshOut {
-        sink: &mut tris,
-        warnings: &mut warnings,
-        materials: &mut Vec::new(),
-        palette: &mut Palette::default(),
-        default: MaterialId(0),
-        mtl: false,
-        dir: None,
-        window: None,
-    };
-    read(Input::bytes(bytes), kind, name, &mut out)?;
-    Ok(Mesh {
-        triangles: tris.into_triangles(),
-        warnings,
-    })
+    MeshOut::collect(|out| read(Input::bytes(bytes), kind, name, out))
 }
 
 /// `mesh PATH translate x y z rotate rx ry rz scale s`: applied scale, then rotation about

@@ -17,8 +17,7 @@ use glam::Vec3;
 use super::lex::{Lexer, Token};
 use super::model::{MaterialId, Mesh, Triangle, unit};
 use super::mtl::ObjMaterials;
-use super::palette::Palette;
-use super::sink::{Collect, MeshOut};
+use super::sink::MeshOut;
 use super::triangulate::triangulate;
 use crate::util::error::Result;
 use crate::util::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
@@ -42,23 +41,7 @@ pub fn parse(bytes: &[u8], name: &str) -> Result<Vec<Triangle>> {
 /// warning for each face dropped because it has fewer than three corners or no area (as
 /// the NFF reader warns of degenerate polygons).
 pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
-    let mut tris = Collect::default();
-    let mut warnings = Vec::new();
-    let mut out = MeshOut {
-        sink: &mut tris,
-        warnings: &mut warnings,
-        materials: &mut Vec::new(),
-        palette: &mut Palette::default(),
-        default: MaterialId(0),
-        mtl: false,
-        dir: None,
-        window: None,
-    };
-    read(Lexer::new(bytes, name), &mut out)?;
-    Ok(Mesh {
-        triangles: tris.into_triangles(),
-        warnings,
-    })
+    MeshOut::collect(|out| read(Lexer::new(bytes, name), out))
 }
 
 /// Reads an OBJ file's triangles into `out`, each with the material its `usemtl` names

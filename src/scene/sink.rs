@@ -10,8 +10,9 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::bounds::Bounds;
-use super::model::{BoxPrim, Cone, Material, MaterialId, Scene, Sphere, Triangle};
+use super::model::{BoxPrim, Cone, Material, MaterialId, Mesh, Scene, Sphere, Triangle};
 use super::palette::Palette;
+use crate::util::error::Result;
 
 /// Takes a reader's bounded primitives in the order it reads them.
 pub trait Sink {
@@ -44,6 +45,30 @@ pub struct MeshOut<'a> {
     pub dir: Option<&'a Path>,
     /// The window the mesh and its libraries are read through (`ReadOptions::window`).
     pub window: Option<usize>,
+}
+
+impl MeshOut<'_> {
+    /// A mesh read by `read` from bytes that come from no file: its triangles of material
+    /// 0 (an OBJ's libraries are not read) and its warnings.
+    pub fn collect(read: impl FnOnce(&mut MeshOut) -> Result<()>) -> Result<Mesh> {
+        let mut tris = Collect::default();
+        let mut warnings = Vec::new();
+        let mut out = MeshOut {
+            sink: &mut tris,
+            warnings: &mut warnings,
+            materials: &mut Vec::new(),
+            palette: &mut Palette::default(),
+            default: MaterialId(0),
+            mtl: false,
+            dir: None,
+            window: None,
+        };
+        read(&mut out)?;
+        Ok(Mesh {
+            triangles: tris.into_triangles(),
+            warnings,
+        })
+    }
 }
 
 /// The primitives as `Scene` holds them.
