@@ -28,8 +28,9 @@ use crate::util::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVE
 struct Corner {
     v: i64,
     n: Option<i64>,
-    line: u32,
-    col: u32,
+    /// Where it was written: its line and column, and its bytes for a message to quote
+    /// while the reader still holds them.
+    at: Token,
 }
 
 /// The triangles of an OBJ file (see `parse_with_warnings` for what is dropped).
@@ -163,7 +164,7 @@ impl Reader {
         lx: &Lexer,
         out: &mut MeshOut,
     ) -> Result<()> {
-        let at = |c: &Corner, msg: String| lx.error_at(&Token::position(c.line, c.col), msg);
+        let at = |c: &Corner, msg: String| lx.error_at(&c.at, msg);
         self.poly.clear();
         self.poly_n.clear();
         for c in face {
@@ -198,7 +199,7 @@ impl Reader {
         let smooth = poly_n.len() == poly.len() && poly_n.iter().all(|n| n.length_squared() > 0.0);
         self.idx.clear();
         if poly.len() < 3 || !triangulate(poly, &mut self.idx) {
-            let (line, col) = face.first().map_or((0, 0), |c| (c.line, c.col));
+            let (line, col) = face.first().map_or((0, 0), |c| (c.at.line, c.at.col));
             out.warnings.push(format!(
                 "{}:{line}:{col}: degenerate face with {} corners dropped",
                 lx.name(),
@@ -245,10 +246,5 @@ fn corner(lx: &Lexer, t: &Token, n_pos: usize, n_nrm: usize) -> Result<Corner> {
     if parts.next().is_some() {
         return Err(bad());
     }
-    Ok(Corner {
-        v,
-        n,
-        line: t.line,
-        col: t.col,
-    })
+    Ok(Corner { v, n, at: *t })
 }

@@ -71,6 +71,17 @@ fn parse_errors_show_their_line_from_any_input() {
     );
     assert!(shown.len() < 130, "{} bytes", shown.len());
     assert!(err.lines().nth(3).unwrap().ends_with("^^^^"), "{err}");
+    // An OBJ corner found bad only at the end of the file (a face may refer to vertices
+    // defined later) is quoted too, while the reader still holds its line.
+    std::fs::write(d.join("ahead.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 7\nv 0 1 0\n").unwrap();
+    let o = gpurt(&["ahead.obj", "-o", "out.png"], &d);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("gpurt: ahead.obj:3:7: face corner refers to a vertex that does not exist")
+            && err.ends_with("\n  |\n3 | f 1 2 7\n  |       ^\n"),
+        "{err}"
+    );
 }
 
 /// The small messages: each starts with what the user gave, says what is wrong with it,
