@@ -25,7 +25,15 @@ class _Camera(TypedDict, total=False):
     fov: float
 
 class SceneError(ValueError):
-    """A scene that cannot be read: its message is the command line's `FILE:LINE:COL: message`."""
+    """A scene that cannot be read: its message is the command line's `FILE:LINE:COL: message`;
+    `path`, `line`, `column` and `reason` hold its parts (`line` and `column` None where the
+    fault has no place in the text, `offset` the byte of a binary STL's)."""
+
+    path: str
+    line: Optional[int]
+    column: Optional[int]
+    offset: Optional[int]
+    reason: str
 
 @final
 class Scene:

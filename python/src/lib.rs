@@ -29,7 +29,9 @@ create_exception!(
     gpurt,
     SceneError,
     PyValueError,
-    "A scene that cannot be read: its message is the command line's `FILE:LINE:COL: message`."
+    "A scene that cannot be read: its message is the command line's `FILE:LINE:COL: message`; \
+     `path`, `line`, `column` and `reason` hold its parts (`line` and `column` None where the \
+     fault has no place in the text, `offset` the byte of a binary STL's)."
 );
 
 /// The Python exception for a library error: a scene's fault is a `SceneError` with the
@@ -38,9 +40,19 @@ create_exception!(
 pub(crate) fn to_py(e: Error) -> PyErr {
     let msg = e.to_string();
     match &e {
-        Error::Parse { .. } | Error::Binary { .. } | Error::Scene { .. } => {
-            SceneError::new_err(msg)
-        }
+        Error::Parse {
+            file,
+            line,
+            col,
+            msg: reason,
+            ..
+        } => scene_error(msg, file, (Some(*line), Some(*col), None), reason),
+        Error::Binary {
+            file,
+            offset,
+            msg: reason,
+        } => scene_error(msg, file, (None, None, Some(*offset)), reason),
+        Error::Scene { file, msg: reason } => scene_error(msg, file, (None, None, None), reason),
         Error::Io { source, .. } => match source.kind() {
             std::io::ErrorKind::NotFound => PyFileNotFoundError::new_err(msg),
             std::io::ErrorKind::PermissionDenied => PyPermissionError::new_err(msg),
@@ -50,6 +62,31 @@ pub(crate) fn to_py(e: Error) -> PyErr {
         Error::Interrupted => PyKeyboardInterrupt::new_err(msg),
         Error::NoAdapter(_) | Error::Gpu(_) | Error::NoDisplay(_) => PyRuntimeError::new_err(msg),
     }
+}
+
+/// A `SceneError` with `message` and its parts as attributes, so that callers need not
+/// take the message apart: `path`, `line`, `column`, `offset` and `reason`.
+fn scene_error(
+    message: String,
+    path: &str,
+    (line, column, offset): (Option<u32>, Option<u32>, Option<u64>),
+    reason: &str,
+) -> PyErr {
+    let err = SceneError::new_err(message);
+    Python::attach(|py| {
+        let value = err.value(py);
+        let set = || -> PyResult<()> {
+            value.setattr("path", path)?;
+            value.setattr("line", line)?;
+            value.setattr("column", column)?;
+            value.setattr("offset", offset)?;
+            value.setattr("reason", reason)
+        };
+        // Setting an attribute on a fresh exception cannot fail; if it did, the message
+        // still says everything.
+        let _ = set();
+    });
+    err
 }
 
 /// `array` as a C-contiguous float32 array of shape (H, W, 3), converting what numpy can.
@@ -121,7 +158,16 @@ pub(crate) fn film_to_numpy(py: Python<'_>, film: Film) -> Bound<'_, PyArray3<f3
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("SceneError", m.py().get_type::<SceneError>())?;
+    let scene_error = m.py().get_type::<SceneError>();
+    // The attributes every SceneError is given (`scene_error`), at their empty values on
+    // the class, so that the type stubs' declarations of them hold on the class too.
+    for (name, empty) in [("path", Some("")), ("reason", Some(""))] {
+        scene_error.setattr(name, empty)?;
+    }
+    for name in ["line", "column", "offset"] {
+        scene_error.setattr(name, m.py().None())?;
+    }
+    m.add("SceneError", scene_error)?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<renderer::Renderer>()?;
     m.add_function(wrap_pyfunction!(scene::render, m)?)?;

@@ -38,6 +38,22 @@ def test_a_bad_scene_raises_scene_error_with_the_cli_message(name, tmp_path):
     assert str(e.value) == message
 
 
+def test_a_scene_error_holds_its_path_line_column_and_reason(tmp_path):
+    path = tmp_path / "bad.nff"
+    path.write_text(BAD["bad.nff"])
+    with pytest.raises(gpurt.SceneError) as e:
+        gpurt.Scene.open(path)
+    assert (e.value.path, e.value.line, e.value.column, e.value.offset) == (str(path), 6, 7, None)
+    assert str(e.value) == f"{path}:6:7: {e.value.reason}"
+    # A binary STL's fault is at a byte, not a line.
+    stl = tmp_path / "cut.stl"
+    stl.write_bytes(b"x" * 80 + (2).to_bytes(4, "little") + bytes(60))
+    with pytest.raises(gpurt.SceneError) as e:
+        gpurt.Scene.open(stl)
+    assert (e.value.path, e.value.line, e.value.column) == (str(stl), None, None)
+    assert isinstance(e.value.offset, int) and f"at byte {e.value.offset}:" in str(e.value)
+
+
 def test_a_missing_file_is_file_not_found():
     with pytest.raises(FileNotFoundError, match="no-such.nff"):
         gpurt.render("no-such.nff")
