@@ -117,3 +117,34 @@ def test_the_image_is_moved_into_numpy_not_copied():
         owner = owner.base
     assert owner is not None and not isinstance(owner, np.ndarray), type(owner)
     assert img.flags.c_contiguous and img.flags.writeable
+
+
+def test_a_missing_gpu_falls_back_to_the_cpu_with_one_runtime_warning(gpu_available):
+    """`backend="gpu"` without an adapter (wgpu told to look only for DX12, which Linux
+    and macOS lack) renders on the CPU and says so in one RuntimeWarning, as the command
+    line does; with an adapter it warns of nothing. In a process of its own, so that the
+    environment is the one wgpu reads."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import json, warnings, gpurt\n"
+        "with warnings.catch_warnings(record=True) as caught:\n"
+        "    warnings.simplefilter('always')\n"
+        f"    r = gpurt.Renderer({str(SCENES / 'spheres.nff')!r}, width=8, height=8, backend='gpu')\n"
+        "    r.render()\n"
+        "print(json.dumps([r.backend, [(w.category.__name__, str(w.message)) for w in caught]]))\n"
+    )
+
+    def run(**env):
+        p = subprocess.run([sys.executable, "-c", code], env=dict(os.environ, **env), capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout)
+
+    backend, caught = run(WGPU_BACKEND="dx12")
+    assert backend == "cpu"
+    assert caught == [["RuntimeWarning", "gpurt: no GPU adapter; rendering on the CPU"]]
+    if gpu_available:
+        assert run() == ["gpu", []]
