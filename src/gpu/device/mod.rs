@@ -13,6 +13,7 @@
 //! (bind group layouts, shader modules, pipelines and their cache).
 
 mod pipelines;
+#[cfg(feature = "native")]
 mod raster;
 mod resources;
 

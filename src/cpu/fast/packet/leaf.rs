@@ -501,6 +501,140 @@ mod tests {
         }
     }
 
+    /// Random rays for the lanes of `L`, aimed at `aim` give or take `spread`, from
+    /// `reach` away at most: some from inside what they aim at, some parallel to an axis
+    /// (zero direction components), one in 23 from infinity (NaN).
+    fn rays_at<L: Lanes>(
+        rand: &mut impl FnMut() -> f32,
+        aim: Vec3,
+        spread: f32,
+        reach: f32,
+    ) -> Rows {
+        let mut rows = Rows::default();
+        for k in 0..L::N {
+            let mut origin = aim + Vec3::new(rand(), rand(), rand()) * reach;
+            let target = aim + Vec3::new(rand(), rand(), rand()) * spread;
+            let mut dir = (target - origin).normalize();
+            match k % 23 {
+                0 => dir = Vec3::new(dir.x, 0.0, 0.0).normalize_or(Vec3::X),
+                1 => origin.y = f32::INFINITY,
+                2 => origin = aim,
+                _ => {}
+            }
+            for a in 0..3 {
+                (rows.origin[a][k], rows.dir[a][k]) = (origin[a], dir[a]);
+            }
+        }
+        rows
+    }
+
+    /// `sphere`, `triangle` and `plane` give each lane the bits its ray gets alone
+    /// (`intersect_sphere`, `intersect_triangles4` of a leaf of the triangle twice,
+    /// `intersect_plane`):
+    /// random spheres, triangles (thin ones, and edges the rays graze) and planes, rays
+    /// aimed near them, some missing, some parallel, some from infinity.
+    fn surfaces_match_the_scalar_tests<L: Lanes>(l: L) {
+        use crate::cpu::intersect::{intersect_plane, intersect_sphere, intersect_triangles4};
+        let mut rand = xorshift(0x2545_f491_4f6c_dd1d);
+        let bits = |v: L::F| {
+            let mut out = [0.0; MAX_LANES];
+            l.store(v, &mut out);
+            out.map(f32::to_bits)
+        };
+        let (mut sphere_hits, mut triangle_hits, mut plane_hits) = (0, 0, 0);
+        for case in 0..3_000 {
+            let centre = Vec3::new(rand(), rand(), rand()) * 20.0;
+            let radius = rand().abs() * 3.0 + 1e-3;
+            let ball = GpuPrim {
+                p0: centre,
+                f0: radius,
+                tag: PRIM_SPHERE << PRIM_KIND_SHIFT,
+                ..Default::default()
+            };
+            let rows = rays_at::<L>(&mut rand, centre, radius * 1.5, 15.0);
+            let (t0, t1) = sphere(l, &ball, &Rays::new(l, &rows));
+            let (t0, t1) = (bits(t0), bits(t1));
+            for k in 0..L::N {
+                let want = intersect_sphere(centre, radius, &rows.ray(k));
+                assert_eq!(t0[k], want.x.to_bits(), "sphere t0, case {case} lane {k}");
+                assert_eq!(t1[k], want.y.to_bits(), "sphere t1, case {case} lane {k}");
+                sphere_hits += usize::from(want.x != NO_HIT);
+            }
+
+            // Edges from the first corner, as the packed records hold a triangle; every
+            // 5th a sliver.
+            let v0 = Vec3::new(rand(), rand(), rand()) * 20.0;
+            let e1 = Vec3::new(rand(), rand(), rand()) * 4.0;
+            let e2 = match case % 5 {
+                0 => e1 * 0.5 + Vec3::new(rand(), rand(), rand()) * 1e-3,
+                _ => Vec3::new(rand(), rand(), rand()) * 4.0,
+            };
+            let tri = GpuPrim {
+                p0: v0,
+                p1: e1,
+                p2: e2,
+                tag: PRIM_TRIANGLE << PRIM_KIND_SHIFT,
+                ..Default::default()
+            };
+            let rows = rays_at::<L>(&mut rand, v0 + (e1 + e2) * 0.3, 3.0, 15.0);
+            let (t, u, v) = triangle(l, &tri, &Rays::new(l, &rows));
+            let (t, u, v) = (bits(t), bits(u), bits(v));
+            for k in 0..L::N {
+                let (wt, wu, wv) =
+                    intersect_triangles4(&[tri, tri], &rows.ray(k)).expect("a block");
+                assert_eq!(t[k], wt.x.to_bits(), "triangle t, case {case} lane {k}");
+                if wt.x != NO_HIT {
+                    assert_eq!(
+                        (u[k], v[k]),
+                        (wu.x.to_bits(), wv.x.to_bits()),
+                        "case {case}"
+                    );
+                    triangle_hits += 1;
+                }
+            }
+
+            let normal = Vec3::new(rand(), rand(), rand()).normalize_or(Vec3::Z);
+            let normal = if case % 7 == 0 { Vec3::Y } else { normal };
+            let pl = GpuPlane {
+                normal,
+                d: rand() * 10.0,
+                ..Default::default()
+            };
+            let rows = rays_at::<L>(&mut rand, normal * pl.d, 5.0, 15.0);
+            let t = bits(plane(l, &pl, &Rays::new(l, &rows)));
+            for (k, &got) in t.iter().enumerate().take(L::N) {
+                let want = intersect_plane(&pl, &rows.ray(k));
+                assert_eq!(got, want.to_bits(), "plane, case {case} lane {k}");
+                plane_hits += usize::from(want != NO_HIT && want > 0.0);
+            }
+        }
+        let n = 3_000 * L::N;
+        assert!(sphere_hits > n / 4, "only {sphere_hits} sphere hits of {n}");
+        assert!(
+            triangle_hits > n / 20,
+            "only {triangle_hits} triangle hits of {n}"
+        );
+        assert!(plane_hits > n / 4, "only {plane_hits} plane hits of {n}");
+    }
+
+    #[test]
+    fn spheres_triangles_and_planes_in_every_instruction_set_match_the_scalar_tests() {
+        surfaces_match_the_scalar_tests(Portable);
+        #[cfg(target_arch = "x86_64")]
+        {
+            use crate::cpu::fast::packet::x86::{Avx2, Avx512, Sse};
+            surfaces_match_the_scalar_tests(Sse::new());
+            match Avx2::detect() {
+                Some(l) => surfaces_match_the_scalar_tests(l),
+                None => eprintln!("SKIPPED the AVX2 lanes: this processor lacks AVX2"),
+            }
+            match Avx512::detect() {
+                Some(l) => surfaces_match_the_scalar_tests(l),
+                None => eprintln!("SKIPPED the AVX-512 lanes: this processor lacks AVX-512F"),
+            }
+        }
+    }
+
     /// The way `cone` orders its two roots is `f32::min` and `max` on this machine, on
     /// zeros of both signs, infinities and NaN.
     #[test]
