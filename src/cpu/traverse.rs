@@ -221,6 +221,30 @@ pub fn closest_plane(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> (f32, u32
     (t_near, prim)
 }
 
+/// The leaf's primitives `first..first + count` one at a time, the nearest kept in `hit`:
+/// `closest_hit`'s loop, which the CPU's leaf test (`fast::leaf::closest_in_leaf`) falls
+/// back to where it cannot take a leaf's primitives several at once.
+#[inline(always)]
+pub fn closest_in_prims(
+    b: &Bindings,
+    ray: &Ray,
+    inv_dir: Vec3,
+    (first, count): (u32, u32),
+    tmin: f32,
+    hit: &mut Hit,
+) {
+    for i in first..first + count {
+        let t = intersect::intersect_prim(&b.prims[i as usize], ray, inv_dir);
+        let t_first = first_in(t, tmin, hit.t);
+        if t_first != NO_HIT {
+            hit.t = t_first;
+            hit.prim = i;
+            hit.u = t.z;
+            hit.v = t.w;
+        }
+    }
+}
+
 /// Nearest surface along the ray within `(tmin, tmax)`, through the binary tree a
 /// primitive at a time, as the shader walks it (the CPU renders through its eight-wide
 /// tree: `fast::wide_ray`).
@@ -244,16 +268,7 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         if count == 0 {
             break;
         }
-        for i in first..first + count {
-            let t = intersect::intersect_prim(&b.prims[i as usize], ray, inv_dir);
-            let t_first = first_in(t, tmin, hit.t);
-            if t_first != NO_HIT {
-                hit.t = t_first;
-                hit.prim = i;
-                hit.u = t.z;
-                hit.v = t.w;
-            }
-        }
+        closest_in_prims(b, ray, inv_dir, (first, count), tmin, &mut hit);
         if !walk.walk_on(b) {
             break;
         }

@@ -430,6 +430,10 @@ const CPU_ONLY: &[(&str, &str)] = &[
         "four triangles in SIMD lanes for the CPU's leaves; a GPU lane tests one",
     ),
     (
+        "closest_in_prims",
+        "closest_hit's leaf loop, which the CPU's leaf test (fast/leaf.rs) falls back to",
+    ),
+    (
         "closest_plane",
         "closest_hit's planes, which the CPU's eight-wide walk (fast/wide_ray.rs) starts from too",
     ),

@@ -7,7 +7,7 @@
 use glam::{Vec3, Vec4};
 
 use crate::cpu::intersect::{self, lanes_of};
-use crate::cpu::traverse::first_in;
+use crate::cpu::traverse::{closest_in_prims, first_in};
 use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::gpu_types::{GpuPrim, NO_HIT};
 
@@ -151,15 +151,5 @@ pub(crate) fn closest_in_leaf(
         }
         return;
     }
-    for i in first..first + count {
-        let p = &b.prims[i as usize];
-        let t = intersect::intersect_prim(p, ray, inv_dir);
-        let t_first = first_in(t, tmin, hit.t);
-        if t_first != NO_HIT {
-            hit.t = t_first;
-            hit.prim = i;
-            hit.u = t.z;
-            hit.v = t.w;
-        }
-    }
+    closest_in_prims(b, ray, inv_dir, (first, count), tmin, hit);
 }

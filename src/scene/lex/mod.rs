@@ -46,15 +46,11 @@ pub struct Lexer<'a> {
 impl<'a> Lexer<'a> {
     /// A lexer over bytes in memory (gzip-compressed or not).
     pub fn new(src: &'a [u8], name: &'a str) -> Self {
-        Self::from_input(Input::bytes(src), name)
+        Self::through(Input::bytes(src), name, None)
     }
 
-    /// A lexer over a stream (`io::open`), which names `name` in its messages.
-    pub fn from_input(input: Input<'a>, name: &'a str) -> Self {
-        Self::with_buffer(input, name, BUFFER_BYTES)
-    }
-
-    /// `from_input` through a window of `window` bytes where given (`ReadOptions::window`).
+    /// A lexer over a stream (`io::open`), which names `name` in its messages, through a
+    /// window of `window` bytes where given (`ReadOptions::window`), else the usual one.
     pub fn through(input: Input<'a>, name: &'a str, window: Option<usize>) -> Self {
         Self::with_buffer(input, name, window.unwrap_or(BUFFER_BYTES))
     }
