@@ -8,7 +8,6 @@
 fn cwide_reached(n: CwideNode, half: u32, ray: Ray, inv_dir: vec3<f32>, tmin: f32, tmax: f32, octant: u32) -> vec2<u32> {
     let shifts = vec4<u32>(0u, 8u, 16u, 24u);
     let byte = vec4<u32>(255u);
-    let o = ray.origin;
     let sx = bitcast<f32>((n.exp_inner & 255u) << 23u);
     let sy = bitcast<f32>(((n.exp_inner >> 8u) & 255u) << 23u);
     let sz = bitcast<f32>(((n.exp_inner >> 16u) & 255u) << 23u);
@@ -18,16 +17,10 @@ fn cwide_reached(n: CwideNode, half: u32, ray: Ray, inv_dir: vec3<f32>, tmin: f3
     let qy1 = vec4<f32>((vec4<u32>(n.quant[1][2u + half]) >> shifts) & byte);
     let qz0 = vec4<f32>((vec4<u32>(n.quant[2][half]) >> shifts) & byte);
     let qz1 = vec4<f32>((vec4<u32>(n.quant[2][2u + half]) >> shifts) & byte);
-    let x0 = (n.origin.x + qx0 * sx - o.x) * inv_dir.x;
-    let x1 = (n.origin.x + qx1 * sx - o.x) * inv_dir.x;
-    let y0 = (n.origin.y + qy0 * sy - o.y) * inv_dir.y;
-    let y1 = (n.origin.y + qy1 * sy - o.y) * inv_dir.y;
-    let z0 = (n.origin.z + qz0 * sz - o.z) * inv_dir.z;
-    let z1 = (n.origin.z + qz1 * sz - o.z) * inv_dir.z;
-    let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
-    let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
+    let lo = array<vec4<f32>, 3>(n.origin.x + qx0 * sx, n.origin.y + qy0 * sy, n.origin.z + qz0 * sz);
+    let hi = array<vec4<f32>, 3>(n.origin.x + qx1 * sx, n.origin.y + qy1 * sy, n.origin.z + qz1 * sz);
     let tag = (vec4<u32>(n.tags[half]) >> shifts) & byte;
-    let reached = (near <= far * SLAB_WIDEN) & (tag != vec4<u32>(0u));
+    let reached = slab4(lo, hi, ray.origin, inv_dir, tmin, tmax).reached & (tag != vec4<u32>(0u));
     let lane = vec4<u32>(0u, 1u, 2u, 3u) + vec4<u32>(4u * half);
     let inner = select(vec4<u32>(0u), vec4<u32>(1u) << (lane ^ vec4<u32>(octant)), reached & (tag == vec4<u32>(CWIDE_INNER)));
     let count = tag >> vec4<u32>(CWIDE_COUNT_SHIFT);

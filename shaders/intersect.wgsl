@@ -123,6 +123,28 @@ fn overlaps(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>,
     return s.x <= s.y * SLAB_WIDEN;
 }
 
+// `slab4`'s answer: where the ray enters each of four boxes (clamped to tmin), and which
+// it overlaps.
+struct Slab4 {
+    near: vec4<f32>,
+    reached: vec4<bool>,
+}
+
+// `slab` then `overlaps` for four boxes, a box a lane, the same arithmetic lane by lane.
+// lo[a] and hi[a] hold the four boxes' bounds on axis a. The wide and compressed wide
+// walks test their nodes' children with it.
+fn slab4(lo: array<vec4<f32>, 3>, hi: array<vec4<f32>, 3>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> Slab4 {
+    let x0 = (lo[0] - origin.x) * inv_dir.x;
+    let x1 = (hi[0] - origin.x) * inv_dir.x;
+    let y0 = (lo[1] - origin.y) * inv_dir.y;
+    let y1 = (hi[1] - origin.y) * inv_dir.y;
+    let z0 = (lo[2] - origin.z) * inv_dir.z;
+    let z1 = (hi[2] - origin.z) * inv_dir.z;
+    let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
+    let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
+    return Slab4(near, near <= far * SLAB_WIDEN);
+}
+
 // `overlaps`, returning where the ray enters the box (clamped to tmin), NO_HIT when it
 // does not overlap: the pairs traversal enters the nearer child first.
 fn slab_entry(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, tmin: f32, tmax: f32) -> f32 {

@@ -204,20 +204,11 @@ fn next_leaf_wide(
         if (COUNTERS) {
             fetched += 1u;
         }
-        // `slab` for the four boxes, lane by lane the same arithmetic.
-        let o = ray.origin;
-        let x0 = (n.lo[0] - o.x) * inv_dir.x;
-        let x1 = (n.hi[0] - o.x) * inv_dir.x;
-        let y0 = (n.lo[1] - o.y) * inv_dir.y;
-        let y1 = (n.hi[1] - o.y) * inv_dir.y;
-        let z0 = (n.lo[2] - o.z) * inv_dir.z;
-        let z1 = (n.hi[2] - o.z) * inv_dir.z;
-        let near = max(max(max(min(x0, x1), min(y0, y1)), min(z0, z1)), vec4<f32>(tmin));
-        let far = min(min(min(max(x0, x1), max(y0, y1)), max(z0, z1)), vec4<f32>(tmax));
+        let slabs = slab4(n.lo, n.hi, ray.origin, inv_dir, tmin, tmax);
         // WGSL requires the parentheses (Chrome's compiler rejects a relational and a bitwise
         // operator side by side without them; naga reads them as here).
-        let reached = (near <= far * SLAB_WIDEN) & (n.entry != vec4<u32>(WIDE_EMPTY));
-        let t = bitcast<vec4<u32>>(select(vec4<f32>(NO_HIT), near, reached));
+        let reached = slabs.reached & (n.entry != vec4<u32>(WIDE_EMPTY));
+        let t = bitcast<vec4<u32>>(select(vec4<f32>(NO_HIT), slabs.near, reached));
         var a = vec2<u32>(t.x, n.entry.x);
         var b = vec2<u32>(t.y, n.entry.y);
         var c = vec2<u32>(t.z, n.entry.z);

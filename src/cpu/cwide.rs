@@ -3,11 +3,10 @@
 
 use glam::{Vec3, Vec4};
 
+use super::intersect;
 use super::types::Ray;
 use super::walk::Walk;
-use crate::gpu_types::{
-    CWIDE_COUNT_SHIFT, CWIDE_INNER, CWIDE_OFFSET_MASK, GpuCwideNode, SLAB_WIDEN,
-};
+use crate::gpu_types::{CWIDE_COUNT_SHIFT, CWIDE_INNER, CWIDE_OFFSET_MASK, GpuCwideNode};
 
 /// Lanes `4 * half` to `4 * half + 3` of compressed node `n`: the inner children the
 /// ray reaches within `[tmin, tmax]`, as bits at `lane ^ octant`, and the primitives
@@ -25,23 +24,13 @@ pub(super) fn cwide_reached(
 ) -> (u32, u32) {
     let lanes = |w: u32| Vec4::from_array([0, 8, 16, 24].map(|s| (w >> s & 0xff) as f32));
     let step = |a: u32| f32::from_bits((n.exp_inner >> (8 * a) & 0xff) << 23);
-    let o = ray.origin;
-    let t = |a: usize, hi: usize| {
-        let q = lanes(n.quant[a][2 * hi + half]);
-        (n.origin[a] + q * step(a as u32) - o[a]) * inv_dir[a]
-    };
-    let (x0, x1, y0, y1, z0, z1) = (t(0, 0), t(0, 1), t(1, 0), t(1, 1), t(2, 0), t(2, 1));
-    let near = x0
-        .min(x1)
-        .max(y0.min(y1))
-        .max(z0.min(z1))
-        .max(Vec4::splat(tmin));
-    let far = x0
-        .max(x1)
-        .min(y0.max(y1))
-        .min(z0.max(z1))
-        .min(Vec4::splat(tmax));
-    let reached = near.cmple(far * SLAB_WIDEN).bitmask();
+    let bound =
+        |a: usize, hi: usize| n.origin[a] + lanes(n.quant[a][2 * hi + half]) * step(a as u32);
+    let (lo, hi) = (
+        [0, 1, 2].map(|a| bound(a, 0)),
+        [0, 1, 2].map(|a| bound(a, 1)),
+    );
+    let (_, reached) = intersect::slab4(lo, hi, ray.origin, inv_dir, tmin, tmax);
     let (mut inner, mut leaves) = (0, 0);
     for l in 0..4 {
         let tag = n.tags[half] >> (8 * l) & 0xff;

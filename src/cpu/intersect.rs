@@ -251,6 +251,39 @@ pub fn overlaps(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, tmin: f32, tmax
     near <= far * SLAB_WIDEN
 }
 
+/// `slab` then `overlaps` for four boxes, a box a lane, the same arithmetic lane by lane:
+/// where the ray enters each box (clamped to `tmin`) and, as bits, the boxes it
+/// overlaps. `lo[a]` and `hi[a]` hold the four boxes' bounds on axis `a`. The wide and
+/// compressed wide walks test their nodes' children with it.
+#[inline]
+pub fn slab4(
+    lo: [Vec4; 3],
+    hi: [Vec4; 3],
+    origin: Vec3,
+    inv_dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> (Vec4, u32) {
+    let t = |a: usize| {
+        (
+            (lo[a] - origin[a]) * inv_dir[a],
+            (hi[a] - origin[a]) * inv_dir[a],
+        )
+    };
+    let ((x0, x1), (y0, y1), (z0, z1)) = (t(0), t(1), t(2));
+    let near = x0
+        .min(x1)
+        .max(y0.min(y1))
+        .max(z0.min(z1))
+        .max(Vec4::splat(tmin));
+    let far = x0
+        .max(x1)
+        .min(y0.max(y1))
+        .min(z0.max(z1))
+        .min(Vec4::splat(tmax));
+    (near, near.cmple(far * SLAB_WIDEN).bitmask())
+}
+
 /// `overlaps`, returning where the ray enters the box (clamped to `tmin`), `NO_HIT` when
 /// it does not overlap: the pairs traversal enters the nearer child first.
 #[inline]

@@ -9,7 +9,7 @@ use super::types::{Bindings, GpuWide, Hit, Ray};
 use super::walk::{Walk, start_walk};
 use crate::bvh::qwide;
 use crate::gpu_types::{
-    GpuNode, GpuQwideNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, SLAB_WIDEN, TRAVERSAL_SINGLE,
+    GpuNode, GpuQwideNode, GpuWideNode, NO_HIT, NO_PRIM, PLANE_FLAG, TRAVERSAL_SINGLE,
     WIDE_COUNT_MASK, WIDE_EMPTY, WIDE_FIRST_SHIFT, WIDE_LEAF,
 };
 
@@ -166,22 +166,7 @@ impl Walk {
             };
             *cost += 4;
             self.fetched += 1;
-            // `intersect::slab` for the four boxes, lane by lane the same arithmetic.
-            let o = ray.origin;
-            let (x0, x1) = ((n.lo[0] - o.x) * inv_dir.x, (n.hi[0] - o.x) * inv_dir.x);
-            let (y0, y1) = ((n.lo[1] - o.y) * inv_dir.y, (n.hi[1] - o.y) * inv_dir.y);
-            let (z0, z1) = ((n.lo[2] - o.z) * inv_dir.z, (n.hi[2] - o.z) * inv_dir.z);
-            let near = x0
-                .min(x1)
-                .max(y0.min(y1))
-                .max(z0.min(z1))
-                .max(Vec4::splat(tmin));
-            let far = x0
-                .max(x1)
-                .min(y0.max(y1))
-                .min(z0.max(z1))
-                .min(Vec4::splat(tmax));
-            let reached = near.cmple(far * SLAB_WIDEN).bitmask();
+            let (near, reached) = intersect::slab4(n.lo, n.hi, ray.origin, inv_dir, tmin, tmax);
             let lane = |l: usize| {
                 let hit = reached & (1 << l) != 0 && n.entry[l] != WIDE_EMPTY;
                 (if hit { near[l].to_bits() } else { miss }, n.entry[l])
