@@ -1,9 +1,11 @@
 //! The two models of the specular highlight (`frame::Shading`): a pixel worked out by
 //! hand for each, on both renderers; every pixel of a shiny sphere against the f64 oracle
-//! under Blinn-Phong; and the GPU specialisation that keeps Blinn-Phong out of Phong
-//! pipelines. GPU against CPU under Blinn-Phong on every scene is a variant of
-//! `common::versus::check_variants`; Phong images byte for byte as before are checked by
-//! rendering the image suite with the binary before and after.
+//! under Blinn-Phong; every pixel the f64 tracer (`common::whitted`) can call of triangles
+//! and glass under point, directional and area lights, on both renderers; and the GPU
+//! specialisation that keeps Blinn-Phong out of Phong pipelines. GPU against CPU under
+//! Blinn-Phong on every scene is a variant of `common::versus::check_variants`; Phong
+//! images byte for byte as before are checked by rendering the image suite with the
+//! binary before and after.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -18,6 +20,7 @@ use gpurt::scene::{Scene, nff};
 
 use crate::common::oracle::{Camera, lone_sphere};
 use crate::common::versus::{self, Gpu};
+use crate::common::whitted::{Met, Whitted};
 
 /// A unit sphere at the origin seen along +y from (0, -5, 0) on a 3 x 3 image, whose
 /// centre pixel's ray is exactly (0, 1, 0): it meets the sphere at P = (0, -1, 0), where
@@ -143,6 +146,142 @@ s 0.3 0.2 0.5 1.5
         worst(&phong, Shading::BlinnPhong) > 10.0 / 255.0,
         "Phong's image passes as Blinn-Phong's"
     );
+}
+
+/// A floor and a wall of triangles, an opaque shiny sphere and a glass one (refraction,
+/// total internal reflection, tinted shadows) under a point and a directional light.
+const HARD: &str = "b 0.1 0.12 0.2
+v from 0 -9 4 at 0 0 0.8 up 0 0 1 angle 38 hither 0.5 resolution 64 48
+l 3 -4 7
+dl 1 -0.5 -2
+f 0.8 0.75 0.7 0.7 0.15 12 0 1
+p 4
+-4 -3 0
+4 -3 0
+4 3 0
+-4 3 0
+f 0.35 0.5 0.9 0.6 0.3 20 0 1
+p 3
+-3.5 2.5 0
+0 3 3
+3.5 2.5 0
+f 0.9 0.3 0.2 0.5 0.4 30 0 1
+s -1.4 0.6 1 1
+f 0.95 0.95 1 0.05 0.1 60 0.85 1.5
+s 1.3 -0.6 1 1
+";
+
+/// The glass's transmission and index of refraction.
+const GLASS: &str = "0.85 1.5";
+
+/// `HARD`'s shapes under one area light, 8 x 8 samples, with its soft and tinted shadows.
+const SOFT: &str = "b 0.1 0.12 0.2
+v from 0 -9 4 at 0 0 0.8 up 0 0 1 angle 38 hither 0.5 resolution 64 48
+al -1 -1 6 2 0 0 0 2 0 0.9 0.9 0.85 8 8
+f 0.8 0.75 0.7 0.7 0.15 12 0 1
+p 4
+-4 -3 0
+4 -3 0
+4 3 0
+-4 3 0
+f 0.35 0.5 0.9 0.6 0.3 20 0 1
+p 3
+-3.5 2.5 0
+0 3 3
+3.5 2.5 0
+f 0.9 0.3 0.2 0.5 0.4 30 0 1
+s -1.4 0.6 1 1
+f 0.95 0.95 1 0.05 0.1 60 0.85 1.5
+s 1.3 -0.6 1 1
+";
+
+/// Every pixel of `src` that the f64 tracer can call, rendered under Blinn-Phong on one
+/// renderer, within `tol` of the tracer; most pixels called, each of `wanted`'s features
+/// met by many of them; and two renders of other scenes failing that oracle: the same
+/// scene under Phong, and with glass of another index.
+fn check_whitted(src: &str, gpu: Option<&Gpu>, tol: f64, wanted: &[Feature]) {
+    let scene = parse(src);
+    let cam = Camera::of(&scene);
+    let oracle = Whitted::new(&scene, Shading::BlinnPhong, 5);
+    let called: Vec<_> = cam
+        .pixels()
+        .filter_map(|(x, y)| Some(((x, y), oracle.pixel(&cam, x, y)?)))
+        .collect();
+    let pixels = (cam.width * cam.height) as usize;
+    assert!(
+        called.len() * 10 >= pixels * 7,
+        "the tracer calls {} of {pixels} pixels",
+        called.len()
+    );
+    for (name, met) in wanted {
+        let n = called.iter().filter(|(_, (_, m))| met(m)).count();
+        assert!(n >= 40, "{name}: met by {n} pixels");
+    }
+    let worst = |film: &Film| {
+        called
+            .iter()
+            .map(|&((x, y), (want, _))| {
+                let got = DVec3::from(film.get(x, y).map(f64::from));
+                ((got - want).abs().max_element(), (x, y))
+            })
+            .fold((0.0, (0, 0)), |a, b| if b.0 > a.0 { b } else { a })
+    };
+    let (off, at) = worst(&render(&scene, Shading::BlinnPhong, gpu));
+    assert!(off <= tol, "{off} off the f64 tracer at {at:?}");
+    let (off, _) = worst(&render(&scene, Shading::Phong, gpu));
+    assert!(off > 4.0 * tol, "Phong's image passes ({off})");
+    let bent = parse(&src.replace(GLASS, "0.85 1.4"));
+    let (off, _) = worst(&render(&bent, Shading::BlinnPhong, gpu));
+    assert!(off > 4.0 * tol, "glass of index 1.4 passes for 1.5 ({off})");
+}
+
+/// A feature of the model by name, and whether a pixel's paths met it.
+type Feature = (&'static str, fn(&Met) -> bool);
+
+const HARD_MET: [Feature; 4] = [
+    ("triangles", |m| m.triangle),
+    ("refraction", |m| m.refraction),
+    ("the directional light", |m| m.directional),
+    ("shadows through glass", |m| m.tinted_shadow),
+];
+
+const SOFT_MET: [Feature; 4] = [
+    ("triangles", |m| m.triangle),
+    ("refraction", |m| m.refraction),
+    ("the area light", |m| m.area),
+    ("shadows through glass", |m| m.tinted_shadow),
+];
+
+/// Both renderers meet the tracer to about 3e-6 here: the tolerance leaves a margin of 30.
+const HARD_TOL: f64 = 1e-4;
+
+#[test]
+fn triangles_and_glass_under_point_and_directional_lights_are_blinn_phong_on_the_cpu() {
+    check_whitted(HARD, None, HARD_TOL, &HARD_MET);
+}
+
+#[test]
+fn triangles_and_glass_under_point_and_directional_lights_are_blinn_phong_on_the_gpu() {
+    let Some(g) = versus::gpu() else {
+        return;
+    };
+    check_whitted(HARD, Some(g), HARD_TOL, &HARD_MET);
+}
+
+/// The renderers estimate the area light from 64 jittered samples where the tracer
+/// integrates it: a smooth integrand (penumbrae are not called), so within one and a
+/// half 8-bit levels (both meet it to 0.7 here).
+#[test]
+fn an_area_light_over_triangles_and_glass_is_blinn_phong_on_the_cpu() {
+    check_whitted(SOFT, None, 1.5 / 255.0, &SOFT_MET);
+}
+
+#[test]
+fn an_area_light_over_triangles_and_glass_is_blinn_phong_on_the_gpu() {
+    let Some(g) = versus::gpu() else {
+        return;
+    };
+    check_whitted(SOFT, Some(g), 1.5 / 255.0, &SOFT_MET);
 }
 
 /// The model is a pipeline constant of colour frames only: Phong and Blinn-Phong frames

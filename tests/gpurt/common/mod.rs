@@ -1,11 +1,13 @@
 //! Helpers shared by the test modules: whether to skip or fail, where the scenes are,
 //! temporary directories, a seedable random source, and the `gpurt` binary. Apart:
 //! `inputs` (the scene texts and files the tests write), `oracle` (expected values
-//! computed independently of the renderer), `versus` (the GPU against the CPU).
+//! computed independently of the renderer), `whitted` (an independent f64 tracer of the
+//! whole model), `versus` (the GPU against the CPU).
 
 pub mod inputs;
 pub mod oracle;
 pub mod versus;
+pub mod whitted;
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
