@@ -15,7 +15,8 @@ function showError(message) {
     pre.id = "gpurt-error";
     $("out").appendChild(pre);
   }
-  pre.textContent = String(message);
+  // An Error's message alone: String(e) would prefix "Error: ".
+  pre.textContent = message instanceof Error ? message.message : String(message);
   status("error");
 }
 
@@ -75,9 +76,19 @@ function restart() {
   run();
 }
 
-function applyOptions() {
-  const n = (id) => parseInt($(id).value, 10) || 0;
-  session.set_options(n("width"), n("height"), n("spp"), n("depth"), $("shading").value);
+// A number from the URL or a box: a whole number, or an error naming the parameter
+// (parseInt would take "-2" as -2, which wraps to 4294967294 on the way to the library,
+// and "abc" as nothing). The library checks the range.
+function whole(id, text) {
+  if (!/^[0-9]+$/.test(text.trim())) {
+    throw new Error(`${id} must be a whole number, got ${JSON.stringify(text)}`);
+  }
+  return parseInt(text, 10);
+}
+
+function applyOptions(shading = $("shading").value) {
+  const n = (id) => whole(id, $(id).value);
+  session.set_options(n("width"), n("height"), n("spp"), n("depth"), shading);
 }
 
 async function loadBytes(name, bytes) {
@@ -147,17 +158,14 @@ async function interactive() {
 async function scripted(params) {
   const url = params.get("scene");
   for (const id of ["width", "height", "spp", "depth"]) {
-    if (params.has(id)) $(id).value = params.get(id);
+    if (params.has(id)) $(id).value = whole(id, params.get(id));
   }
   const response = await fetch(url);
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   const name = decodeURIComponent(new URL(url, location.href).pathname.split("/").pop());
   await loadBytes(name, new Uint8Array(await response.arrayBuffer()));
   // A <select> ignores a value it has no option for: the library checks the name.
-  if (params.has("shading")) {
-    const n = (id) => parseInt($(id).value, 10) || 0;
-    session.set_options(n("width"), n("height"), n("spp"), n("depth"), params.get("shading"));
-  }
+  if (params.has("shading")) applyOptions(params.get("shading"));
   const pair = (key) => params.get(key).split(",").map(Number);
   if (params.has("orbit")) session.drag(...pair("orbit"), false);
   if (params.has("pan")) session.drag(...pair("pan"), true);

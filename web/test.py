@@ -7,8 +7,9 @@ under the GPU-vs-CPU limits (`gpurt diff`), with ray counts; the camera's moves 
 `v` block it prints are checked against `gpurt --view`; the interactive page is driven
 with the browser's own input events (file input, a drag and a wheel notch on the canvas,
 the Camera and Download buttons, a dropped file) and its canvas held against the CPU's
-image; a bad scene must show the command line's `FILE:LINE:COL: message`. A self-test proves the comparison fails on a perturbed
-image. Needs web/dist (web/build.sh), the command line
+image; a bad scene must show the command line's `FILE:LINE:COL: message`, and bad numbers,
+a missing scene and a browser without WebGPU their own messages. A self-test proves the
+comparison fails on a perturbed image and on Phong's image for Blinn-Phong's. Needs web/dist (web/build.sh), the command line
 (target/debug/gpurt, or GPURT_CLI) and chromium; the SPD scenes in ../shared/scenes are
 used when there (required under CI=true). Prints `N passed, M failed`; exits 1 on a failure.
 """
@@ -144,11 +145,16 @@ class Browser:
                     raise AssertionError(f"{method}: {reply['error']}")
                 return reply["result"]
 
-    def page(self, url, screenshot=None):
+    def page(self, url, screenshot=None, before=None):
         """The page's DOM once it shows a result or an error; with `screenshot`, a PNG of
-        the page (800 px wide) is written there then."""
-        target = self.send("Target.createTarget", url=url)["targetId"]
+        the page (800 px wide) is written there then; `before` is a script run in the page
+        before its own."""
+        target = self.send("Target.createTarget", url="about:blank" if before else url)["targetId"]
         session = self.send("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
+        if before:
+            self.send("Page.enable", session)
+            self.send("Page.addScriptToEvaluateOnNewDocument", session, source=before)
+            self.send("Page.navigate", session, url=url)
         if screenshot:
             self.send("Emulation.setDeviceMetricsOverride", session, width=800, height=600,
                       deviceScaleFactor=1, mobile=False)
@@ -295,7 +301,7 @@ def main():
             assert abs(rays - cpu_rays) <= cpu_rays // 200, f"{rays} rays in the page, {cpu_rays} on the CPU"
             return web, scene, adapter, rays
 
-        first = {}
+        first, rendered = {}, {}
         for name, source, w, h, spp, depth, *more in CASES:
             params = more[0] if more else {}
             if isinstance(source, tuple) and not source[1].exists() or isinstance(source, Path) and not source.exists():
@@ -306,6 +312,7 @@ def main():
             def run(name=name, source=source, w=w, h=h, spp=spp, depth=depth, params=params):
                 web, scene, adapter, rays = case(name, source, w, h, spp, depth, params)
                 first.setdefault("case", (web, scene, w, h, spp, depth, adapter, rays))
+                rendered[name] = (web, scene, w, h, spp, depth)
 
             check(f"{name} {w}x{h} {spp} spp depth {depth}{url_args(params)}", run)
 
@@ -454,6 +461,11 @@ def main():
                 diff = cli("diff", web, other, check=False)
                 assert diff.returncode == 1, f"{extra} depth {d}: gpurt diff exited {diff.returncode}, not 1:\n{diff.stdout}"
             assert abs(rays - other_rays) > other_rays // 200, (rays, other_rays)
+            # A page that ignored shading=blinn-phong would show Phong's image: it fails too.
+            web, scene, w, h, spp, depth = rendered["spheres-blinn.nff"]
+            cpu_render(scene, other, w, h, spp, depth, "--shading", "phong")
+            diff = cli("diff", web, other, check=False)
+            assert diff.returncode == 1, f"Phong passes for Blinn-Phong: gpurt diff exited {diff.returncode}:\n{diff.stdout}"
 
         check("self-test: a perturbed render fails the comparison", self_test)
 
@@ -481,6 +493,29 @@ def main():
             assert 'id="gpurt-result"' not in dom
 
         check("an unknown shading model is an error naming the models", bad_shading)
+
+        def shows(query, message, before=None):
+            """The page given `query` shows `message` and no image."""
+            dom = dump(f"{base}?{query}", before=before)
+            err = re.search(r'<pre id="gpurt-error">(.*?)</pre>', dom, re.S)
+            assert err, f"{query}: no error element"
+            got = html.unescape(err.group(1))
+            assert got.startswith(message), f"{query}: {got!r}, not {message!r}"
+            assert 'id="gpurt-result"' not in dom
+
+        def bad_numbers():
+            scene = "scene=scenes/spheres.nff"
+            shows(f"{scene}&width=abc&height=8", 'width must be a whole number, got "abc"')
+            shows(f"{scene}&width=8&height=8&spp=-2", 'spp must be a whole number, got "-2"')
+            shows(f"{scene}&width=8&height=8&depth=99", "depth must be 1 to 16, got 99")
+
+        check("bad numbers in the URL are errors naming the parameter", bad_numbers)
+        check("a scene the server does not have shows its HTTP status",
+              lambda: shows("scene=scenes/missing.nff", "scenes/missing.nff: HTTP 404"))
+        # A browser without WebGPU has no navigator.gpu.
+        no_gpu = "Object.defineProperty(Navigator.prototype, 'gpu', { get() { return undefined; } });"
+        check("a browser without WebGPU shows that it has none",
+              lambda: shows("scene=scenes/spheres.nff", "no WebGPU: ", before=no_gpu))
         browser.close()
         server.shutdown()
     print(f"{passed} passed, {failed} failed" + (f", {skipped} skipped" if skipped else ""))
