@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Peak memory of whole renders against what the scene holds: a 2M-triangle terrain and a
-# field of 1M spheres (`examples/field.rs`, also the terrain as OBJ and binary STL, gzip),
+# field of 1M spheres (`examples/field.rs`, also the terrain as OBJ and binary STL, gzip,
+# and binary PLY),
 # and files that are nearly all comment lines around one sphere: 3 GB gzip-compressed and
 # 1 GB plain. Each is rendered at SIZE x SIZE, 1 spp, by the release gpurt on each backend
 # and, when BASELINE names another gpurt binary (an older build), by that one too, side by
@@ -40,6 +41,7 @@ ROWS="$WORK/rows.tsv"
 "$FIELD" terrain "$TERRAIN" nff >"$WORK/terrain.nff"
 "$FIELD" terrain "$TERRAIN" obj | gzip -1 >"$WORK/terrain.obj.gz"
 "$FIELD" terrain "$TERRAIN" stl | gzip -1 >"$WORK/terrain.stl.gz"
+"$FIELD" terrain "$TERRAIN" ply >"$WORK/terrain.ply"
 "$FIELD" spheres "$SPHERES" >"$WORK/spheres.nff"
 sphere='v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nl 1 1 1\nf 1 0 0 1 0 1 0 1\ns 0 0 0 1\n'
 comments() { # MB
@@ -55,6 +57,7 @@ scenes=(
     "terrain terrain.nff $tris"
     "terrain-obj terrain.obj.gz $tris"
     "terrain-stl terrain.stl.gz $tris"
+    "terrain-ply terrain.ply $tris"
     "spheres spheres.nff $((SPHERES * SPHERES))"
     "comments-${COMMENTS_GZ_MB}MB-gz comments.nff.gz 1"
     "comments-${COMMENTS_PLAIN_MB}MB comments.nff 1"

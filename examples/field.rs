@@ -2,14 +2,14 @@
 //! from the SPD, so that the readers and the tree are measured on scenes they were not
 //! tuned on:
 //!
-//!     cargo run --release --example field -- terrain N [nff|obj|stl] > out
+//!     cargo run --release --example field -- terrain N [nff|obj|stl|ply] > out
 //!     cargo run --release --example field -- spheres N > out.nff
 //!
 //! `terrain N` is a height field of N x N cells, two triangles a cell (2 N^2 triangles:
 //! N = 1000 gives two million), its heights a sum of a few waves, as NFF `p 3` polygons,
-//! an OBJ mesh (shared vertices, `f` faces) or a binary STL. `spheres N` is a field of
-//! N x N spheres of varying radius on a plane (N = 1000 gives a million). Both stream out
-//! as they are generated.
+//! an OBJ mesh (shared vertices, `f` faces), a binary STL, or a binary PLY (shared
+//! vertices). `spheres N` is a field of N x N spheres of varying radius on a plane
+//! (N = 1000 gives a million). Both stream out as they are generated.
 
 use std::io::{self, BufWriter, Write};
 
@@ -77,9 +77,37 @@ pub fn terrain(n: usize, format: &str, out: &mut impl Write) -> io::Result<()> {
                 }
             }
         }
+        "ply" => {
+            let (verts, faces) = ((n + 1) * (n + 1), 2 * n * n);
+            write!(
+                out,
+                "ply\nformat binary_little_endian 1.0\ncomment terrain of {n} x {n} cells\n\
+                 element vertex {verts}\nproperty float x\nproperty float y\nproperty float z\n\
+                 element face {faces}\nproperty list uchar uint vertex_indices\nend_header\n"
+            )?;
+            for j in 0..=n {
+                for i in 0..=n {
+                    for x in p(i, j) {
+                        out.write_all(&x.to_le_bytes())?;
+                    }
+                }
+            }
+            let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+            for j in 0..n {
+                for i in 0..n {
+                    let [a, b, c, d] = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+                    for tri in [[a, b, c], [a, c, d]] {
+                        out.write_all(&[3])?;
+                        for v in tri {
+                            out.write_all(&v.to_le_bytes())?;
+                        }
+                    }
+                }
+            }
+        }
         other => {
             return Err(io::Error::other(format!(
-                "unknown terrain format {other}: nff, obj or stl"
+                "unknown terrain format {other}: nff, obj, stl or ply"
             )));
         }
     }
@@ -103,7 +131,7 @@ pub fn spheres(n: usize, out: &mut impl Write) -> io::Result<()> {
 
 fn main() -> io::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let usage = || io::Error::other("usage: field terrain N [nff|obj|stl] | field spheres N");
+    let usage = || io::Error::other("usage: field terrain N [nff|obj|stl|ply] | field spheres N");
     let n: usize = args
         .get(1)
         .and_then(|s| s.parse().ok())

@@ -75,6 +75,7 @@ CASES = [
     ("spheres.nff", ROOT / "scenes" / "spheres.nff", 48, 36, 2, 5),
     ("glass.nff", ROOT / "scenes" / "glass.nff", 40, 30, 1, 8),
     ("icosahedron.stl", ROOT / "scenes" / "icosahedron.stl", 32, 32, 1, 5),
+    ("torus.ply", ROOT / "scenes" / "torus.ply", 36, 28, 1, 5),
     ("tetra.obj", OBJ, 33, 25, 1, 5),
     ("mirrors.nff.gz", ("gzip", ROOT / "scenes" / "mirrors.nff"), 40, 30, 1, 5),
     ("teapot-2.nff", SHARED / "spd" / "teapot-2.nff", 40, 40, 1, 5),

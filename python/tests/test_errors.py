@@ -14,6 +14,7 @@ BAD = {
     "view.nff": "v\nfrom 0 0 0\nat 0 0 0\nup 0 1 0\nangle 40\n",
     "bad.obj": "v 0 0 0\nv 1 0\n",
     "bad.stl": "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 nope\n",
+    "bad.ply": "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n0\n",
 }
 
 
@@ -117,7 +118,7 @@ def test_bad_cameras_raise(camera, error):
 
 def test_scene_format_and_type_errors():
     with pytest.raises(ValueError, match="format"):
-        gpurt.Scene.from_string("s 0 0 0 1", format="ply")
+        gpurt.Scene.from_string("s 0 0 0 1", format="gltf")
     with pytest.raises(TypeError):
         gpurt.Scene.from_string(42)
     with pytest.raises(TypeError):
@@ -131,7 +132,9 @@ import random, gpurt
 random.seed(3)
 for i in range(300):
     text = bytes(random.randrange(256) for _ in range(random.randrange(1, 200)))
-    fmt = ["nff", "stl", "obj"][i % 3]
+    fmt = ["nff", "stl", "obj", "ply"][i % 4]
+    if fmt == "ply":
+        text = b"ply\nformat ascii 1.0\n" + text
     try:
         s = gpurt.Scene.from_string(text, format=fmt)
         s.render(width=4, height=4, backend="cpu")

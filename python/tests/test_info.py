@@ -45,6 +45,10 @@ def test_mesh_strings_are_read_by_their_format(tmp_path):
     scene = gpurt.Scene.from_string(stl, format="stl", name="ico")
     assert scene.info()["triangles"] == cli_info(SCENES / "icosahedron.stl")["triangles"] > 0
     assert "ico" in repr(scene)
+    ply = (SCENES / "torus.ply").read_text()
+    got = gpurt.Scene.from_string(ply, format="ply", name=str(SCENES / "torus.ply")).info()
+    assert got == cli_info(SCENES / "torus.ply")
+    assert got["triangles"] == 2 * 32 * 14
 
 
 def test_warnings_are_kept():

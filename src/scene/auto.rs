@@ -19,11 +19,12 @@ pub const FILL: f32 = 0.875;
 /// The bare-mesh camera's vertical field of view, degrees.
 const ANGLE: f32 = 40.0;
 
-/// STL files come from CAD tools, which are z-up; OBJ files are mostly y-up.
+/// STL files come from CAD tools, which are z-up; OBJ files are mostly y-up, and so are
+/// PLY files (the Stanford scans: the bunny, the dragon, the armadillo).
 pub fn up_axis_for(name: &str) -> Vec3 {
     let lower = name.to_ascii_lowercase();
     let lower = lower.strip_suffix(".gz").unwrap_or(&lower);
-    if lower.ends_with(".obj") {
+    if lower.ends_with(".obj") || lower.ends_with(".ply") {
         Vec3::Y
     } else {
         Vec3::Z

@@ -17,6 +17,7 @@ pub enum FileKind {
     Nff,
     Stl,
     Obj,
+    Ply,
 }
 
 impl FileKind {
@@ -30,6 +31,8 @@ impl FileKind {
             FileKind::Stl
         } else if name.ends_with(".obj") {
             FileKind::Obj
+        } else if name.ends_with(".ply") {
+            FileKind::Ply
         } else {
             FileKind::Nff
         }

@@ -1,4 +1,4 @@
-//! Mesh files (STL, OBJ) read into a sink, and the transform the `mesh` statement applies
+//! Mesh files (STL, OBJ, PLY) read into a sink, and the transform the `mesh` statement applies
 //! to them on their way in (`Placed`).
 
 use glam::{Mat3, Vec3};
@@ -8,7 +8,7 @@ use super::io::{FileKind, Input};
 use super::lex::Lexer;
 use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
 use super::sink::{MeshOut, Sink};
-use super::{obj, stl};
+use super::{obj, ply, stl};
 use crate::util::error::Result;
 
 /// Reads a mesh file's triangles into `out` as they are read (`name` in messages).
@@ -16,6 +16,7 @@ pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Resu
     match kind {
         FileKind::Stl => stl::read(input, name, out.sink, (out.default, out.window)),
         FileKind::Obj => obj::read(Lexer::through(input, name, out.window), out),
+        FileKind::Ply => ply::read(input, name, out),
         FileKind::Nff => unreachable!("NFF is not a mesh format"),
     }
 }

@@ -1,11 +1,11 @@
 //! Scenes: the data model (`model`, plain data produced by the readers and consumed by
 //! `pack`), its bounds, reading files (`io`), and the readers.
 //!
-//! The readers (`nff`, `stl`, `obj`) read a stream (`io::Input`: a file, or bytes in
+//! The readers (`nff`, `stl`, `obj`, `ply`) read a stream (`io::Input`: a file, or bytes in
 //! memory) and give every bounded primitive to a `Sink` the moment it is read: into a
 //! `Scene` (`load`), or straight into the renderers' records (`load_flat`), so that a
 //! scene of any size is read holding nothing twice. `load*` open a file (gzip-aware) and
-//! pick the reader by extension.
+//! pick the reader by its first bytes and its extension (`sniff`).
 
 pub mod auto;
 pub mod bounds;
@@ -20,7 +20,9 @@ pub mod number;
 pub mod obj;
 pub mod options;
 pub mod palette;
+pub mod ply;
 pub mod sink;
+pub mod sniff;
 pub mod stl;
 pub mod triangulate;
 
@@ -40,7 +42,7 @@ use io::FileKind;
 use palette::Palette;
 use sink::MeshOut;
 
-/// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ mesh that gets an
+/// Loads a scene file: NFF (with our extensions), or a bare STL/OBJ/PLY mesh that gets an
 /// automatic camera, light, material and ground plane.
 pub fn load(path: &Path) -> Result<Scene> {
     load_with(path, &ReadOptions::default())
@@ -121,6 +123,7 @@ fn read_input(
     sink: &mut dyn Sink,
     opts: &ReadOptions,
 ) -> Result<Scene> {
+    let (input, kind) = sniff::sniff(input, kind, name)?;
     match kind {
         FileKind::Nff => nff::read(
             lex::Lexer::through(input, name, opts.window),

@@ -75,7 +75,7 @@ fn mesh_lines_naming_what_is_not_a_mesh_file_are_refused_at_their_line() {
             "zero.stl",
             "is a device, fifo or socket, not a regular file",
         ),
-        ("scene.nff", "must end in .stl or .obj"),
+        ("scene.nff", "must end in .stl, .obj or .ply"),
         ("missing.stl", "cannot read mesh file"),
     ];
     if fifo {
@@ -115,7 +115,7 @@ fn scene_paths_naming_what_is_not_a_file_are_refused() {
         .map(|_| ())
         .expect_err("refused");
     assert!(
-        msg.to_string().contains("must end in .stl or .obj"),
+        msg.to_string().contains("must end in .stl, .obj or .ply"),
         "{msg}"
     );
 }

@@ -77,6 +77,11 @@ impl<'a> Lexer<'a> {
         w.len.map(|len| len.saturating_sub(next))
     }
 
+    /// Bytes in the whole input, when known.
+    pub fn input_len(&self) -> Option<u64> {
+        self.win.len
+    }
+
     /// The bytes of `tok`: the latest token read or peeked, or one before it that the
     /// lexer has not read past the buffer since (empty if it has).
     pub fn text(&self, tok: &Token) -> &[u8] {
@@ -93,6 +98,13 @@ impl<'a> Lexer<'a> {
     /// has been read; and the column of its first byte. For messages that quote the line.
     pub fn line_text(&self) -> (&[u8], u32) {
         self.win.line_text()
+    }
+
+    /// The input after the end of the current line, as a stream, and the offset it starts
+    /// at; `None` when the input ends first. For a text header followed by binary data
+    /// (PLY's `end_header`): the lexer reads no further.
+    pub fn rest_after_line(self) -> Result<Option<(Box<dyn std::io::Read + 'a>, u64)>> {
+        self.win.rest_after_line()
     }
 
     /// The next token, or `None` at the end of the input.

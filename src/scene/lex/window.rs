@@ -338,6 +338,23 @@ impl<'a> Window<'a> {
         }
     }
 
+    /// The stream after the end of the current line (its `\n`), and its offset: for a
+    /// text header followed by binary data. `None` when the input ends before a `\n`.
+    pub(super) fn rest_after_line(mut self) -> Result<Option<(Box<dyn Read + 'a>, u64)>> {
+        loop {
+            if let Some(k) = memchr::memchr(b'\n', &self.buf[self.pos..self.end]) {
+                let from = self.pos + k + 1;
+                let offset = self.base + from as u64;
+                let held = std::io::Cursor::new(self.buf[from..self.end].to_vec());
+                return Ok(Some((Box::new(held.chain(self.src)), offset)));
+            }
+            self.pos = self.end;
+            if !self.refill(self.pos)? {
+                return Ok(None);
+            }
+        }
+    }
+
     /// See `Lexer::line_text`.
     pub(super) fn line_text(&self) -> (&[u8], u32) {
         let first = self.line_start.max(self.base);

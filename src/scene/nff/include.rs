@@ -60,7 +60,7 @@ impl Parser<'_> {
             return Err(self.lx.error_at(
                 &ptok,
                 format!(
-                    "mesh file '{}' must end in .stl or .obj (optionally .gz)",
+                    "mesh file '{}' must end in .stl, .obj or .ply (optionally .gz)",
                     escape(rel.as_bytes())
                 ),
             ));

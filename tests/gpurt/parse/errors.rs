@@ -4,7 +4,10 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use gpurt::scene::{nff, obj, stl};
+use gpurt::scene::io::FileKind;
+use gpurt::scene::{self, nff, obj, stl};
+
+use super::ply::Format;
 
 use crate::common::inputs::{VIEW, ascii_stl, assert_error, header, parse_error, tetra, write};
 use crate::common::{shared_scenes, temp_dir};
@@ -320,6 +323,7 @@ fn random_mutations_never_panic_a_reader() {
         Nff,
         Stl,
         Obj,
+        Ply,
     }
     let ext = format!(
         "{VIEW}hither 0.1\nresolution 64 48\naperture 0.1\nfocal 4\nam 0.1 0.1 0.1\ndl 0 0 -1\nal 0 0 5 1 0 0 0 1 0 1 1 1 2 2\nf 1 1 1 1 0 1 0 1\nmesh part.stl translate 1 2 3 rotate 0 0 90 scale 2\nmesh part.obj scale 1 2 3\npl 0 0 -1 1 0 -1 0 1 -1\naabb 0 1 0 1 0 1\nc 0 0 0 1 0 0 1 0.5\npp 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n"
@@ -334,6 +338,14 @@ fn random_mutations_never_panic_a_reader() {
         ),
         ("part.obj".into(), Reader::Obj, obj_src.as_bytes().to_vec()),
     ];
+    for (format, coloured) in [
+        (Format::Ascii, false),
+        (Format::Little, true),
+        (Format::Big, false),
+    ] {
+        let bytes = super::ply::write(&super::ply::mesh(), format, coloured);
+        inputs.push(("part.ply".into(), Reader::Ply, bytes));
+    }
     if let Some(shared) = shared_scenes() {
         for f in [
             "spd/balls-1.nff",
@@ -365,6 +377,9 @@ fn random_mutations_never_panic_a_reader() {
             Reader::Nff => nff::parse(&bytes, name, &dir).map(|s| s.triangles.len()),
             Reader::Stl => stl::parse(&bytes, name).map(|t| t.len()),
             Reader::Obj => obj::parse(&bytes, name).map(|t| t.len()),
+            Reader::Ply => {
+                scene::parse(&bytes, FileKind::Ply, name, &dir).map(|s| s.triangles.len())
+            }
         }));
         match result {
             Ok(Ok(_)) => ok += 1,

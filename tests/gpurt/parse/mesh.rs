@@ -241,7 +241,7 @@ fn missing_mesh_file_points_at_the_path() {
     match nff::parse(src.as_bytes(), "t.nff", &dir) {
         Err(Error::Parse { line, col, msg, .. }) => {
             assert_eq!((line, col), (6, 6));
-            assert!(msg.contains(".stl or .obj"), "{msg}");
+            assert!(msg.contains(".stl, .obj or .ply"), "{msg}");
         }
         other => panic!("expected a parse error, got {other:?}"),
     }
