@@ -76,6 +76,7 @@ CASES = [
     ("glass.nff", ROOT / "scenes" / "glass.nff", 40, 30, 1, 8),
     ("icosahedron.stl", ROOT / "scenes" / "icosahedron.stl", 32, 32, 1, 5),
     ("torus.ply", ROOT / "scenes" / "torus.ply", 36, 28, 1, 5),
+    ("blocks.gltf", ROOT / "scenes" / "blocks.gltf", 40, 30, 1, 6),
     ("tetra.obj", OBJ, 33, 25, 1, 5),
     ("mirrors.nff.gz", ("gzip", ROOT / "scenes" / "mirrors.nff"), 40, 30, 1, 5),
     ("teapot-2.nff", SHARED / "spd" / "teapot-2.nff", 40, 40, 1, 5),
@@ -513,6 +514,14 @@ def main():
         check("bad numbers in the URL are errors naming the parameter", bad_numbers)
         check("a scene the server does not have shows its HTTP status",
               lambda: shows("scene=scenes/missing.nff", "scenes/missing.nff: HTTP 404"))
+        def gltf_needs_its_buffer():
+            """A .gltf whose buffer is a file of its own names the file it needs."""
+            doc = json.loads((ROOT / "scenes" / "blocks.gltf").read_text())
+            doc["buffers"][0]["uri"] = "blocks.bin"
+            serve_scene("split.gltf", json.dumps(doc))
+            shows("scene=scenes/split.gltf", "split.gltf: buffer 0: cannot read 'blocks.bin'")
+
+        check("a .gltf with its buffer in another file says which file it needs", gltf_needs_its_buffer)
         # A browser without WebGPU has no navigator.gpu.
         no_gpu = "Object.defineProperty(Navigator.prototype, 'gpu', { get() { return undefined; } });"
         check("a browser without WebGPU shows that it has none",

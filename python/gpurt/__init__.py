@@ -1,4 +1,4 @@
-"""gpurt: a Whitted ray tracer for NFF/SPD scenes, STL, OBJ and PLY meshes, into numpy.
+"""gpurt: a Whitted ray tracer for NFF/SPD scenes, STL, OBJ, PLY and glTF models, into numpy.
 
     >>> import gpurt
     >>> img = gpurt.render("scenes/spheres.nff", width=320, height=240, spp=4)

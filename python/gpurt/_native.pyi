@@ -37,14 +37,14 @@ class SceneError(ValueError):
 
 @final
 class Scene:
-    """A scene read from a file or a string: NFF (with the P3D dialect), STL, OBJ or PLY."""
+    """A scene read from a file or a string: NFF (with the P3D dialect), STL, OBJ, PLY or glTF."""
 
     @staticmethod
     def open(path: _PathLike) -> "Scene":
-        """Reads a scene file: NFF, STL, OBJ or PLY by its first bytes or its extension, gzip too."""
+        """Reads a scene file: NFF, STL, OBJ, PLY or glTF by its first bytes or its extension, gzip too."""
     @staticmethod
     def from_string(
-        text: Union[str, bytes], format: Literal["nff", "p3d", "stl", "obj", "ply"] = "nff", name: str = "<string>"
+        text: Union[str, bytes], format: Literal["nff", "p3d", "stl", "obj", "ply", "gltf"] = "nff", name: str = "<string>"
     ) -> "Scene":
         """Reads a scene from a string (or bytes, for binary STL)."""
     def info(self) -> Dict[str, Any]:

@@ -15,7 +15,7 @@ use crate::frames::Frames;
 use crate::options::{self, Frame};
 use crate::{film_to_numpy, to_py};
 
-/// A scene read from a file or a string: NFF (with the P3D dialect), STL, OBJ or PLY.
+/// A scene read from a file or a string: NFF (with the P3D dialect), STL, OBJ, PLY or glTF.
 /// Render it with `render()`, or many frames of it with `gpurt.Renderer(scene, ...)`.
 #[pyclass(module = "gpurt", frozen)]
 pub struct Scene {
@@ -90,7 +90,7 @@ pub fn render_scene<'py>(
 
 #[pymethods]
 impl Scene {
-    /// Reads a scene file (str or os.PathLike): NFF, STL, OBJ or PLY by its first bytes or
+    /// Reads a scene file (str or os.PathLike): NFF, STL, OBJ, PLY or glTF by its first bytes or
     /// extension, gzip too. A malformed file raises `SceneError` with `FILE:LINE:COL: message`.
     #[staticmethod]
     fn open(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
@@ -100,7 +100,7 @@ impl Scene {
     }
 
     /// Reads a scene from a string (or bytes, for binary STL) in `format`: "nff" (and its
-    /// P3D dialect), "stl", "obj" or "ply". `name` names it in error messages; an NFF `mesh`
+    /// P3D dialect), "stl", "obj", "ply" or "gltf" (JSON or .glb bytes). `name` names it in error messages; an NFF `mesh`
     /// include is looked for in the current directory.
     #[staticmethod]
     #[pyo3(signature = (text, format = "nff", name = "<string>"))]
@@ -110,9 +110,10 @@ impl Scene {
             "stl" => FileKind::Stl,
             "obj" => FileKind::Obj,
             "ply" => FileKind::Ply,
+            "gltf" => FileKind::Gltf,
             _ => {
                 return Err(PyValueError::new_err(format!(
-                    "format must be 'nff', 'p3d', 'stl', 'obj' or 'ply', got {format:?}"
+                    "format must be 'nff', 'p3d', 'stl', 'obj', 'ply' or 'gltf', got {format:?}"
                 )));
             }
         };

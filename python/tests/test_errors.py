@@ -118,7 +118,7 @@ def test_bad_cameras_raise(camera, error):
 
 def test_scene_format_and_type_errors():
     with pytest.raises(ValueError, match="format"):
-        gpurt.Scene.from_string("s 0 0 0 1", format="gltf")
+        gpurt.Scene.from_string("s 0 0 0 1", format="fbx")
     with pytest.raises(TypeError):
         gpurt.Scene.from_string(42)
     with pytest.raises(TypeError):

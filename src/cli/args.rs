@@ -27,7 +27,7 @@ use values::backends;
 #[command(
     name = "gpurt",
     version,
-    about = "Whitted ray tracer for NFF/SPD scenes and STL/OBJ/PLY meshes",
+    about = "Whitted ray tracer for NFF/SPD scenes, STL/OBJ/PLY meshes and glTF models",
     args_conflicts_with_subcommands = true,
     // `--spp -1` is a value out of range, not an unknown flag `-1`.
     allow_negative_numbers = true
@@ -150,7 +150,7 @@ pub enum Overlay {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl, .obj or .ply, optionally .gz.
+    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl, .obj, .ply, .gltf or .glb, optionally .gz.
     /// One at a time, or any number with --out-dir.
     #[arg(value_name = "SCENE")]
     pub scenes: Vec<PathBuf>,

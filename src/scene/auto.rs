@@ -16,15 +16,22 @@ use crate::util::error::{Error, Result};
 /// The part of the frame's width or height the framed mesh fills.
 pub const FILL: f32 = 0.875;
 
+/// The background of a scene made around a mesh, and of a glTF model.
+pub const BACKGROUND: Vec3 = Vec3::new(0.25, 0.3, 0.38);
+
 /// The bare-mesh camera's vertical field of view, degrees.
 const ANGLE: f32 = 40.0;
 
 /// STL files come from CAD tools, which are z-up; OBJ files are mostly y-up, and so are
-/// PLY files (the Stanford scans: the bunny, the dragon, the armadillo).
+/// PLY files (the Stanford scans: the bunny, the dragon, the armadillo); glTF is y-up by
+/// its specification.
 pub fn up_axis_for(name: &str) -> Vec3 {
     let lower = name.to_ascii_lowercase();
     let lower = lower.strip_suffix(".gz").unwrap_or(&lower);
-    if lower.ends_with(".obj") || lower.ends_with(".ply") {
+    if [".obj", ".ply", ".gltf", ".glb"]
+        .iter()
+        .any(|e| lower.ends_with(e))
+    {
         Vec3::Y
     } else {
         Vec3::Z
@@ -76,7 +83,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
     fit(&mut camera, 512, 512);
     let distance = (camera.from - camera.at).length();
     scene.camera = camera;
-    scene.background = Vec3::new(0.25, 0.3, 0.38);
+    scene.background = BACKGROUND;
     // Above and to the side of the camera, so shadows fall visibly on the ground.
     let light = scene.camera.from + (up * 0.6 + side.cross(up) * 0.3) * distance;
     scene.lights.push(Light::Point {

@@ -18,6 +18,7 @@ pub enum FileKind {
     Stl,
     Obj,
     Ply,
+    Gltf,
 }
 
 impl FileKind {
@@ -33,6 +34,8 @@ impl FileKind {
             FileKind::Obj
         } else if name.ends_with(".ply") {
             FileKind::Ply
+        } else if name.ends_with(".gltf") || name.ends_with(".glb") {
+            FileKind::Gltf
         } else {
             FileKind::Nff
         }

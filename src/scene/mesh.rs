@@ -17,7 +17,10 @@ pub fn read(input: Input, kind: FileKind, name: &str, out: &mut MeshOut) -> Resu
         FileKind::Stl => stl::read(input, name, out.sink, (out.default, out.window)),
         FileKind::Obj => obj::read(Lexer::through(input, name, out.window), out),
         FileKind::Ply => ply::read(input, name, out),
-        FileKind::Nff => unreachable!("NFF is not a mesh format"),
+        FileKind::Nff | FileKind::Gltf => Err(crate::util::error::Error::Scene {
+            file: name.to_string(),
+            msg: "a scene, not a mesh file (STL, OBJ or PLY)".into(),
+        }),
     }
 }
 

@@ -1,7 +1,7 @@
 //! Scenes: the data model (`model`, plain data produced by the readers and consumed by
 //! `pack`), its bounds, reading files (`io`), and the readers.
 //!
-//! The readers (`nff`, `stl`, `obj`, `ply`) read a stream (`io::Input`: a file, or bytes in
+//! The readers (`nff`, `stl`, `obj`, `ply`, `gltf`) read a stream (`io::Input`: a file, or bytes in
 //! memory) and give every bounded primitive to a `Sink` the moment it is read: into a
 //! `Scene` (`load`), or straight into the renderers' records (`load_flat`), so that a
 //! scene of any size is read holding nothing twice. `load*` open a file (gzip-aware) and
@@ -10,6 +10,7 @@
 pub mod auto;
 pub mod bounds;
 pub mod flat;
+pub mod gltf;
 pub mod io;
 pub mod lex;
 pub mod mesh;
@@ -125,6 +126,7 @@ fn read_input(
 ) -> Result<Scene> {
     let (input, kind) = sniff::sniff(input, kind, name)?;
     match kind {
+        FileKind::Gltf => gltf::read(input, name, dir, sink),
         FileKind::Nff => nff::read(
             lex::Lexer::through(input, name, opts.window),
             dir,

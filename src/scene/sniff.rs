@@ -1,6 +1,6 @@
-//! Which reader a file is for, told by its first bytes as well as its name: a PLY file is
-//! read as PLY whatever its name, and a file in a format gpurt does not read (an image, an
-//! archive, FBX, glTF, ...) is named as what it is, rather than read as NFF and refused
+//! Which reader a file is for, told by its first bytes as well as its name: a PLY or glTF
+//! file is read as one whatever its name, and a file in a format gpurt does not read (an
+//! image, an archive, FBX, ...) is named as what it is, rather than read as NFF and refused
 //! with a message about NFF keywords.
 
 use std::io::Read;
@@ -10,7 +10,9 @@ use super::io::{FileKind, Input, read_error};
 use crate::util::error::{Error, Result};
 
 /// What gpurt reads, for messages about what it does not.
-pub const READS: &str = "gpurt reads NFF, STL, OBJ and PLY";
+pub const READS: &str = "gpurt reads NFF, STL, OBJ, PLY and glTF";
+
+const JSON: &str = "a JSON file";
 
 /// Bytes looked at: enough for a JSON file's `"asset"` key to show.
 const HEAD: usize = 512;
@@ -29,6 +31,8 @@ pub fn sniff<'a>(
         .map_err(|e| read_error(name, e))?;
     let kind = match told(&head) {
         Some(Told::Reads(k)) => k,
+        // glTF's "asset" key may come after the bytes looked at.
+        Some(Told::Foreign(JSON)) if kind == FileKind::Gltf => kind,
         Some(Told::Foreign(what)) => return Err(foreign(name, what)),
         None => match by_extension(name) {
             Some(what) => return Err(foreign(name, what)),
@@ -53,8 +57,7 @@ enum Told {
 
 /// What a file's first bytes say it is, where they say it clearly.
 fn told(head: &[u8]) -> Option<Told> {
-    const MAGIC: [(&[u8], &str); 12] = [
-        (b"glTF", "a binary glTF (.glb) file"),
+    const MAGIC: [(&[u8], &str); 11] = [
         (b"\x89PNG", "a PNG image"),
         (b"\xff\xd8\xff", "a JPEG image"),
         (b"GIF8", "a GIF image"),
@@ -70,17 +73,20 @@ fn told(head: &[u8]) -> Option<Told> {
     if head.starts_with(b"ply\n") || head.starts_with(b"ply\r\n") {
         return Some(Told::Reads(FileKind::Ply));
     }
+    if head.starts_with(b"glTF") {
+        return Some(Told::Reads(FileKind::Gltf));
+    }
     if let Some((_, what)) = MAGIC.iter().find(|(m, _)| head.starts_with(m)) {
         return Some(Told::Foreign(what));
     }
     let text = head.trim_ascii_start();
     if text.starts_with(b"{") {
         let gltf = text.windows(7).any(|w| w == b"\"asset\"");
-        return Some(Told::Foreign(if gltf {
-            "a glTF file"
+        return Some(if gltf {
+            Told::Reads(FileKind::Gltf)
         } else {
-            "a JSON file"
-        }));
+            Told::Foreign(JSON)
+        });
     }
     None
 }
@@ -91,8 +97,6 @@ fn by_extension(name: &str) -> Option<&'static str> {
     let name = name.strip_suffix(".gz").unwrap_or(&name);
     let ext = Path::new(name).extension()?.to_str()?;
     Some(match ext {
-        "gltf" => "a glTF file",
-        "glb" => "a binary glTF (.glb) file",
         "fbx" => "an FBX file",
         "3ds" => "a 3DS file",
         "blend" => "a Blender file",

@@ -56,7 +56,7 @@ impl Parser<'_> {
         }
         let path = self.base.join(rel);
         let kind = FileKind::of(&path);
-        if kind == FileKind::Nff {
+        if matches!(kind, FileKind::Nff | FileKind::Gltf) {
             return Err(self.lx.error_at(
                 &ptok,
                 format!(

@@ -66,8 +66,8 @@ fn own_scenes_match_cpu() {
     let Some(g) = gpu() else {
         return;
     };
-    let files = files_with(&own_scenes(), &[".nff", ".ply"]);
-    assert!(!files.is_empty(), "scenes/ has no .nff or .ply files");
+    let files = files_with(&own_scenes(), &[".nff", ".ply", ".gltf"]);
+    assert!(!files.is_empty(), "scenes/ has no scene files");
     check_all(files.iter().flat_map(|f| {
         let scene = scene::load(f).expect("own scene loads");
         let name = f

@@ -324,6 +324,7 @@ fn random_mutations_never_panic_a_reader() {
         Stl,
         Obj,
         Ply,
+        Gltf,
     }
     let ext = format!(
         "{VIEW}hither 0.1\nresolution 64 48\naperture 0.1\nfocal 4\nam 0.1 0.1 0.1\ndl 0 0 -1\nal 0 0 5 1 0 0 0 1 0 1 1 1 2 2\nf 1 1 1 1 0 1 0 1\nmesh part.stl translate 1 2 3 rotate 0 0 90 scale 2\nmesh part.obj scale 1 2 3\npl 0 0 -1 1 0 -1 0 1 -1\naabb 0 1 0 1 0 1\nc 0 0 0 1 0 0 1 0.5\npp 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n"
@@ -345,6 +346,9 @@ fn random_mutations_never_panic_a_reader() {
     ] {
         let bytes = super::ply::write(&super::ply::mesh(), format, coloured);
         inputs.push(("part.ply".into(), Reader::Ply, bytes));
+    }
+    for (name, bytes) in super::gltf::samples() {
+        inputs.push((name.into(), Reader::Gltf, bytes));
     }
     if let Some(shared) = shared_scenes() {
         for f in [
@@ -379,6 +383,9 @@ fn random_mutations_never_panic_a_reader() {
             Reader::Obj => obj::parse(&bytes, name).map(|t| t.len()),
             Reader::Ply => {
                 scene::parse(&bytes, FileKind::Ply, name, &dir).map(|s| s.triangles.len())
+            }
+            Reader::Gltf => {
+                scene::parse(&bytes, FileKind::Gltf, name, &dir).map(|s| s.triangles.len())
             }
         }));
         match result {

@@ -2,11 +2,12 @@
 //! gzip and bare meshes, checked against the shared SPD/P3D scenes, hand-written inputs for
 //! every error class, and random mutations that must never make a reader panic. One file a
 //! subject: `shared` (the SPD and P3D files), `statements` and `view` (NFF as it is read),
-//! `errors` (positions, limits, mutations), `mesh` (STL, OBJ, `mesh`, bare meshes), `ply`,
+//! `errors` (positions, limits, mutations), `mesh` (STL, OBJ, `mesh`, bare meshes), `ply`, `gltf`,
 //! `sniff` (formats told by their first bytes), `gzip`, `stream` (reading through a buffer
 //! of fixed size), `materials` (OBJ `.mtl`, `--lenient`).
 
 mod errors;
+mod gltf;
 mod gzip;
 pub mod materials;
 mod mesh;

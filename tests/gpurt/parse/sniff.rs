@@ -1,5 +1,6 @@
-//! Formats told by their first bytes as well as their names: PLY read as PLY whatever the
-//! name, and what gpurt does not read named as what it is, before any reader sees it.
+//! Formats told by their first bytes as well as their names: PLY and glTF read as such
+//! whatever the name, and what gpurt does not read named as what it is, before any reader
+//! sees it.
 
 use std::path::Path;
 
@@ -32,15 +33,9 @@ fn a_ply_file_is_read_as_ply_whatever_its_name_and_gzip_too() {
 
 #[test]
 fn formats_gpurt_does_not_read_are_named() {
-    let reads = "gpurt reads NFF, STL, OBJ and PLY";
+    let reads = "gpurt reads NFF, STL, OBJ, PLY and glTF";
     for (name, bytes, what) in [
         ("x.nff", &b"\x89PNG\r\n\x1a\n...."[..], "a PNG image"),
-        (
-            "duck.gltf",
-            b"{\"asset\":{\"version\":\"2.0\"}}",
-            "a glTF file",
-        ),
-        ("duck.glb", b"glTF\x02\0\0\0", "a binary glTF (.glb) file"),
         ("m.nff", b"  {\"a\": 1}", "a JSON file"),
         ("m.zip", b"PK\x03\x04rest", "a zip archive"),
         ("m.fbx", b"Kaydara FBX Binary  \0", "an FBX file"),
@@ -52,6 +47,21 @@ fn formats_gpurt_does_not_read_are_named() {
             .expect_err(name)
             .to_string();
         assert_eq!(e, format!("{name}: {what}; {reads}"));
+    }
+    // glTF by its JSON or its magic, whatever the name; a .gltf whose "asset" key comes
+    // late is still glTF.
+    for (name, bytes) in [
+        ("duck.nff", &b"{\"asset\":{\"version\":\"2.0\"}}"[..]),
+        ("duck.bin", b"glTF\x02\0\0\0"),
+        ("late.gltf", b"{\"scenes\": []}"),
+    ] {
+        let e = scene::parse(bytes, FileKind::of(Path::new(name)), name, Path::new("."))
+            .expect_err(name)
+            .to_string();
+        assert!(
+            !e.contains(reads) && !e.contains("entity keyword"),
+            "{name}: {e}"
+        );
     }
     // An NFF file is not mistaken for anything.
     let nff =
