@@ -118,6 +118,30 @@ fn peak_memory_a_primitive_holds_on_generated_scenes() {
     }
 }
 
+/// A binary PLY of the same terrain (shared vertices, held while the faces are read and
+/// dropped before the tree is built) renders within the same bound a primitive as the
+/// NFF terrain: the PLY reader streams as the others do.
+#[test]
+fn a_ply_terrain_holds_what_the_others_hold() {
+    let (dir, _) = generated();
+    let path = dir.join("terrain.ply");
+    let mut w = BufWriter::new(std::fs::File::create(&path).unwrap());
+    field_example::terrain(700, "ply", &mut w).unwrap();
+    w.flush().unwrap();
+    drop(w);
+    let render = |file: &str| {
+        let args = [file, "--backend", "cpu", "--width", "64", "--height", "64"];
+        reported_peak_mib(&[&args[..], &["-o", "ply.png", "--stats"]].concat(), dir).0
+    };
+    let (ply, fixed) = (render("terrain.ply"), render("one.nff"));
+    let bytes = (ply - fixed) * (1u64 << 20) as f64 / (2.0 * 700.0 * 700.0);
+    println!("terrain.ply: {bytes:.1} bytes a primitive beyond the fixed part");
+    assert!(
+        bytes <= BYTES_A_PRIMITIVE,
+        "terrain.ply: {bytes:.1} bytes a primitive"
+    );
+}
+
 /// The guard above fails when a copy of the primitives is kept alive through the render
 /// (`GPURT_FAULT=keep-primitives`) on the terrain, whose peak comes while it renders. On
 /// the field of spheres the peak is the BVH build's, before the copy is made, which then
