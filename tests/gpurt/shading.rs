@@ -149,11 +149,12 @@ s 0.3 0.2 0.5 1.5
 }
 
 /// A floor and a wall of triangles, an opaque shiny sphere and a glass one (refraction,
-/// total internal reflection, tinted shadows) under a point and a directional light.
-const HARD: &str = "b 0.1 0.12 0.2
+/// total internal reflection, tinted shadows), seen from one camera, under `lights`.
+fn shapes_under(lights: &str) -> String {
+    format!(
+        "b 0.1 0.12 0.2
 v from 0 -9 4 at 0 0 0.8 up 0 0 1 angle 38 hither 0.5 resolution 64 48
-l 3 -4 7
-dl 1 -0.5 -2
+{lights}
 f 0.8 0.75 0.7 0.7 0.15 12 0 1
 p 4
 -4 -3 0
@@ -167,33 +168,24 @@ p 3
 3.5 2.5 0
 f 0.9 0.3 0.2 0.5 0.4 30 0 1
 s -1.4 0.6 1 1
-f 0.95 0.95 1 0.05 0.1 60 0.85 1.5
+f 0.95 0.95 1 0.05 0.1 60 {GLASS}
 s 1.3 -0.6 1 1
-";
+"
+    )
+}
+
+/// The shapes under a point and a directional light.
+fn hard() -> String {
+    shapes_under("l 3 -4 7\ndl 1 -0.5 -2")
+}
+
+/// The shapes under one area light, 8 x 8 samples, with its soft and tinted shadows.
+fn soft() -> String {
+    shapes_under("al -1 -1 6 2 0 0 0 2 0 0.9 0.9 0.85 8 8")
+}
 
 /// The glass's transmission and index of refraction.
 const GLASS: &str = "0.85 1.5";
-
-/// `HARD`'s shapes under one area light, 8 x 8 samples, with its soft and tinted shadows.
-const SOFT: &str = "b 0.1 0.12 0.2
-v from 0 -9 4 at 0 0 0.8 up 0 0 1 angle 38 hither 0.5 resolution 64 48
-al -1 -1 6 2 0 0 0 2 0 0.9 0.9 0.85 8 8
-f 0.8 0.75 0.7 0.7 0.15 12 0 1
-p 4
--4 -3 0
-4 -3 0
-4 3 0
--4 3 0
-f 0.35 0.5 0.9 0.6 0.3 20 0 1
-p 3
--3.5 2.5 0
-0 3 3
-3.5 2.5 0
-f 0.9 0.3 0.2 0.5 0.4 30 0 1
-s -1.4 0.6 1 1
-f 0.95 0.95 1 0.05 0.1 60 0.85 1.5
-s 1.3 -0.6 1 1
-";
 
 /// Every pixel of `src` that the f64 tracer can call, rendered under Blinn-Phong on one
 /// renderer, within `tol` of the tracer; most pixels called, each of `wanted`'s features
@@ -257,7 +249,7 @@ const HARD_TOL: f64 = 1e-4;
 
 #[test]
 fn triangles_and_glass_under_point_and_directional_lights_are_blinn_phong_on_the_cpu() {
-    check_whitted(HARD, None, HARD_TOL, &HARD_MET);
+    check_whitted(&hard(), None, HARD_TOL, &HARD_MET);
 }
 
 #[test]
@@ -265,7 +257,7 @@ fn triangles_and_glass_under_point_and_directional_lights_are_blinn_phong_on_the
     let Some(g) = versus::gpu() else {
         return;
     };
-    check_whitted(HARD, Some(g), HARD_TOL, &HARD_MET);
+    check_whitted(&hard(), Some(g), HARD_TOL, &HARD_MET);
 }
 
 /// The renderers estimate the area light from 64 jittered samples where the tracer
@@ -273,7 +265,7 @@ fn triangles_and_glass_under_point_and_directional_lights_are_blinn_phong_on_the
 /// half 8-bit levels (both meet it to 0.7 here).
 #[test]
 fn an_area_light_over_triangles_and_glass_is_blinn_phong_on_the_cpu() {
-    check_whitted(SOFT, None, 1.5 / 255.0, &SOFT_MET);
+    check_whitted(&soft(), None, 1.5 / 255.0, &SOFT_MET);
 }
 
 #[test]
@@ -281,7 +273,7 @@ fn an_area_light_over_triangles_and_glass_is_blinn_phong_on_the_gpu() {
     let Some(g) = versus::gpu() else {
         return;
     };
-    check_whitted(SOFT, Some(g), 1.5 / 255.0, &SOFT_MET);
+    check_whitted(&soft(), Some(g), 1.5 / 255.0, &SOFT_MET);
 }
 
 /// The model is a pipeline constant of colour frames only: Phong and Blinn-Phong frames
