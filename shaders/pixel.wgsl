@@ -17,7 +17,7 @@ fn camera_ray(x: f32, y: f32, rng: ptr<function, u32>) -> Ray {
     // Thin lens: aim at the point on the focal plane, from a point on the lens disc.
     let focus = g.cam_pos + dir * (g.focal / dot(dir, g.cam_forward));
     let r = 0.5 * g.aperture * sqrt(rand(rng));
-    let phi = 2.0 * 3.14159265358979323846 * rand(rng);
+    let phi = 2.0 * PI * rand(rng);
     let origin = g.cam_pos + r * cos(phi) * g.cam_right + r * sin(phi) * g.cam_up;
     return Ray(origin, normalize(focus - origin));
 }
@@ -355,7 +355,7 @@ fn resume(
             st.ns = s.ns;
             st.entering = u32(s.entering);
             st.material = s.material;
-            st.lit = g.ambient * m.kd * m.color;
+            st.lit = unlit(s, m);
             st.light = 0u;
             st.light_sample = 0u;
             st.phase = PHASE_LIGHT;

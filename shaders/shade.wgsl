@@ -68,12 +68,61 @@ fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return d - 2.0 * dot(n, d) * n;
 }
 
-// Samples a light takes: nu x nv for an area light, else one.
+// Samples a light takes: nu x nv for an area light, nu x nu for an emitter, else one.
 fn light_samples(light: Light) -> u32 {
     if (AREA_LIGHTS && light.kind == LIGHT_AREA) {
         return light.nu * light.nv;
     }
+    if (EMITTERS && light.kind == LIGHT_EMITTER) {
+        return light.nu * light.nu;
+    }
     return 1u;
+}
+
+// What surface `s` of material m gives before any light sample: the ambient term, and
+// its own light where the ray meets its front (an emitter's).
+fn unlit(s: Surface, m: Material) -> vec3<f32> {
+    var c = globals.ambient * m.kd * m.color;
+    if (EMITTERS && s.entering) {
+        c += m.emission;
+    }
+    return c;
+}
+
+// Emitter triangle i, after the lights in their buffer (src/gpu_types.rs: GpuLight).
+fn emitter_triangle(i: u32) -> Light {
+    return lights[globals.n_lights + i];
+}
+
+// A point on an emitter, and the emitter's whole area along the front normal there.
+struct EmitterPoint {
+    point: vec3<f32>,
+    area_normal: vec3<f32>,
+}
+
+// Where sample k of emitter `light` lands, cell (k % nu, k / nu) of an nu x nu grid,
+// jittered: the first coordinate along the emitter's summed area chooses the triangle by
+// area and where within its share, the second runs across; the two map onto the triangle
+// uniformly, cells onto equal areas (the square root warp).
+fn emitter_point(light: Light, k: u32, rng: ptr<function, u32>) -> EmitterPoint {
+    let total = emitter_triangle(light.first + light.nv - 1u).color.x;
+    let goal = (f32(k % light.nu) + rand(rng)) / f32(light.nu) * total;
+    // The first triangle whose summed area passes the goal.
+    var lo = 0u;
+    var hi = light.nv - 1u;
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        if (emitter_triangle(light.first + mid).color.x > goal) {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
+        }
+    }
+    let t = emitter_triangle(light.first + lo);
+    let along = clamp((goal - (t.color.x - t.color.y)) / t.color.y, 0.0, 1.0);
+    let across = (f32(k / light.nu) + rand(rng)) / f32(light.nu);
+    let r = sqrt(along);
+    return EmitterPoint(t.pos + r * (1.0 - across) * t.u + r * across * t.v, normalize(cross(t.u, t.v)) * total);
 }
 
 // The specular highlight of material m towards a light in direction l, for a ray that
@@ -111,7 +160,7 @@ struct LightRay {
 // The shadow ray of sample k of `light` at surface `s` (material m, incoming direction
 // dir, mirror direction r), and the Lambert and highlight terms it carries.
 fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light, k: u32, rng: ptr<function, u32>) -> LightRay {
-    let intensity = light.color / f32(light_samples(light));
+    var intensity = light.color / f32(light_samples(light));
     var l: vec3<f32>;
     var dist: f32;
     if (DIRECTIONAL_LIGHTS && light.kind == LIGHT_DIRECTIONAL) {
@@ -124,9 +173,28 @@ fn light_ray(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Light
             let sv = (f32(k / light.nu) + rand(rng)) / f32(light.nv);
             lp += su * light.u + sv * light.v;
         }
+        var area_normal = vec3<f32>(0.0);
+        if (EMITTERS && light.kind == LIGHT_EMITTER) {
+            let e = emitter_point(light, k, rng);
+            lp = e.point;
+            area_normal = e.area_normal;
+        }
         let to = lp - s.point;
         l = normalize(to);
         dist = length(to);
+        if (EMITTERS && light.kind == LIGHT_EMITTER) {
+            // Radiance over the emitter's area, seen at its cosine from the surface, as
+            // intensity: that area times the cosine over pi r^2 (an emitter lights a
+            // Lambertian surface as a physically based renderer's would). Emitters light
+            // from their front only.
+            let cos_e = -dot(area_normal, l);
+            if (cos_e <= 0.0) {
+                return LightRay();
+            }
+            intensity *= cos_e / (PI * dist * dist);
+            // The shadow ray stops short of the emitter it aims at.
+            dist -= 2.0 * globals.epsilon;
+        }
     }
     let ndotl = dot(s.ns, l);
     if (ndotl <= 0.0) {
@@ -160,7 +228,7 @@ fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Li
 
 fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
     let m = materials[s.material];
-    var colour = globals.ambient * m.kd * m.color;
+    var colour = unlit(s, m);
     let r = reflect_dir(dir, s.ns);
     var li = 0u;
     for (; li < globals.n_lights; li++) {

@@ -69,6 +69,8 @@ struct Material {
     shine: f32,
     t: f32,
     ior: f32,
+    emission: vec3<f32>,
+    _pad: u32,
 }
 
 struct Light {
@@ -79,7 +81,7 @@ struct Light {
     v: vec3<f32>,
     nv: u32,
     color: vec3<f32>,
-    _pad: u32,
+    first: u32,
 }
 
 struct Globals {
@@ -203,6 +205,9 @@ override PLANES: bool = true;
 override NORMALS: bool = true;
 override DIRECTIONAL_LIGHTS: bool = true;
 override AREA_LIGHTS: bool = true;
+// Some material emits: its surfaces are seen with their own light and its triangles are
+// lights (LIGHT_EMITTER).
+override EMITTERS: bool = true;
 // Some material has Ks > 0 / T > 0.
 override REFLECTION: bool = true;
 override REFRACTION: bool = true;

@@ -18,9 +18,9 @@
 // `WAVE_RAYS_PER_PATH` rays a path on average; a path whose rays do not fit is flagged
 // cut short, and `resume` traces its pixel again.
 //
-// Area lights take the one kernel (`policy::wavefront_for`): their samples draw from a
-// path's random stream in the depth-first order of its ray tree, which rounds by depth
-// cannot follow. The wave's records and bindings, and the kernels' shared steps, are in
+// Area lights and emitters take the one kernel (`policy::wavefront_for`): their samples
+// draw from a path's random stream in the depth-first order of its ray tree, which rounds
+// by depth cannot follow. The wave's records and bindings, and the kernels' shared steps, are in
 // wave.wgsl. (CPU twin: src/cpu/wavefront.rs, the same kernels run one after another.)
 
 // Path p is sample `tile.sample_start + p % tile.sample_count` of pixel
@@ -151,9 +151,10 @@ fn wf_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let ray = Ray(r.origin, r.dir);
     let s = surface(ray, hit);
     let m = materials[s.material];
-    wave_hits[k].ambient = globals.ambient * m.kd * m.color;
+    wave_hits[k].ambient = unlit(s, m);
     let mirror = reflect_dir(ray.dir, s.ns);
-    // Area lights take the one kernel: no light here draws from the random stream.
+    // Area lights and emitters take the one kernel: no light here draws from the random
+    // stream.
     var rng = 0u;
     for (var li = 0u; li < globals.n_lights; li++) {
         let lr = light_ray(s, m, ray.dir, mirror, lights[li], 0u, &rng);

@@ -88,7 +88,8 @@ pub struct GpuPlane {
     pub _pad: [u32; 3],
 }
 
-/// NFF `f r g b Kd Ks Shine T ior`.
+/// NFF `f r g b Kd Ks Shine T ior`, and the radiance the surface emits from its front
+/// (OBJ's `Ke`, glTF's emissive; zero for NFF's materials).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -98,15 +99,25 @@ pub struct GpuMaterial {
     pub shine: f32,
     pub t: f32,
     pub ior: f32,
+    pub emission: Vec3,
+    pub _pad: u32,
 }
 
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_DIRECTIONAL: u32 = 1;
 pub const LIGHT_AREA: u32 = 2;
+pub const LIGHT_EMITTER: u32 = 3;
 
 /// A light with its final intensity. Point: `pos`. Directional: `pos` is the unit direction
 /// towards the light. Area: the rectangle `pos + a*u + b*v`, sampled `nu x nv` times, each
-/// sample carrying `color / (nu*nv)`.
+/// sample carrying `color / (nu*nv)`. Emitter (the triangles of one emissive material):
+/// `color` is their radiance, `nu` the samples it takes, `nv` its triangles, the emitter
+/// triangles `first..first + nv` (`SceneBuffers::emitter_triangles`) hold them.
+///
+/// An emitter triangle is a `GpuLight` too, so that it travels in the lights' buffer
+/// after the lights (the shader's bindings stay as they are): `pos` its first corner, `u`
+/// and `v` its edges, `color` the emitter's area up to and including it and its own area
+/// (x and y), which the emitter's samples are chosen by.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuLight {
@@ -117,7 +128,7 @@ pub struct GpuLight {
     pub v: Vec3,
     pub nv: u32,
     pub color: Vec3,
-    pub _pad: u32,
+    pub first: u32,
 }
 
 /// AOV modes (`--aov`): what a pixel holds instead of shaded colour.
@@ -283,6 +294,9 @@ pub const NO_PRIM: u32 = 0xffff_ffff;
 /// the last bits of arithmetic.
 pub const SLAB_WIDEN: f32 = 1.0 + 1.0 / 65536.0;
 
+/// An emitter's radiance becomes a light's intensity over `PI` (docs/model.md).
+pub const PI: f32 = std::f32::consts::PI;
+
 /// The value of a constant shared with WGSL, of the WGSL type it is declared with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum WgslValue {
@@ -320,6 +334,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
     U32 LIGHT_POINT,
     U32 LIGHT_DIRECTIONAL,
     U32 LIGHT_AREA,
+    U32 LIGHT_EMITTER,
     U32 AOV_COLOR,
     U32 AOV_NORMAL,
     U32 AOV_DEPTH,
@@ -353,6 +368,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
     U32 PLANE_FLAG,
     U32 NO_PRIM,
     F32 SLAB_WIDEN,
+    F32 PI,
 ];
 
 const _: () = {
@@ -362,7 +378,7 @@ const _: () = {
     assert!(size_of::<GpuCwideNode>() == 80);
     assert!(size_of::<GpuQwideNode>() == 64);
     assert!(size_of::<GpuPlane>() == 32);
-    assert!(size_of::<GpuMaterial>() == 32);
+    assert!(size_of::<GpuMaterial>() == 48);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 144);
     assert!(size_of::<GpuTile>() == 40);

@@ -4,7 +4,8 @@
 use glam::Vec3;
 use serde_json::{Value, json};
 
-use crate::scene::{FlatScene, Light};
+use crate::pack::EMITTER_SAMPLES;
+use crate::scene::{FlatScene, Light, MaterialId};
 use crate::util::limits::DEFAULT_AMBIENT;
 
 /// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the
@@ -54,6 +55,27 @@ fn light(l: &Light) -> Value {
     }
 }
 
+/// The emitters' light (`pack::EMITTER_SAMPLES`): an emissive material's triangles.
+struct Emitter {
+    material: usize,
+    radiance: Vec3,
+    triangles: usize,
+    area: f64,
+}
+
+/// The scene's emitters: each material that emits, with triangles of some area.
+fn emitters(f: &FlatScene) -> impl Iterator<Item = Emitter> + '_ {
+    (f.scene.materials.iter().enumerate()).filter_map(|(i, m)| {
+        let (triangles, area) = f.prims.surface(MaterialId(i as u32));
+        (m.emits() && triangles > 0).then_some(Emitter {
+            material: i,
+            radiance: m.emission,
+            triangles,
+            area,
+        })
+    })
+}
+
 /// The whole scene description: camera, image, background and ambient light, bounds,
 /// counts per primitive kind (after triangulation), every light and material with its
 /// parameters, and the reader's warnings. From a scene read as `scene::summary` reads
@@ -77,6 +99,7 @@ pub fn to_json(f: &FlatScene) -> Value {
                 "shine": num(m.shine),
                 "t": num(m.t),
                 "ior": num(m.ior),
+                "emission": vec3(m.emission),
             })
         })
         .collect();
@@ -101,7 +124,14 @@ pub fn to_json(f: &FlatScene) -> Value {
         "planes": s.planes.len(),
         "cones": cones,
         "boxes": boxes,
-        "lights": s.lights.iter().map(light).collect::<Vec<_>>(),
+        "lights": s.lights.iter().map(light).chain(emitters(f).map(|e| json!({
+            "kind": "emitter",
+            "material": e.material,
+            "color": vec3(e.radiance),
+            "triangles": e.triangles,
+            "area": num(e.area as f32),
+            "samples": [EMITTER_SAMPLES, EMITTER_SAMPLES],
+        }))).collect::<Vec<_>>(),
         "materials": materials,
         "warnings": s.warnings,
     })
@@ -154,7 +184,8 @@ pub fn to_text(f: &FlatScene) -> String {
         "primitives  {spheres} spheres, {triangles} triangles, {} planes, {cones} cones, {boxes} boxes",
         s.planes.len(),
     );
-    let _ = writeln!(o, "lights      {}", s.lights.len());
+    let emitters: Vec<Emitter> = emitters(f).collect();
+    let _ = writeln!(o, "lights      {}", s.lights.len() + emitters.len());
     for l in &s.lights {
         let line = match l {
             Light::Point { position, color } => format!(
@@ -189,17 +220,32 @@ pub fn to_text(f: &FlatScene) -> String {
         };
         let _ = writeln!(o, "  {line}");
     }
+    for e in &emitters {
+        let _ = writeln!(
+            o,
+            "  emitter: material {}, radiance {}, {} triangles of area {}, {EMITTER_SAMPLES}x{EMITTER_SAMPLES} samples",
+            e.material,
+            v(e.radiance),
+            e.triangles,
+            e.area as f32
+        );
+    }
     let _ = writeln!(o, "materials   {}", s.materials.len());
     for (i, m) in s.materials.iter().enumerate() {
         let _ = writeln!(
             o,
-            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}",
+            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}{}",
             v(m.color),
             m.kd,
             m.ks,
             m.shine,
             m.t,
-            m.ior
+            m.ior,
+            if m.emits() {
+                format!("  emits {}", v(m.emission))
+            } else {
+                String::new()
+            }
         );
     }
     let _ = writeln!(o, "warnings    {}", s.warnings.len());

@@ -21,7 +21,7 @@ pub fn camera_ray(g: &GpuGlobals, x: f32, y: f32, rng: &mut u32) -> Ray {
     // Thin lens: aim at the point on the focal plane, from a point on the lens disc.
     let focus = g.cam_pos + dir * (g.focal / dir.dot(g.cam_forward));
     let r = 0.5 * g.aperture * rand(rng).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * rand(rng);
+    let phi = 2.0 * PI * rand(rng);
     let origin = g.cam_pos + r * phi.cos() * g.cam_right + r * phi.sin() * g.cam_up;
     Ray {
         origin,

@@ -147,12 +147,61 @@ pub fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
     d - 2.0 * n.dot(d) * n
 }
 
-/// Samples a light takes: nu x nv for an area light, else one.
+/// Samples a light takes: nu x nv for an area light, nu x nu for an emitter, else one.
 pub fn light_samples(light: &GpuLight) -> u32 {
-    if light.kind == LIGHT_AREA {
-        light.nu * light.nv
-    } else {
-        1
+    match light.kind {
+        LIGHT_AREA => light.nu * light.nv,
+        LIGHT_EMITTER => light.nu * light.nu,
+        _ => 1,
+    }
+}
+
+/// What surface `s` of material `m` gives before any light sample: the ambient term, and
+/// its own light where the ray meets its front (an emitter's).
+pub fn unlit(g: &GpuGlobals, s: &Surface, m: &GpuMaterial) -> Vec3 {
+    let mut c = g.ambient * m.kd * m.color;
+    if s.entering {
+        c += m.emission;
+    }
+    c
+}
+
+/// Emitter triangle `i` (`GpuLight`).
+pub fn emitter_triangle<'a>(b: &Bindings<'a>, i: u32) -> &'a GpuLight {
+    &b.emitter_triangles[i as usize]
+}
+
+/// A point on an emitter, and the emitter's whole area along the front normal there.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterPoint {
+    pub point: Vec3,
+    pub area_normal: Vec3,
+}
+
+/// Where sample `k` of emitter `light` lands, cell `(k % nu, k / nu)` of an `nu x nu`
+/// grid, jittered: the first coordinate along the emitter's summed area chooses the
+/// triangle by area and where within its share, the second runs across; the two map onto
+/// the triangle uniformly, cells onto equal areas (the square root warp).
+pub fn emitter_point(b: &Bindings, light: &GpuLight, k: u32, rng: &mut u32) -> EmitterPoint {
+    let total = emitter_triangle(b, light.first + light.nv - 1).color.x;
+    let goal = ((k % light.nu) as f32 + rand(rng)) / light.nu as f32 * total;
+    // The first triangle whose summed area passes the goal.
+    let (mut lo, mut hi) = (0, light.nv - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if emitter_triangle(b, light.first + mid).color.x > goal {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    let t = emitter_triangle(b, light.first + lo);
+    let along = ((goal - (t.color.x - t.color.y)) / t.color.y).clamp(0.0, 1.0);
+    let across = ((k / light.nu) as f32 + rand(rng)) / light.nu as f32;
+    let r = along.sqrt();
+    EmitterPoint {
+        point: t.pos + r * (1.0 - across) * t.u + r * across * t.v,
+        area_normal: t.u.cross(t.v).normalize() * total,
     }
 }
 
@@ -200,7 +249,7 @@ pub fn light_ray(
     k: u32,
     rng: &mut u32,
 ) -> Option<LightRay> {
-    let intensity = light.color / light_samples(light) as f32;
+    let mut intensity = light.color / light_samples(light) as f32;
     let (l, dist) = if light.kind == LIGHT_DIRECTIONAL {
         (light.pos, NO_HIT)
     } else {
@@ -210,8 +259,28 @@ pub fn light_ray(
             let sv = ((k / light.nu) as f32 + rand(rng)) / light.nv as f32;
             lp += su * light.u + sv * light.v;
         }
+        let mut area_normal = Vec3::ZERO;
+        if light.kind == LIGHT_EMITTER {
+            let e = emitter_point(b, light, k, rng);
+            lp = e.point;
+            area_normal = e.area_normal;
+        }
         let to = lp - s.point;
-        (to.normalize(), to.length())
+        let (l, mut dist) = (to.normalize(), to.length());
+        if light.kind == LIGHT_EMITTER {
+            // Radiance over the emitter's area, seen at its cosine from the surface, as
+            // intensity: that area times the cosine over pi r^2 (an emitter lights a
+            // Lambertian surface as a physically based renderer's would). Emitters light
+            // from their front only.
+            let cos_e = -area_normal.dot(l);
+            if cos_e <= 0.0 {
+                return None;
+            }
+            intensity *= cos_e / (PI * dist * dist);
+            // The shadow ray stops short of the emitter it aims at.
+            dist -= 2.0 * b.globals.epsilon;
+        }
+        (l, dist)
     };
     let ndotl = s.ns.dot(l);
     if ndotl <= 0.0 {
@@ -261,7 +330,7 @@ fn direct(
 ) -> Vec3 {
     let g = b.globals;
     let m = &b.materials[s.material as usize];
-    let mut colour = g.ambient * m.kd * m.color;
+    let mut colour = unlit(g, s, m);
     let at = Shaded {
         s,
         m,

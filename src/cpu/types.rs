@@ -19,6 +19,9 @@ pub struct Bindings<'a> {
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
+    /// The emitters' triangles, which the shader reads after `lights`
+    /// (`SceneBuffers::gpu_lights`).
+    pub emitter_triangles: &'a [GpuLight],
     /// The eight-wide tree (`bvh::wide`) the CPU walks (`wide.rs`) instead of `nodes` when
     /// given; `None` walks `nodes` as the shader does (`GpuGlobals::traversal`).
     pub wide: Option<&'a [WideNode]>,
@@ -49,6 +52,7 @@ impl<'a> Bindings<'a> {
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,
+            emitter_triangles: &buffers.emitter_triangles,
             wide: Some(buffers.wide_nodes()),
             blocks: Some(buffers.triangle_blocks()),
             gpu_wide: None,
@@ -70,6 +74,7 @@ impl<'a> Bindings<'a> {
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,
+            emitter_triangles: &buffers.emitter_triangles,
             wide: None,
             // Blocks are found by a leaf's first primitive in `buffers.prims`' order,
             // which the compressed tree's `prims` do not keep.

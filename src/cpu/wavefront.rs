@@ -12,7 +12,7 @@ use glam::Vec3;
 
 use super::pixel::sample_ray;
 use super::shade::{
-    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface,
+    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface, unlit,
 };
 use super::traverse::{closest_hit, transmission};
 use super::types::{Bindings, Ray, RayCounts};
@@ -130,9 +130,10 @@ impl Wave<'_, '_> {
         };
         let s = surface(b, &ray, &hit);
         let m = &b.materials[s.material as usize];
-        self.hits[k as usize].ambient = g.ambient * m.kd * m.color;
+        self.hits[k as usize].ambient = unlit(g, &s, m);
         let mirror = reflect_dir(ray.dir, s.ns);
-        // Area lights take the one kernel: no light here draws from the random stream.
+        // Area lights and emitters take the one kernel: no light here draws from the random
+        // stream.
         let mut rng = 0;
         let n_lights = b.lights.len() as u32;
         for (li, light) in b.lights.iter().enumerate() {

@@ -8,8 +8,8 @@
 use super::cut::{BAND_BYTES, Cut, Shape};
 use super::shaders::Fetch;
 use crate::gpu_types::{
-    AOV_COLOR, GpuGlobals, LIGHT_AREA, POOL_MAX_SIDE, POOL_SIDE, TRAVERSAL_NAMES, TRAVERSAL_WIDE,
-    WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
+    AOV_COLOR, GpuGlobals, LIGHT_AREA, LIGHT_EMITTER, POOL_MAX_SIDE, POOL_SIDE, TRAVERSAL_NAMES,
+    TRAVERSAL_WIDE, WAVE_RAYS_PER_PATH, WORKGROUP_INVOCATIONS, WORKGROUP_SIDE, wave_buffer_bytes,
 };
 use crate::pack::SceneBuffers;
 use crate::util::error::{Error, Result};
@@ -150,17 +150,17 @@ pub(super) fn pooled_for(forced: bool, globals: &GpuGlobals) -> bool {
 
 /// Whether a frame of `scene` traces through the wavefront kernels, where the
 /// renderer's kernels are the wavefront ones (`wavefront`: `GPURT_KERNELS`, a tuning,
-/// `GpuRenderer::with_wavefront`). Colour frames without area lights only: an AOV traces
-/// eye rays alone, which one kernel does without idle lanes, and an area light's samples
-/// draw from a path's random stream in the depth-first order of its ray tree, which the
+/// `GpuRenderer::with_wavefront`). Colour frames without area lights or emitters only: an
+/// AOV traces eye rays alone, which one kernel does without idle lanes, and the samples of
+/// an area light or an emitter draw from a path's random stream in the depth-first order of its ray tree, which the
 /// wavefront's rounds (a generation of rays each) cannot follow.
 ///
 /// Measured (docs/gpu.md, "The wavefront kernels"): the one kernel is 1.3 to 1.7 times
 /// faster than the kernels over queues of rays on lavapipe, and 2.8 to 41 times on an
 /// H200 (seven scenes, 1080p and 4K, 1 and 16 spp), so no adapter's defaults take them.
 pub(super) fn wavefront_for(wavefront: bool, scene: &SceneBuffers, globals: &GpuGlobals) -> bool {
-    let area_lights = scene.lights.iter().any(|l| l.kind == LIGHT_AREA);
-    globals.aov == AOV_COLOR && !area_lights && wavefront
+    let sampled = (scene.lights.iter()).any(|l| matches!(l.kind, LIGHT_AREA | LIGHT_EMITTER));
+    globals.aov == AOV_COLOR && !sampled && wavefront
 }
 
 /// Pixels a side of a wave's tile at most, before `cut_for` fits its records to

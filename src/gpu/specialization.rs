@@ -20,6 +20,8 @@ pub struct Specialization {
     pub normals: bool,
     pub directional_lights: bool,
     pub area_lights: bool,
+    /// Some material emits (seen, and its triangles lights).
+    pub emitters: bool,
     pub reflection: bool,
     pub refraction: bool,
     pub lens: bool,
@@ -68,6 +70,10 @@ impl Specialization {
             normals: !scene.tri_normals.is_empty(),
             directional_lights: light(LIGHT_DIRECTIONAL),
             area_lights: light(LIGHT_AREA),
+            emitters: scene
+                .materials
+                .iter()
+                .any(|m| m.emission != glam::Vec3::ZERO),
             reflection: scene.materials.iter().any(|m| m.ks > 0.0),
             refraction: scene.materials.iter().any(|m| m.t > 0.0),
             lens: g.aperture > 0.0,
@@ -104,6 +110,7 @@ impl Specialization {
             ("NORMALS", b(self.normals)),
             ("DIRECTIONAL_LIGHTS", b(self.directional_lights)),
             ("AREA_LIGHTS", b(self.area_lights)),
+            ("EMITTERS", b(self.emitters)),
             ("REFLECTION", b(self.reflection)),
             ("REFRACTION", b(self.refraction)),
             ("LENS", b(self.lens)),
@@ -146,6 +153,7 @@ mod tests {
             normals: true,
             directional_lights: true,
             area_lights: true,
+            emitters: true,
             reflection: true,
             refraction: true,
             lens: true,

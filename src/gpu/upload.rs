@@ -83,7 +83,7 @@ pub(super) fn scene_bytes(
         + [
             non_empty(&scene.planes).len(),
             non_empty(&scene.materials).len(),
-            non_empty(&scene.lights).len(),
+            non_empty(&scene.gpu_lights()).len(),
         ]
         .iter()
         .map(|&b| b as u64)
@@ -121,7 +121,7 @@ pub(super) fn upload_scene(
             tri_normals: texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?,
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
-            lights: storage("lights", non_empty(&scene.lights)),
+            lights: storage("lights", non_empty(&scene.gpu_lights())),
         })
     })?
 }
@@ -315,7 +315,7 @@ fn check_buffers<const N: usize>(
     let arrays = [
         ("planes", size_of_val(&scene.planes[..]) as u64),
         ("materials", size_of_val(&scene.materials[..]) as u64),
-        ("lights", size_of_val(&scene.lights[..]) as u64),
+        ("lights", size_of_val(&scene.gpu_lights()[..]) as u64),
         ("output band", out_bytes),
     ];
     // Textures may hold the large arrays where a buffer cannot: they grow by layers.

@@ -91,12 +91,16 @@ impl SceneBuffers {
         {
             return fail("a plane has a bad material".into());
         }
-        if self
-            .lights
-            .iter()
-            .any(|l| l.kind > LIGHT_AREA || (l.kind == LIGHT_AREA && (l.nu == 0 || l.nv == 0)))
-        {
-            return fail("a light has a bad kind or sample count".into());
+        let emitter_triangles = self.emitter_triangles.len() as u64;
+        if self.lights.iter().any(|l| match l.kind {
+            LIGHT_POINT | LIGHT_DIRECTIONAL => false,
+            LIGHT_AREA => l.nu == 0 || l.nv == 0,
+            LIGHT_EMITTER => {
+                l.nu == 0 || l.nv == 0 || u64::from(l.first) + u64::from(l.nv) > emitter_triangles
+            }
+            _ => true,
+        }) {
+            return fail("a light has a bad kind, sample count or triangle range".into());
         }
         let counts_ok = globals.n_nodes as usize == self.node_count
             && globals.n_planes as usize == self.planes.len()

@@ -16,6 +16,9 @@ use crate::util::error::{Error, Result};
 use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH};
 
 mod check;
+mod emitters;
+
+pub use emitters::EMITTER_SAMPLES;
 
 /// Secondary rays start this fraction of the scene's size (bounds diagonal) away from the
 /// surface, along the geometric normal; shading.md leaves the constant to us. It must clear
@@ -38,7 +41,12 @@ pub struct SceneBuffers {
     pub tri_normals: Vec<GpuTriNormals>,
     pub planes: Vec<GpuPlane>,
     pub materials: Vec<GpuMaterial>,
+    /// The scene's lights, then one `LIGHT_EMITTER` per emissive material
+    /// (`emitters::emitters`).
     pub lights: Vec<GpuLight>,
+    /// The emitters' triangles (`GpuLight`), which travel after `lights` in the shader's
+    /// lights buffer.
+    pub emitter_triangles: Vec<GpuLight>,
     /// Scene bounds (planes excluded) and the secondary-ray offset derived from them.
     pub bounds: Bounds,
     pub epsilon: f32,
@@ -122,6 +130,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let bounds = prims.bounds();
     let epsilon = epsilon(bounds, &scene.camera);
     let (mut records, tri_normals) = prims.into_records();
+    let (mut emitters, emitter_triangles) = emitters::emitters(&records, &scene.materials);
     let planes = scene
         .planes
         .iter()
@@ -142,9 +151,12 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             shine: m.shine,
             t: m.t,
             ior: m.ior,
+            emission: m.emission,
+            _pad: 0,
         })
         .collect();
-    let lights = pack_lights(&scene.lights);
+    let mut lights = pack_lights(&scene.lights);
+    lights.append(&mut emitters);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
     let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
     let gpu_collapse = wide::Collapse::for_gpu().map_err(Error::Render)?;
@@ -169,6 +181,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         planes,
         materials,
         lights,
+        emitter_triangles,
         bounds,
         epsilon,
         bvh_depth: depth,
@@ -221,6 +234,11 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
+    /// The shader's lights buffer: `lights`, then `emitter_triangles`.
+    pub fn gpu_lights(&self) -> Vec<GpuLight> {
+        [&self.lights[..], &self.emitter_triangles[..]].concat()
+    }
+
     /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first
     /// time it is asked for: `nodes` must not change after that.
     pub fn wide_nodes(&self) -> &[WideNode] {
@@ -400,7 +418,7 @@ fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
                 v,
                 nv: samples[1],
                 color,
-                _pad: 0,
+                first: 0,
             },
         })
         .collect()

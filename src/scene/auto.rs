@@ -84,12 +84,15 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
     let distance = (camera.from - camera.at).length();
     scene.camera = camera;
     scene.background = BACKGROUND;
-    // Above and to the side of the camera, so shadows fall visibly on the ground.
-    let light = scene.camera.from + (up * 0.6 + side.cross(up) * 0.3) * distance;
-    scene.lights.push(Light::Point {
-        position: light,
-        color: Some(Vec3::ONE),
-    });
+    // Above and to the side of the camera, so shadows fall visibly on the ground; a mesh
+    // with emitters is lit by them alone, as its authors lit it.
+    if !scene.emits() {
+        let light = scene.camera.from + (up * 0.6 + side.cross(up) * 0.3) * distance;
+        scene.lights.push(Light::Point {
+            position: light,
+            color: Some(Vec3::ONE),
+        });
+    }
     let ground = MaterialId(scene.materials.len() as u32);
     scene.materials.push(Material {
         color: Vec3::splat(0.9),
@@ -98,6 +101,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
         shine: 1.0,
         t: 0.0,
         ior: 1.0,
+        emission: Vec3::ZERO,
     });
     // A little below the mesh's lowest point (a thousandth of its size), so that a flat
     // mesh lying on that plane does not z-fight with the ground.

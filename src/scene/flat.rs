@@ -24,6 +24,9 @@ pub struct Flat {
     counts: [usize; 4],
     tri_normals: Vec<GpuTriNormals>,
     bounds: Bounds,
+    /// Triangles of some area and their summed area, by material: what `gpurt info` tells
+    /// of an emitter (`pack` makes its light from the records).
+    surface: Vec<(usize, f64)>,
     /// False for a sink that only counts and bounds (`gpurt info`).
     keep: bool,
 }
@@ -41,6 +44,7 @@ impl Flat {
             counts: [0; 4],
             tri_normals: Vec::new(),
             bounds: Bounds::EMPTY,
+            surface: Vec::new(),
             keep: true,
         }
     }
@@ -56,6 +60,11 @@ impl Flat {
     /// Spheres, triangles, cones and boxes taken.
     pub fn counts(&self) -> [usize; 4] {
         self.counts
+    }
+
+    /// Triangles of some area and their summed area, of material `m`.
+    pub fn surface(&self, m: MaterialId) -> (usize, f64) {
+        self.surface.get(m.0 as usize).copied().unwrap_or_default()
     }
 
     /// Triangles with shading normals taken.
@@ -103,6 +112,15 @@ impl Sink for Flat {
             min: v[0].min(v[1]).min(v[2]),
             max: v[0].max(v[1]).max(v[2]),
         };
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        if area > 0.0 && area.is_finite() {
+            let m = material.0 as usize;
+            if self.surface.len() <= m {
+                self.surface.resize(m + 1, (0, 0.0));
+            }
+            self.surface[m].0 += 1;
+            self.surface[m].1 += f64::from(area);
+        }
         // Unit normals or none: one without a direction would make the interpolated
         // shading normal 0 / 0 and the pixel NaN, so such a triangle is shaded flat.
         if !self.take(PRIM_TRIANGLE, b) {

@@ -75,7 +75,9 @@ impl Camera {
     }
 }
 
-/// NFF `f r g b Kd Ks Shine T ior`.
+/// NFF `f r g b Kd Ks Shine T ior`, and what the surface emits (OBJ's `Ke`, glTF's
+/// emissive): the radiance seen on its front, whose triangles are then lights
+/// (docs/model.md).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Material {
     pub color: Vec3,
@@ -84,9 +86,15 @@ pub struct Material {
     pub shine: f32,
     pub t: f32,
     pub ior: f32,
+    pub emission: Vec3,
 }
 
 impl Material {
+    /// Whether the surface emits light: its triangles are then lights.
+    pub fn emits(&self) -> bool {
+        self.emission != Vec3::ZERO
+    }
+
     /// Used for primitives that come before the first `f` (documented in docs/scene-format.md).
     pub const DEFAULT: Material = Material {
         color: Vec3::ONE,
@@ -95,6 +103,7 @@ impl Material {
         shine: 1.0,
         t: 0.0,
         ior: 1.0,
+        emission: Vec3::ZERO,
     };
     /// Neutral grey given to a bare mesh rendered without a scene file.
     pub const NEUTRAL_GREY: Material = Material {
@@ -104,6 +113,7 @@ impl Material {
         shine: 30.0,
         t: 0.0,
         ior: 1.0,
+        emission: Vec3::ZERO,
     };
 }
 
@@ -204,6 +214,12 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Whether one of the scene's materials emits (`Material::emits`): its triangles
+    /// light the scene (a reader that frames a bare mesh then adds no light of its own).
+    pub fn emits(&self) -> bool {
+        self.materials.iter().any(Material::emits)
+    }
+
     /// An empty scene with the given camera.
     pub fn new(name: impl Into<String>, camera: Camera) -> Self {
         Scene {

@@ -4,8 +4,9 @@
 //! as docs/scene-format.md's table says: `Kd` is the colour and the diffuse weight, `Ks`
 //! the mirror and highlight weight where `illum` asks for reflection (3 and up), `Ns` the
 //! Phong exponent, `d`/`Tr` the transmission, `Ni` the index of refraction of glass
-//! (`illum` 4, 6, 7). Statements the model has no room for (texture maps, emission, ...)
-//! are skipped with one warning each per file.
+//! (`illum` 4, 6, 7), `Ke` the radiance an emitter gives off (its triangles are then
+//! lights). Statements the model has no room for (texture maps, ...) are skipped with one
+//! warning each per file.
 
 use std::collections::HashMap;
 
@@ -16,7 +17,7 @@ use super::lex::{Lexer, Token};
 use super::model::{Material, MaterialId};
 use super::sink::MeshOut;
 use crate::util::error::{Error, Result, escape};
-use crate::util::limits::MAX_SHINE;
+use crate::util::limits::{MAX_LIGHT, MAX_SHINE};
 
 /// A library's materials by name (a later `newmtl` of a name replaces the earlier).
 pub type Library = HashMap<String, Material>;
@@ -26,6 +27,7 @@ pub type Library = HashMap<String, Material>;
 struct Block {
     kd: Vec3,
     ks: Vec3,
+    ke: Vec3,
     ns: f32,
     /// Dissolve: 1 is opaque (`Tr` is `1 - d`).
     d: f32,
@@ -38,6 +40,7 @@ impl Default for Block {
         Block {
             kd: Vec3::splat(0.8),
             ks: Vec3::ZERO,
+            ke: Vec3::ZERO,
             ns: 30.0,
             d: 1.0,
             ni: 1.0,
@@ -65,6 +68,7 @@ impl Block {
             shine: self.ns,
             t: 1.0 - self.d,
             ior: if glass { self.ni } else { 1.0 },
+            emission: self.ke,
         }
     }
 }
@@ -101,7 +105,7 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
         };
         let mut last = t;
         match word.as_str() {
-            "Kd" | "Ks" | "Ka" => {
+            "Kd" | "Ks" | "Ka" | "Ke" => {
                 let colour = match lx.peek()? {
                     Some(n)
                         if n.line == line
@@ -112,8 +116,10 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
                     _ => Some(rgb(&mut lx, &mut last, &word)?),
                 };
                 match (word.as_str(), colour) {
-                    ("Kd", Some(c)) => block.kd = held(warnings, &lx, &t, &word, c),
-                    ("Ks", Some(c)) => block.ks = held(warnings, &lx, &t, &word, c),
+                    ("Kd", Some(c)) => block.kd = held(warnings, &lx, &t, &word, c, 1.0),
+                    ("Ks", Some(c)) => block.ks = held(warnings, &lx, &t, &word, c, 1.0),
+                    // Radiance, not a reflectance: above 1 where it lights a room.
+                    ("Ke", Some(c)) => block.ke = held(warnings, &lx, &t, &word, c, MAX_LIGHT),
                     // The model's ambient term is `ambient * Kd * colour`: Ka has no room of
                     // its own, and the diffuse colour stands for it.
                     ("Ka", Some(_)) => {}
@@ -162,7 +168,7 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
             _ => {
                 if !skipped.contains(&word) {
                     let msg = format!(
-                        "'{word}' is not read (the shading model has no textures, emission or the like); skipped here and below"
+                        "'{word}' is not read (the shading model has no textures or the like); skipped here and below"
                     );
                     warn(warnings, &lx, &t, msg);
                     skipped.push(word.clone());
@@ -272,12 +278,12 @@ fn rgb(lx: &mut Lexer, last: &mut Token, what: &str) -> Result<Vec3> {
     Ok(Vec3::new(r, g, b))
 }
 
-/// `c` held to [0, 1], with a warning when it was outside.
-fn held(warnings: &mut Vec<String>, lx: &Lexer, t: &Token, what: &str, c: Vec3) -> Vec3 {
-    let h = c.clamp(Vec3::ZERO, Vec3::ONE);
+/// `c` held to [0, `hi`], with a warning when it was outside.
+fn held(warnings: &mut Vec<String>, lx: &Lexer, t: &Token, what: &str, c: Vec3, hi: f32) -> Vec3 {
+    let h = c.clamp(Vec3::ZERO, Vec3::splat(hi));
     if h != c {
         warnings.push(format!(
-            "{}:{}:{}: {what} {} {} {} is outside [0, 1]; using {} {} {}",
+            "{}:{}:{}: {what} {} {} {} is outside [0, {hi}]; using {} {} {}",
             lx.name(),
             t.line,
             t.col,
@@ -308,7 +314,8 @@ mod tests {
         let (lib, warnings) = library(
             "# two\nnewmtl red\nKd 0.8 0.2 0.2\nKs 0.5 0.5 0.5\nNs 100\nillum 2\n\
              newmtl glass pane\nKd 0 0 0\nKs 1 1 1\nd 0.1\nNi 1.5\nillum 7\nmap_Kd a.png\n\
-             newmtl mirror\nKd 0.1\nKs 0.9 0.6 0.3\nillum 3\nmap_Kd b.png\nTr 0.25\n",
+             newmtl mirror\nKd 0.1\nKs 0.9 0.6 0.3\nillum 3\nmap_Kd b.png\nTr 0.25\n\
+             newmtl light\nKd 0.78\nKe 17 12 4\n",
         );
         let red = lib["red"];
         assert_eq!((red.kd, red.ks, red.t, red.ior), (0.8, 0.0, 0.0, 1.0));
@@ -326,6 +333,9 @@ mod tests {
         assert!((mirror.ks - 0.6).abs() < 1e-6 && mirror.kd == 0.1);
         // Tr without glass: dissolve, straight through.
         assert_eq!((mirror.t, mirror.ior), (0.25, 1.0));
+        // `Ke` is radiance: kept above 1; the others emit nothing.
+        assert_eq!(lib["light"].emission, Vec3::new(17.0, 12.0, 4.0));
+        assert!(lib["light"].emits() && !red.emits() && !glass.emits());
         assert_eq!(warnings.len(), 1, "{warnings:?}");
         assert!(warnings[0].starts_with("m.mtl:13:1: 'map_Kd' is not read"));
     }

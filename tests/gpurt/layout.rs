@@ -60,8 +60,12 @@ fn rust_layouts() -> Vec<Layout> {
                 _pad
             ]
         ),
-        layout!("Material", GpuMaterial, [color, kd, ks, shine, t, ior]),
-        layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, _pad]),
+        layout!(
+            "Material",
+            GpuMaterial,
+            [color, kd, ks, shine, t, ior, emission, _pad]
+        ),
+        layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, first]),
         layout!(
             "Globals",
             GpuGlobals,

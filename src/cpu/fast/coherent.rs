@@ -18,7 +18,7 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::lights::{Surfaces, light_rays};
+use super::lights::{Surfaces, light_rays, packed};
 use super::packet::{Kernels, MAX_LANES, Packet};
 use super::tracer::Alone;
 use crate::cpu::pixel::{aov, sample_ray};
@@ -114,7 +114,7 @@ impl Tracer for Known<'_> {
         rng: &mut u32,
         counts: &mut RayCounts,
     ) -> Option<Vec3> {
-        if light.kind != LIGHT_AREA
+        if packed(light)
             && let Some((lit, rest)) = self.eye_lights.split_first()
         {
             // `light_sample` on the same surface, its shadow ray answered by the packet
@@ -162,7 +162,7 @@ pub fn render_tile(
     let g = b.globals;
     let (bw, bh) = block(kernels.lanes());
     let shadowed: Vec<usize> = (0..b.lights.len())
-        .filter(|&i| b.lights[i].kind != LIGHT_AREA)
+        .filter(|&i| packed(&b.lights[i]))
         .collect();
     let unlit = Lit {
         sample: None,

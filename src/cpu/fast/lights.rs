@@ -21,7 +21,7 @@ use super::packet::{MAX_LANES, Packet};
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::shade::{Surface, light_samples};
 use crate::cpu::types::{Bindings, Ray};
-use crate::gpu_types::{GpuLight, LIGHT_AREA, LIGHT_DIRECTIONAL, NO_HIT, SHADING_BLINN_PHONG};
+use crate::gpu_types::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, SHADING_BLINN_PHONG};
 
 /// One value a lane.
 type Row = [f32; MAX_LANES];
@@ -110,11 +110,17 @@ impl Lights {
     }
 }
 
+/// Whether `light`'s shadow rays go in packets: a point or a directional light, one sample
+/// and no random numbers (an area light's or an emitter's samples are drawn one by one).
+pub fn packed(light: &GpuLight) -> bool {
+    matches!(light.kind, LIGHT_POINT | LIGHT_DIRECTIONAL)
+}
+
 /// `light_ray(b, s, m, dir, r, light, 0, _)` for every surface of `all`: puts each shadow
-/// ray in `packet` (lane by lane, over `(0, dist)`) and returns the rest. `light` is a point
-/// or directional light (an area light's samples are drawn one by one).
+/// ray in `packet` (lane by lane, over `(0, dist)`) and returns the rest. `light` is
+/// `packed`.
 pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut Packet) -> Lights {
-    debug_assert_ne!(light.kind, LIGHT_AREA);
+    debug_assert!(packed(light));
     let g = b.globals;
     let mut l: Rows = [[0.0; MAX_LANES]; 3];
     let mut dist = [NO_HIT; MAX_LANES];

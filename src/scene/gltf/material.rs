@@ -4,6 +4,7 @@
 use glam::Vec3;
 
 use crate::scene::model::Material;
+use crate::util::limits::MAX_LIGHT;
 
 /// The Whitted material of glTF material `m`:
 ///
@@ -14,7 +15,9 @@ use crate::scene::model::Material;
 /// - Kd: `1 - metallic` (metals have no diffuse term), less the light transmitted;
 /// - Shine: the Blinn-Phong exponent of the same highlight width as GGX's roughness,
 ///   `2 / a^2 - 2` with `a = roughness^2`, between 1 and 10^4;
-/// - T: `KHR_materials_transmission`'s factor; ior: `KHR_materials_ior`'s (1.5 without).
+/// - T: `KHR_materials_transmission`'s factor; ior: `KHR_materials_ior`'s (1.5 without);
+/// - emission: the emissive factor times `KHR_materials_emissive_strength`'s strength (1
+///   without): the radiance of an emitter, whose triangles light the scene.
 pub fn whitted(m: &gltf::Material) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let (base, metallic, roughness) = (
@@ -24,6 +27,7 @@ pub fn whitted(m: &gltf::Material) -> Material {
     );
     let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
     let ior = m.ior().unwrap_or(1.5);
+    let strength = m.emissive_strength().unwrap_or(1.0);
     let clamp = |x: f32| {
         if x.is_finite() {
             x.clamp(0.0, 1.0)
@@ -45,5 +49,12 @@ pub fn whitted(m: &gltf::Material) -> Material {
         } else {
             1.5
         },
+        emission: (Vec3::from(m.emissive_factor()) * strength).map(|e| {
+            if e.is_finite() {
+                e.clamp(0.0, MAX_LIGHT)
+            } else {
+                0.0
+            }
+        }),
     }
 }

@@ -13,7 +13,6 @@
 mod buffers;
 mod material;
 
-use std::collections::HashSet;
 use std::io::Read;
 use std::path::Path;
 
@@ -54,7 +53,6 @@ pub fn read(mut input: Input, name: &str, dir: &Path, sink: &mut dyn Sink) -> Re
     let mut r = Reader {
         buffers,
         palette: Palette::default(),
-        emissive_warned: HashSet::new(),
         camera: None,
         instances: 0,
         err: &err,
@@ -100,8 +98,8 @@ pub fn read(mut input: Input, name: &str, dir: &Path, sink: &mut dyn Sink) -> Re
     } else if sink.bounds().is_empty() {
         return Err(err("the scene has no triangles".into()));
     }
-    if !lights.is_empty() {
-        // The file's lights instead of the framing's.
+    if !lights.is_empty() || scene.emits() {
+        // The file's lights (and emitters) instead of the framing's.
         scene.lights = lights;
     } else if r.camera.is_some() {
         scene.lights.push(Light::Point {
@@ -173,24 +171,14 @@ fn parse_error(name: &str, bytes: &[u8], e: gltf::Error) -> Error {
 struct Reader<'a> {
     buffers: Vec<Vec<u8>>,
     palette: Palette,
-    emissive_warned: HashSet<Option<usize>>,
     camera: Option<usize>,
     instances: usize,
     err: &'a dyn Fn(String) -> Error,
 }
 
 impl Reader<'_> {
-    /// The scene's material for glTF material `m`, with a warning the first time an
-    /// emissive one is met: its light is not yet rendered.
+    /// The scene's material for glTF material `m`.
     fn material(&mut self, m: gltf::Material, scene: &mut Scene) -> MaterialId {
-        let emissive = m.emissive_factor().iter().any(|&e| e > 0.0);
-        if emissive && self.emissive_warned.insert(m.index()) {
-            scene.warnings.push(format!(
-                "{}: material {} is emissive; its light is not rendered (its colour is)",
-                scene.name,
-                m.index().map_or("(default)".into(), |i| i.to_string())
-            ));
-        }
         self.palette.id(&mut scene.materials, material::whitted(&m))
     }
 

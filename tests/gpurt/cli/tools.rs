@@ -54,6 +54,68 @@ fn info_json_has_the_documented_keys() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("ambient     0.05 0.05 0.05"));
 }
 
+/// scenes/cornell.nff, a Cornell box whose OBJ's `.mtl` gives its ceiling light `Ke 17 12
+/// 4`: `info` lists that emitter as the scene's one light (the bare OBJ too, which then
+/// gets no light of the framing's), and a render is lit by it alone, from its front: the
+/// light seen white, the floor lit, the ceiling above the light with the ambient term only.
+#[test]
+fn the_cornell_box_is_lit_by_its_ceiling_emitter_alone() {
+    let d = workdir("cornell");
+    let scenes = crate::common::own_scenes();
+    for file in ["cornell.nff", "cornell.obj"] {
+        let path = scenes.join(file).display().to_string();
+        let o = gpurt(&["info", &path, "--json"], &d);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object");
+        let lights = v["lights"].as_array().expect("lights array");
+        assert_eq!(lights.len(), 1, "{file}: {v}");
+        let e = &lights[0];
+        assert_eq!(
+            (&e["kind"], &e["triangles"], &e["color"]),
+            (
+                &"emitter".into(),
+                &2.into(),
+                &serde_json::json!([17.0, 12.0, 4.0])
+            ),
+            "{file}: {v}"
+        );
+        let area = e["area"].as_f64().unwrap();
+        assert!((area - 0.47 * 0.38).abs() < 1e-4, "{area}");
+        assert_eq!(
+            v["materials"][e["material"].as_u64().unwrap() as usize]["emission"],
+            e["color"]
+        );
+    }
+    let scene = scenes.join("cornell.nff").display().to_string();
+    let o = gpurt(
+        &[
+            &scene,
+            "-o",
+            "c.png",
+            "--backend",
+            "cpu",
+            "--width",
+            "64",
+            "--height",
+            "64",
+        ],
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = image::open(d.join("c.png"))
+        .expect("c.png written")
+        .to_rgb8();
+    let red = |x, y| img.get_pixel(x, y).0[0];
+    // The light, under the ceiling in rows 8 to 10: its radiance, above 1, is white.
+    assert_eq!(img.get_pixel(32, 9).0, [255, 255, 255]);
+    // The ceiling in front of it: ambient 0.1 x Kd 0.73 alone (18.6), the light behind it.
+    for x in 24..40 {
+        assert_eq!(red(x, 2), 19, "ceiling at ({x}, 2)");
+    }
+    // The floor left of the blocks, lit from above.
+    assert!(red(16, 60) > 40, "floor {}", red(16, 60));
+}
+
 #[test]
 fn diff_exit_codes_and_heat_map() {
     let d = workdir("diff");

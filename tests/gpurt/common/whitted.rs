@@ -1,12 +1,13 @@
 //! An independent Whitted tracer in f64 for small scenes of spheres and flat triangles
-//! under point, directional and area lights: docs/shading.md written out again from the
+//! under point, directional and area lights and emitters (docs/model.md's emissive
+//! triangles): docs/shading.md written out again from the
 //! parsed scene (not from the renderer's buffers or code), recursion where the renderers
 //! iterate, every crossing tested against every shape. It answers `None` for a pixel where
 //! f32 and f64 may honestly disagree: a ray on the path (eye, mirrored, refracted or to a
 //! light) passing near a sphere's silhouette or a triangle's edge, a refraction near the
 //! critical angle, a light near the horizon of the surface, and an area light partly hidden
-//! or partly below the horizon (the renderers estimate that integral from a few jittered
-//! samples, this tracer integrates it on a fine grid).
+//! or partly below the horizon, and the same of an emitter (the renderers estimate those
+//! integrals from a few jittered samples, this tracer integrates them on fine grids).
 
 use glam::{DVec3, Vec3};
 use gpurt::frame::Shading;
@@ -20,7 +21,8 @@ use super::oracle::{Camera, d, highlight, sphere_hit, triangle_hit};
 /// light must stand above the horizon, for the answer to count.
 const MARGIN: f64 = 1e-3;
 
-/// Side of the grid of points on which an area light is integrated.
+/// Side of the grid of points on which an area light is integrated, and the cuts of each
+/// side of an emitter's triangle (into `GRID^2` triangles, integrated at their centroids).
 const GRID: u32 = 24;
 
 /// What a pixel's paths met, to show that a test covered what it meant to.
@@ -30,6 +32,8 @@ pub struct Met {
     pub refraction: bool,
     pub directional: bool,
     pub area: bool,
+    /// Light from an emitter's triangles.
+    pub emitter: bool,
     /// Light reached through a transmitting occluder, dimmed but not blocked.
     pub tinted_shadow: bool,
 }
@@ -65,6 +69,8 @@ pub struct Whitted<'a> {
     ambient: DVec3,
     /// The intensity of a light given without a colour: 1/sqrt(number of lights).
     grey: DVec3,
+    /// The triangles of emissive materials, and their radiance.
+    emitters: Vec<([DVec3; 3], DVec3)>,
 }
 
 impl<'a> Whitted<'a> {
@@ -86,6 +92,15 @@ impl<'a> Whitted<'a> {
             }
         });
         let surfaces: Vec<Surface> = spheres.chain(triangles).collect();
+        let emitters = (scene.triangles.iter())
+            .map(|t| {
+                (
+                    t.v.map(d),
+                    d(scene.materials[t.material.0 as usize].emission),
+                )
+            })
+            .filter(|&(_, radiance)| radiance != DVec3::ZERO)
+            .collect();
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
         for s in &surfaces {
             let (a, b) = match s.shape {
@@ -102,6 +117,7 @@ impl<'a> Whitted<'a> {
             eps: 5e-6 * (hi - lo).length(),
             ambient: d(scene.ambient.unwrap_or(Vec3::splat(DEFAULT_AMBIENT))),
             grey: DVec3::splat(1.0 / (scene.lights.len() as f64).sqrt()),
+            emitters,
         }
     }
 
@@ -220,6 +236,10 @@ impl<'a> Whitted<'a> {
         let n = if entering { hit.normal } else { -hit.normal };
         let above = p + self.eps * n;
         let mut colour = self.ambient * kd_c;
+        // An emissive surface is seen with its radiance from its front.
+        if entering {
+            colour += d(m.emission);
+        }
         let at = At {
             above,
             n,
@@ -255,6 +275,11 @@ impl<'a> Whitted<'a> {
                     d(color) * add
                 }
             };
+        }
+        for &(v, radiance) in &self.emitters {
+            let add = self.emitter(&at, v, met)?;
+            met.emitter |= add != DVec3::ZERO;
+            colour += radiance * add;
         }
         if ks > 0.0 && depth < self.max_depth {
             let r = dir - 2.0 * n.dot(dir) * n;
@@ -331,6 +356,46 @@ impl<'a> Whitted<'a> {
             }
         }
         Ok(sum / (GRID * GRID) as f64)
+    }
+
+    /// An emitter triangle's share per unit of its radiance: the integral over the
+    /// triangle of what a point light there would add, times the cosine at the emitter
+    /// over pi r^2 (its front only), on the centroids of its `GRID^2` equal triangles.
+    /// `Unsure` as for an area light, and where a point lies near the emitter's horizon.
+    fn emitter(&self, at: &At, v: [DVec3; 3], met: &mut Met) -> Result<DVec3, Unsure> {
+        let (u, w) = (v[1] - v[0], v[2] - v[0]);
+        let area = 0.5 * u.cross(w).length();
+        let front = u.cross(w).normalize();
+        let g = GRID as f64;
+        // Barycentric (a, b) of each small triangle's centroid: the upright ones of each
+        // row, and the upside-down ones between them.
+        let upright = (0..GRID).flat_map(|i| (0..GRID - i).map(move |j| (i, j, 1.0 / 3.0)));
+        let flipped = (0..GRID).flat_map(|i| (0..GRID - i - 1).map(move |j| (i, j, 2.0 / 3.0)));
+        let mut sum = DVec3::ZERO;
+        let mut first: Option<Option<DVec3>> = None;
+        for (i, j, c) in upright.chain(flipped) {
+            let q = v[0] + (i as f64 + c) / g * u + (j as f64 + c) / g * w;
+            let to = q - at.above;
+            let (l, r) = (to.normalize(), to.length());
+            let cos_e = -front.dot(l);
+            if cos_e.abs() < MARGIN {
+                return Err(Unsure);
+            }
+            // Stops short of the emitter, which the ray would otherwise meet at its end.
+            let lit = if cos_e > 0.0 {
+                self.lit(at, l, r * (1.0 - 1e-9), met)?
+            } else {
+                None
+            };
+            let seen = lit.map(|(through, _)| through);
+            if *first.get_or_insert(seen) != seen {
+                return Err(Unsure);
+            }
+            sum += lit.map_or(DVec3::ZERO, |(through, shade)| {
+                through * shade * cos_e / (std::f64::consts::PI * r * r)
+            });
+        }
+        Ok(sum * area / (g * g))
     }
 }
 

@@ -218,6 +218,32 @@ fn camera_lights_and_materials_are_mapped_as_documented() {
     let s = parse(&serde_json::to_vec(&doc).unwrap(), "m.gltf", Path::new(".")).unwrap();
     assert!(s.camera.fit.is_some());
     assert_eq!(s.lights.len(), 1);
+    // An emitter's radiance: the factor times the strength. A model lit by emitters alone
+    // gets no light of its own, framed or seen through its camera; one without emitters
+    // or lights gets one.
+    for (nodes, emits, lights) in [
+        (json!([0]), true, 0),
+        (json!([0, 3]), true, 0),
+        (json!([0]), false, 1),
+        (json!([0, 3]), false, 1),
+    ] {
+        let mut doc = model(Some(&data_uri()));
+        doc["scenes"][0]["nodes"] = nodes;
+        if emits {
+            doc["materials"][0] = json!({
+                "emissiveFactor": [1, 0.5, 0.25],
+                "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 8}}
+            });
+        }
+        let s = parse(&serde_json::to_vec(&doc).unwrap(), "m.gltf", Path::new(".")).unwrap();
+        let m = s.materials[s.triangles[0].material.0 as usize];
+        let radiance = if emits {
+            Vec3::new(8.0, 4.0, 2.0)
+        } else {
+            Vec3::ZERO
+        };
+        assert_eq!((m.emission, s.lights.len()), (radiance, lights), "{s:?}");
+    }
 }
 
 #[test]

@@ -84,10 +84,10 @@ fn a_bare_obj_gets_the_materials_its_mtl_names() {
         s.warnings,
         [
             format!(
-                "{file}:8:1: 'map_Kd' is not read (the shading model has no textures, emission or the like); skipped here and below"
+                "{file}:8:1: 'map_Kd' is not read (the shading model has no textures or the like); skipped here and below"
             ),
             format!(
-                "{file}:16:1: 'map_Bump' is not read (the shading model has no textures, emission or the like); skipped here and below"
+                "{file}:16:1: 'map_Bump' is not read (the shading model has no textures or the like); skipped here and below"
             ),
         ]
     );

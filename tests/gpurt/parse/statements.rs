@@ -70,6 +70,7 @@ fn materials_default_sharing_and_zero_ior() {
         shine: 1.0,
         t: 0.0,
         ior: 1.0,
+        emission: Vec3::ZERO,
     };
     assert_eq!(Material::DEFAULT, default);
     let m = |i: usize| s.materials[s.spheres[i].material.0 as usize];
@@ -83,7 +84,8 @@ fn materials_default_sharing_and_zero_ior() {
             ks: 0.5,
             shine: 10.0,
             t: 0.0,
-            ior: 1.0
+            ior: 1.0,
+            emission: Vec3::ZERO,
         }
     );
     let cone_m = s.materials[s.cones[0].material.0 as usize];
