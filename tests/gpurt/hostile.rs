@@ -332,3 +332,58 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
         "peak {peak_kib} KiB, bound {bound} KiB"
     );
 }
+
+/// A `.gltf` of 3 GiB that is one data URI (a sparse file: its bytes after the JSON's start
+/// read as zeros) is refused once its first 256 MiB are read, with the bound named, exit
+/// 2, no output file, and the peak memory that bound's; the peak is sampled from /proc.
+#[test]
+fn a_gltf_data_uri_of_gigabytes_is_refused_within_bounded_memory() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = temp_dir("data-uri");
+    let path = dir.join("huge.gltf");
+    let mut f = std::fs::File::create(&path).unwrap();
+    f.write_all(br#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":3000000000,"uri":"data:application/octet-stream;base64,"#)
+        .unwrap();
+    f.set_len(3 << 30).unwrap();
+    drop(f);
+    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["huge.gltf", "--backend", "cpu", "-o", "out.png"])
+        .current_dir(&dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("gpurt starts");
+    let id = child.id();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    let (mut peak_kib, start) = (0u64, std::time::Instant::now());
+    let out = loop {
+        if let Ok(out) = rx.recv_timeout(Duration::from_millis(10)) {
+            break out.expect("gpurt ends");
+        }
+        peak_kib = peak_kib.max(peak_memory_kib(id).unwrap_or(0));
+        if start.elapsed() > Duration::from_secs(120) {
+            let _ = Command::new("kill")
+                .args(["-KILL", &id.to_string()])
+                .status();
+            panic!("still reading the data URI after 120 s");
+        }
+    };
+    let _ = std::fs::remove_file(&path);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    println!(
+        "a 3 GiB data URI refused in {:.1} s, peak {} MiB",
+        start.elapsed().as_secs_f64(),
+        peak_kib / 1024
+    );
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("huge.gltf") && stderr.contains("more than 256 MiB of glTF JSON"),
+        "{stderr}"
+    );
+    assert!(!dir.join("out.png").exists());
+    let bound = (limits::MAX_GLTF_JSON_BYTES >> 10) + (64 << 10);
+    assert!(peak_kib < bound, "peak {peak_kib} KiB, bound {bound} KiB");
+}

@@ -26,7 +26,7 @@ use super::model::{Light, MaterialId, Scene, nff_default_camera, unit};
 use super::palette::Palette;
 use super::sink::Sink;
 use crate::util::error::{Error, Result};
-use crate::util::limits::{MAX_FILE_BYTES, MAX_PRIMITIVES};
+use crate::util::limits::{MAX_FILE_BYTES, MAX_GLTF_JSON_BYTES, MAX_PRIMITIVES};
 
 /// Node instances visited at most: a hierarchy that shares nodes can name exponentially
 /// many, and one that loops, endlessly.
@@ -35,15 +35,34 @@ const MAX_INSTANCES: usize = 1 << 24;
 /// Reads a glTF file (JSON or binary) into `sink` and a scene; `dir` is where buffers
 /// named by relative paths are looked for.
 pub fn read(mut input: Input, name: &str, dir: &Path, sink: &mut dyn Sink) -> Result<Scene> {
-    let mut bytes = Vec::new();
-    (&mut input.reader)
-        .take(MAX_FILE_BYTES)
-        .read_to_end(&mut bytes)
-        .map_err(|e| read_error(name, e))?;
     let err = |msg: String| Error::Scene {
         file: name.to_string(),
         msg,
     };
+    // JSON is read up to its bound and no further; a `.glb`'s binary chunk up to a file's.
+    let mut bytes = Vec::new();
+    let reader = &mut input.reader;
+    let read = |reader: &mut dyn Read, limit: u64, bytes: &mut Vec<u8>| {
+        reader
+            .take(limit)
+            .read_to_end(bytes)
+            .map_err(|e| read_error(name, e))
+    };
+    read(reader, MAX_GLTF_JSON_BYTES + 1, &mut bytes)?;
+    let json_bytes = if bytes.starts_with(b"glTF") {
+        read(reader, MAX_FILE_BYTES - bytes.len() as u64, &mut bytes)?;
+        bytes
+            .get(12..16)
+            .map_or(0, |b| u32::from_le_bytes(b.try_into().unwrap()).into())
+    } else {
+        bytes.len() as u64
+    };
+    if json_bytes > MAX_GLTF_JSON_BYTES {
+        return Err(err(format!(
+            "more than {} MiB of glTF JSON, which gpurt reads whole: a buffer this large belongs in a .bin file beside the model or a .glb's binary chunk, not a data URI",
+            MAX_GLTF_JSON_BYTES >> 20
+        )));
+    }
     let (doc, blob) = document(&bytes, name)?;
     drop(bytes);
     let buffers = buffers::resolve(&doc, blob, name, Some(dir))?;
