@@ -12,11 +12,22 @@ def cli_info(path):
     return json.loads(run_cli("info", path, "--json").stdout)
 
 
-@pytest.mark.parametrize("name", ["spheres.nff", "arealight.nff", "lens.nff", "patches.nff", "icosahedron.stl"])
+@pytest.mark.parametrize(
+    "name", ["spheres.nff", "arealight.nff", "lens.nff", "patches.nff", "icosahedron.stl", "blocks.gltf", "cornell.nff"]
+)
 def test_info_equals_the_cli_json_on_bundled_scenes(name):
     want = cli_info(SCENES / name)
     assert gpurt.info(SCENES / name) == want
     assert gpurt.Scene.open(str(SCENES / name)).info() == want
+
+
+def test_emitters_are_lights():
+    """The Cornell box's ceiling (`Ke` in its .mtl) is its one light; blocks.gltf's glowing
+    panel (an emissive material) is a light beside the file's two."""
+    (light,) = gpurt.info(SCENES / "cornell.nff")["lights"]
+    assert (light["kind"], light["color"], light["triangles"]) == ("emitter", [17.0, 12.0, 4.0], 2)
+    kinds = [l["kind"] for l in gpurt.info(SCENES / "blocks.gltf")["lights"]]
+    assert kinds == ["point", "directional", "emitter"]
 
 
 @pytest.mark.parametrize("name", ["spd/teapot-2.nff", "spd/mount-1.nff", "spd/balls-5.nff.gz", "p3d/mount_low.nff"])
