@@ -79,6 +79,7 @@ impl MeshTransform {
             // Normals transform by the inverse transpose (non-uniform scale bends them).
             nm: m.inverse().transpose(),
             translate: self.translate,
+            mirrored: m.determinant() < 0.0,
         })
     }
 }
@@ -88,17 +89,21 @@ struct Placement {
     m: Mat3,
     nm: Mat3,
     translate: Vec3,
+    /// A negative scale mirrors the mesh, which turns its triangles' winding: `place`
+    /// turns it back, so that their front (an emitter's) stays the side it was.
+    mirrored: bool,
 }
 
 impl Placement {
     fn place(&self, v: [Vec3; 3], n: Option<[Vec3; 3]>) -> ([Vec3; 3], Option<[Vec3; 3]>) {
+        let turn = |[a, b, c]: [Vec3; 3]| if self.mirrored { [a, c, b] } else { [a, b, c] };
         let v = v.map(|p| self.m * p + self.translate);
         // A normal the transform leaves without a direction makes the triangle flat.
         let n = n.and_then(|[a, b, c]| {
             let unit = |v| unit(self.nm * v);
             Some([unit(a)?, unit(b)?, unit(c)?])
         });
-        (v, n)
+        (turn(v), n.map(turn))
     }
 }
 
@@ -169,5 +174,27 @@ mod tests {
         assert!((t[0].v[0] - Vec3::new(10.0, 2.0, 0.0)).length() < 1e-5);
         assert!((t[0].v[1] - Vec3::new(9.0, 0.0, 0.0)).length() < 1e-5);
         assert!((t[0].n.as_ref().unwrap()[0] - Vec3::Y).length() < 1e-5);
+    }
+
+    /// A negative scale mirrors the triangle; its winding is turned back, so that its
+    /// front faces the mirror image of where it faced, with its normals kept at their
+    /// corners.
+    #[test]
+    fn a_mirroring_scale_keeps_the_front() {
+        let n = [Vec3::X, Vec3::Y, Vec3::Z];
+        let mut t = [Triangle {
+            v: [Vec3::ZERO, Vec3::X, Vec3::Y],
+            n: Some(Box::new(n)),
+            material: MaterialId(0),
+        }];
+        assert_eq!(t[0].cross(), Vec3::Z);
+        let xf = MeshTransform {
+            scale: Vec3::new(1.0, 1.0, -1.0),
+            ..MeshTransform::default()
+        };
+        xf.apply(&mut t);
+        assert_eq!(t[0].cross(), -Vec3::Z);
+        assert_eq!(t[0].v, [Vec3::ZERO, Vec3::Y, Vec3::X]);
+        assert_eq!(*t[0].n.as_deref().unwrap(), [n[0], -n[2], n[1]]);
     }
 }

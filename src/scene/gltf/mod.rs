@@ -289,7 +289,13 @@ impl Reader<'_> {
                     points.len()
                 ))));
             }
-            let corners = |t: [u32; 3]| t.map(|i| i as usize);
+            // A mirroring transform turns the winding (glTF's rule): turned back, the front
+            // stays the side it was (an emitter's light leaves from it).
+            let mirrored = world.determinant() < 0.0;
+            let corners = |[a, b, c]: [u32; 3]| {
+                let t = if mirrored { [a, c, b] } else { [a, b, c] };
+                t.map(|i| i as usize)
+            };
             let mut emit = |[a, b, c]: [usize; 3]| -> Result<()> {
                 if sink.count() >= MAX_PRIMITIVES {
                     return Err((self.err)(format!("more than {MAX_PRIMITIVES} triangles")));

@@ -246,6 +246,39 @@ fn camera_lights_and_materials_are_mapped_as_documented() {
     }
 }
 
+/// The cube's triangles wind counter-clockwise seen from outside; so they stay under a
+/// transform that mirrors it (glTF turns the winding where the determinant is negative),
+/// which keeps an emitter's front where its author put it.
+#[test]
+fn a_mirroring_transform_keeps_the_front_outside() {
+    for scale in [
+        [2.0, 1.0, 1.0],
+        [-2.0, 1.0, 1.0],
+        [1.0, -1.0, -1.0],
+        [-1.0, -1.0, -1.0],
+    ] {
+        let mut doc = model(Some(&data_uri()));
+        doc["nodes"][1]["scale"] = json!(scale);
+        let s = parse(&serde_json::to_vec(&doc).unwrap(), "m.gltf", Path::new(".")).unwrap();
+        let (lo, hi) = s
+            .triangles
+            .iter()
+            .flat_map(|t| t.v)
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            });
+        let centre = 0.5 * (lo + hi);
+        assert_eq!(s.triangles.len(), 12);
+        for t in &s.triangles {
+            let outward = (t.v[0] + t.v[1] + t.v[2]) / 3.0 - centre;
+            assert!(
+                t.cross().dot(outward) > 0.0,
+                "scale {scale:?}: {t:?} faces in"
+            );
+        }
+    }
+}
+
 #[test]
 fn strips_and_fans_are_triangles_and_points_are_skipped_with_a_warning() {
     let mut doc = model(Some(&data_uri()));
