@@ -64,6 +64,9 @@ fn aov(ray: Ray) -> vec3<f32> {
     if (AOV == AOV_DEPTH) {
         return vec3<f32>(hit.t);
     }
+    if (AOV == AOV_UV) {
+        return vec3<f32>(hit_uv(hit), 0.0);
+    }
     return 0.5 * (surface(ray, hit).ns + vec3<f32>(1.0));
 }
 

@@ -51,6 +51,20 @@ fn surface(ray: Ray, hit: Hit) -> Surface {
     return Surface(point, ng, ns, entering, material);
 }
 
+// The texture coordinates at `hit`, interpolated from its triangle's corners; zero where
+// the primitive has none.
+fn hit_uv(hit: Hit) -> vec2<f32> {
+    if (!TRIANGLES || (PLANES && (hit.prim & PLANE_FLAG) != 0u)) {
+        return vec2<f32>(0.0);
+    }
+    let p = load_prim(hit.prim);
+    if (prim_kind(p) != PRIM_TRIANGLE || p.f0 < 0.0) {
+        return vec2<f32>(0.0);
+    }
+    let t = load_tri_uvs(u32(p.f0));
+    return (1.0 - hit.u - hit.v) * t.uv0 + hit.u * t.uv1 + hit.v * t.uv2;
+}
+
 fn offset_origin(s: Surface, dir: vec3<f32>, eps: f32) -> vec3<f32> {
     if (dot(s.ng, dir) >= 0.0) {
         return s.point + eps * s.ng;

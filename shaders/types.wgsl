@@ -25,6 +25,13 @@ struct TriNormals {
     _pad2: u32,
 }
 
+struct TriUvs {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    _pad: array<u32, 6>,
+}
+
 struct Node {
     min: vec3<f32>,
     offset: u32,
@@ -362,6 +369,13 @@ fn load_cwide_node(i: u32) -> CwideNode {
         bases.zw,
         array<vec4<u32>, 3>(node_texel(b + 2u), node_texel(b + 3u), node_texel(b + 4u)),
     );
+}
+
+// The texture coordinates of uv slot i, a record of the normals' three texels.
+fn load_tri_uvs(i: u32) -> TriUvs {
+    let a = normal_texel(3u * i);
+    let b = normal_texel(3u * i + 1u);
+    return TriUvs(bitcast<vec2<f32>>(a.xy), bitcast<vec2<f32>>(a.zw), bitcast<vec2<f32>>(b.xy), array<u32, 6>());
 }
 
 fn load_tri_normals(i: u32) -> TriNormals {

@@ -14,7 +14,7 @@
 //! 16-byte alignment without hidden padding.
 
 use bytemuck::{Pod, Zeroable};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use crate::util::limits::MAX_DEPTH;
 
@@ -39,12 +39,14 @@ pub const PRIM_MATERIAL_MASK: u32 = (1 << PRIM_KIND_SHIFT) - 1;
 /// | kind     | p0, f0                   | p1, f1                     | p2          |
 /// |----------|--------------------------|----------------------------|-------------|
 /// | sphere   | centre, radius           | -                          | -           |
-/// | triangle | v0, -                    | edge v1-v0, normal slot    | edge v2-v0  |
+/// | triangle | v0, uv slot              | edge v1-v0, normal slot    | edge v2-v0  |
 /// | cone     | base centre, base radius | apex centre, apex radius   | -           |
 /// | box      | min, -                   | max, -                     | -           |
 ///
 /// A triangle's "normal slot" indexes `tri_normals` as an exactly representable float
-/// (-1 when the triangle has no shading normals); `pack` refuses more than 2^24 slots.
+/// (-1 when the triangle has no shading normals); `pack` refuses more than 2^24 slots. Its
+/// "uv slot" likewise indexes the records after them in the same texels, `tri_uvs` (-1
+/// without texture coordinates).
 /// Triangles store the two edges because that is what Möller-Trumbore needs.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -76,6 +78,17 @@ pub struct GpuTriNormals {
     pub _pad1: u32,
     pub n2: Vec3,
     pub _pad2: u32,
+}
+
+/// Texture coordinates of one triangle's corners, a record of the normals' size so that
+/// both share one array of texels (`SceneBuffers::surface_texels`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTriUvs {
+    pub uv0: Vec2,
+    pub uv1: Vec2,
+    pub uv2: Vec2,
+    pub _pad: [u32; 6],
 }
 
 /// An infinite plane `dot(normal, p) = d`; tested outside the BVH.
@@ -139,6 +152,9 @@ pub const AOV_NORMAL: u32 = 1;
 pub const AOV_DEPTH: u32 = 2;
 /// BVH nodes visited by the eye ray's closest-hit traversal.
 pub const AOV_COST: u32 = 3;
+/// Texture coordinates at the eye ray's hit, interpolated, in red and green (0 where the
+/// surface has none).
+pub const AOV_UV: u32 = 4;
 
 /// BVH walk: one node fetched and tested per step, the nearer child along the split axis
 /// first. What the CPU backend's own frames name (its renderer walks a wide tree of its
@@ -339,6 +355,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
     U32 AOV_NORMAL,
     U32 AOV_DEPTH,
     U32 AOV_COST,
+    U32 AOV_UV,
     U32 SHADING_PHONG,
     U32 SHADING_BLINN_PHONG,
     U32 PHASE_SAMPLE,
@@ -374,6 +391,7 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
 const _: () = {
     assert!(size_of::<GpuPrim>() == 48);
     assert!(size_of::<GpuTriNormals>() == 48);
+    assert!(size_of::<GpuTriUvs>() == size_of::<GpuTriNormals>());
     assert!(size_of::<GpuNode>() == 32);
     assert!(size_of::<GpuCwideNode>() == 80);
     assert!(size_of::<GpuQwideNode>() == 64);

@@ -47,10 +47,10 @@ class Image(np.ndarray):
     It is an ordinary ndarray (a view of the render's own buffer, not a copy) that Jupyter
     shows as a picture through ``_repr_png_``: the PNG the command line writes for the
     same render. ``aov`` is the output it holds: None for colour, or "normal", "depth",
-    "cost" (shown as grey and as a heat ramp, scaled to their largest value).
+    "cost" (shown as grey and as a heat ramp, scaled to their largest value), "uv".
     """
 
-    aov: Optional[Literal["color", "normal", "depth", "cost"]]
+    aov: Optional[Literal["color", "normal", "depth", "cost", "uv"]]
 
     def __array_finalize__(self, obj: object) -> None:
         # Views and results of arithmetic keep the AOV of the image they came from.

@@ -13,7 +13,7 @@ __all__ = ["__version__", "SceneError", "Scene", "Renderer", "render", "info", "
 __version__: str
 
 _Backend = Literal["auto", "gpu", "cpu"]
-_Aov = Optional[Literal["color", "normal", "depth", "cost"]]
+_Aov = Optional[Literal["color", "normal", "depth", "cost", "uv"]]
 _Shading = Optional[Literal["phong", "blinn-phong"]]
 _Ambient = Union[float, Sequence[float], None]
 _PathLike = Union[str, "os.PathLike[str]"]

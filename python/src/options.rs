@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 use gpurt::frame::{Overrides, Shading};
-use gpurt::gpu_types::{AOV_COLOR, AOV_COST, AOV_DEPTH, AOV_NORMAL};
+use gpurt::gpu_types::{AOV_COLOR, AOV_COST, AOV_DEPTH, AOV_NORMAL, AOV_UV};
 use gpurt::limits::{MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP};
 use gpurt::scene::Camera;
 use gpurt::session::Backend;
@@ -51,15 +51,17 @@ fn ambient(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec3>> {
     Ok(Some(Vec3::from_array(rgb.map(|c| c as f32))))
 }
 
-/// The shader's AOV for `aov=`: None or "color" for the image, "normal", "depth", "cost".
+/// The shader's AOV for `aov=`: None or "color" for the image, "normal", "depth", "cost",
+/// "uv".
 pub fn aov_code(aov: Option<&str>) -> PyResult<u32> {
     match aov {
         None | Some("color") => Ok(AOV_COLOR),
         Some("normal") => Ok(AOV_NORMAL),
         Some("depth") => Ok(AOV_DEPTH),
         Some("cost") => Ok(AOV_COST),
+        Some("uv") => Ok(AOV_UV),
         Some(other) => Err(PyValueError::new_err(format!(
-            "aov must be None, 'color', 'normal', 'depth' or 'cost', got {other:?} \
+            "aov must be None, 'color', 'normal', 'depth', 'cost' or 'uv', got {other:?} \
              (the wireframe is drawn by the command line and the viewer only)"
         ))),
     }

@@ -193,7 +193,7 @@ impl Scene {
 /// line's EXR of the same render holds. `None` keeps the scene's resolution and the
 /// defaults (1 sample per pixel, depth 5, the scene's ambient). `backend` is "auto" (the
 /// GPU when there is a hardware one, else the CPU), "gpu" or "cpu"; `aov` is None,
-/// "normal", "depth" or "cost"; `shading` is None (Phong), "phong" or "blinn-phong", the
+/// "normal", "depth", "cost" or "uv"; `shading` is None (Phong), "phong" or "blinn-phong", the
 /// highlight's model as `--shading` takes it. The GIL is released while
 /// rendering, and Ctrl-C stops the render with KeyboardInterrupt.
 #[pyfunction]

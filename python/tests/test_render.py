@@ -74,6 +74,16 @@ def test_aovs_equal_the_cli_exr(aov, tmp_path):
     assert_same(got, want)
 
 
+def test_the_uv_aov_equals_the_cli_exr(tmp_path):
+    """The Cornell box's walls carry texture coordinates (`vt`), each from 0 to 1."""
+    want, _ = cli_render(SCENES / "cornell.nff", tmp_path, "--width", 32, "--height", 24, "--backend", "cpu", "--aov", "uv")
+    got = gpurt.render(SCENES / "cornell.nff", width=32, height=24, backend="cpu", aov="uv")
+    assert got.aov == "uv"
+    assert_same(got, want)
+    pixels = np.asarray(got)
+    assert pixels[..., :2].max() > 0.9 and pixels[..., 2].max() == 0.0
+
+
 def test_the_gpu_backend_equals_the_cli_gpu_exr(tmp_path, gpu_available):
     if not gpu_available:
         pytest.skip("no GPU adapter")

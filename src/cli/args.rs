@@ -125,6 +125,8 @@ pub enum Aov {
     Depth,
     /// The BVH nodes the GPU's walk tests a pixel, as a heat map.
     Cost,
+    /// The texture coordinates at the first hit, u in red and v in green (none: black).
+    Uv,
     /// The wireframe alone (drawn by the GPU), as `gpurt view` shows it.
     Wireframe,
 }
@@ -137,6 +139,7 @@ impl Aov {
             Aov::Normal => Some(gt::AOV_NORMAL),
             Aov::Depth => Some(gt::AOV_DEPTH),
             Aov::Cost => Some(gt::AOV_COST),
+            Aov::Uv => Some(gt::AOV_UV),
             Aov::Wireframe => None,
         }
     }

@@ -3,7 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::shade::{Tracer, count_nodes, surface, trace};
+use super::shade::{Tracer, count_nodes, hit_uv, surface, trace};
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 
@@ -85,7 +85,8 @@ pub fn sample_sum(
     sum
 }
 
-/// Debug outputs of the eye ray: shading normal, distance, or BVH nodes visited.
+/// Debug outputs of the eye ray: shading normal, distance, BVH nodes visited, or texture
+/// coordinates.
 pub fn aov(b: &Bindings, tracer: &mut impl Tracer, ray: &Ray, counts: &mut RayCounts) -> Vec3 {
     let g = b.globals;
     let hit = tracer.closest_hit(b, ray, g.hither, NO_HIT);
@@ -94,6 +95,7 @@ pub fn aov(b: &Bindings, tracer: &mut impl Tracer, ray: &Ray, counts: &mut RayCo
         AOV_COST => Vec3::splat(hit.cost as f32),
         _ if hit.prim == NO_PRIM => Vec3::ZERO,
         AOV_DEPTH => Vec3::splat(hit.t),
+        AOV_UV => hit_uv(b, &hit).extend(0.0),
         _ => 0.5 * (surface(b, ray, &hit).ns + Vec3::ONE),
     }
 }

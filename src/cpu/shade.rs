@@ -3,7 +3,7 @@
 
 use std::mem::MaybeUninit;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::intersect;
 use super::types::{Bindings, Hit, Ray, RayCounts, rand};
@@ -113,6 +113,21 @@ pub fn surface(b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
         entering,
         material,
     }
+}
+
+/// The texture coordinates at `hit`, interpolated from its triangle's corners; zero where
+/// the primitive has none.
+pub fn hit_uv(b: &Bindings, hit: &Hit) -> Vec2 {
+    if hit.prim & PLANE_FLAG != 0 {
+        return Vec2::ZERO;
+    }
+    let p = &b.prims[hit.prim as usize];
+    if p.kind() != PRIM_TRIANGLE || p.f0 < 0.0 {
+        return Vec2::ZERO;
+    }
+    // The uv records follow the normals' in the shader's texels.
+    let t = &b.tri_uvs[p.f0 as usize - b.tri_normals.len()];
+    (1.0 - hit.u - hit.v) * t.uv0 + hit.u * t.uv1 + hit.v * t.uv2
 }
 
 /// Start of a secondary ray: off the surface along the geometric normal, on the side the

@@ -79,7 +79,7 @@ pub(super) fn scene_bytes(
     };
     texture(node_bytes(scene, traversal).len())
         + texture(size_of_val(&scene.prims[..]))
-        + texture(size_of_val(&scene.tri_normals[..]))
+        + texture(scene.surface_texels().len())
         + [
             non_empty(&scene.planes).len(),
             non_empty(&scene.materials).len(),
@@ -118,7 +118,7 @@ pub(super) fn upload_scene(
         Ok(SceneData {
             nodes: texels("nodes", node_bytes(scene, traversal))?,
             prims: texels("prims", prim_bytes(scene, traversal))?,
-            tri_normals: texels("tri_normals", bytemuck::cast_slice(&scene.tri_normals))?,
+            tri_normals: texels("tri_normals", &scene.surface_texels())?,
             planes: storage("planes", non_empty(&scene.planes)),
             materials: storage("materials", non_empty(&scene.materials)),
             lights: storage("lights", non_empty(&scene.gpu_lights())),
@@ -251,7 +251,10 @@ fn texel_arrays(scene: &SceneBuffers, traversal: u32) -> [(&'static str, usize);
     [
         ("BVH nodes", node_bytes(scene, traversal).len()),
         ("primitives", size_of_val(&scene.prims[..])),
-        ("triangle normals", size_of_val(&scene.tri_normals[..])),
+        (
+            "triangle normals and texture coordinates",
+            scene.surface_texels().len(),
+        ),
     ]
 }
 

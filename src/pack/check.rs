@@ -78,9 +78,17 @@ impl SceneBuffers {
         for (i, p) in self.prims.iter().enumerate() {
             let slot_ok =
                 p.kind() != PRIM_TRIANGLE || p.f1 < 0.0 || (p.f1 as usize) < self.tri_normals.len();
-            if p.material() as usize >= self.materials.len() || p.kind() > PRIM_BOX || !slot_ok {
+            let uv_ok = p.kind() != PRIM_TRIANGLE
+                || p.f0 < 0.0
+                || (self.tri_normals.len()..self.tri_normals.len() + self.tri_uvs.len())
+                    .contains(&(p.f0 as usize));
+            if p.material() as usize >= self.materials.len()
+                || p.kind() > PRIM_BOX
+                || !slot_ok
+                || !uv_ok
+            {
                 return fail(format!(
-                    "primitive {i} has a bad material, kind or normal slot"
+                    "primitive {i} has a bad material, kind, normal slot or uv slot"
                 ));
             }
         }

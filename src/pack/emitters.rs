@@ -19,7 +19,8 @@ pub fn emitters(records: &[GpuPrim], materials: &[Material]) -> (Vec<GpuLight>, 
     let mut by_material: BTreeMap<u32, Vec<GpuLight>> = BTreeMap::new();
     for p in records.iter().filter(|p| p.kind() == PRIM_TRIANGLE) {
         let m = p.material();
-        if !materials[m as usize].emits() {
+        // A material out of range is refused later (`SceneBuffers::check`), not here.
+        if !materials.get(m as usize).is_some_and(Material::emits) {
             continue;
         }
         let (u, v) = (p.p1 - p.p0, p.p2 - p.p0);

@@ -39,6 +39,8 @@ pub struct SceneBuffers {
     /// Bounded primitives in BVH leaf order.
     pub prims: Vec<GpuPrim>,
     pub tri_normals: Vec<GpuTriNormals>,
+    /// Texture coordinates, which the shader reads after `tri_normals` (`surface_texels`).
+    pub tri_uvs: Vec<GpuTriUvs>,
     pub planes: Vec<GpuPlane>,
     pub materials: Vec<GpuMaterial>,
     /// The scene's lights, then one `LIGHT_EMITTER` per emissive material
@@ -121,15 +123,16 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             PRIM_MATERIAL_MASK
         )));
     }
-    if prims.normals() > 1 << 24 {
+    if prims.normals() + prims.uvs() > 1 << 24 {
         return Err(too_big(format!(
-            "{} triangles with shading normals exceed the limit of 2^24",
-            prims.normals()
+            "{} triangles with shading normals and {} with texture coordinates exceed the limit of 2^24 together",
+            prims.normals(),
+            prims.uvs()
         )));
     }
     let bounds = prims.bounds();
     let epsilon = epsilon(bounds, &scene.camera);
-    let (mut records, tri_normals) = prims.into_records();
+    let (mut records, tri_normals, tri_uvs) = prims.into_records();
     let (mut emitters, emitter_triangles) = emitters::emitters(&records, &scene.materials);
     let planes = scene
         .planes
@@ -178,6 +181,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         nodes,
         prims: records,
         tri_normals,
+        tri_uvs,
         planes,
         materials,
         lights,
@@ -234,6 +238,12 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
+    /// The shader's texels of triangle surfaces: `tri_normals`, then `tri_uvs`.
+    pub fn surface_texels(&self) -> Vec<u8> {
+        let normals: &[u8] = bytemuck::cast_slice(&self.tri_normals);
+        [normals, bytemuck::cast_slice(&self.tri_uvs)].concat()
+    }
+
     /// The shader's lights buffer: `lights`, then `emitter_triangles`.
     pub fn gpu_lights(&self) -> Vec<GpuLight> {
         [&self.lights[..], &self.emitter_triangles[..]].concat()

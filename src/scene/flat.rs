@@ -8,13 +8,14 @@
 //! read either way). A triangle's record holds its three vertices until `to_edges`: its box
 //! is then the very floats `Triangle::bounds` gives, and so is the tree.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::bounds::Bounds;
 use super::model::{BoxPrim, Cone, MaterialId, Scene, Sphere, unit};
 use super::sink::Sink;
 use crate::gpu_types::{
-    GpuPrim, GpuTriNormals, PRIM_BOX, PRIM_CONE, PRIM_KIND_SHIFT, PRIM_SPHERE, PRIM_TRIANGLE,
+    GpuPrim, GpuTriNormals, GpuTriUvs, PRIM_BOX, PRIM_CONE, PRIM_KIND_SHIFT, PRIM_SPHERE,
+    PRIM_TRIANGLE,
 };
 
 /// Bounded primitives as packed records, by kind.
@@ -23,6 +24,7 @@ pub struct Flat {
     parts: [Vec<GpuPrim>; 4],
     counts: [usize; 4],
     tri_normals: Vec<GpuTriNormals>,
+    tri_uvs: Vec<GpuTriUvs>,
     bounds: Bounds,
     /// Triangles of some area and their summed area, by material: what `gpurt info` tells
     /// of an emitter (`pack` makes its light from the records).
@@ -43,6 +45,7 @@ impl Flat {
             parts: Default::default(),
             counts: [0; 4],
             tri_normals: Vec::new(),
+            tri_uvs: Vec::new(),
             bounds: Bounds::EMPTY,
             surface: Vec::new(),
             keep: true,
@@ -73,9 +76,26 @@ impl Flat {
     }
 
     /// The records in the model's order (triangles with their vertices, see `to_edges`),
-    /// and the triangles' shading normals, indexed by their records' normal slot.
-    pub fn into_records(self) -> (Vec<GpuPrim>, Vec<GpuTriNormals>) {
-        (concat(self.parts), self.tri_normals)
+    /// the triangles' shading normals, indexed by their records' normal slot, and their
+    /// texture coordinates, by their uv slot less the number of normals' records (the
+    /// shader reads both from one array, `SceneBuffers::surface_texels`).
+    pub fn into_records(self) -> (Vec<GpuPrim>, Vec<GpuTriNormals>, Vec<GpuTriUvs>) {
+        let mut records = concat(self.parts);
+        let normals = self.tri_normals.len() as f32;
+        if !self.tri_uvs.is_empty() {
+            for p in records
+                .iter_mut()
+                .filter(|p| p.kind() == PRIM_TRIANGLE && p.f0 >= 0.0)
+            {
+                p.f0 += normals;
+            }
+        }
+        (records, self.tri_normals, self.tri_uvs)
+    }
+
+    /// Triangles with texture coordinates taken.
+    pub fn uvs(&self) -> usize {
+        self.tri_uvs.len()
     }
 
     /// Counts a primitive of `kind` with bounds `b`; true when its record is kept.
@@ -107,7 +127,13 @@ impl Sink for Flat {
         }
     }
 
-    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId) {
+    fn triangle(
+        &mut self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+        material: MaterialId,
+    ) {
         let b = Bounds {
             min: v[0].min(v[1]).min(v[2]),
             max: v[0].max(v[1]).max(v[2]),
@@ -138,13 +164,25 @@ impl Sink for Flat {
             }
             None => -1.0,
         };
+        let uv_slot = match uv {
+            Some([uv0, uv1, uv2]) => {
+                self.tri_uvs.push(GpuTriUvs {
+                    uv0,
+                    uv1,
+                    uv2,
+                    ..Default::default()
+                });
+                (self.tri_uvs.len() - 1) as f32
+            }
+            None => -1.0,
+        };
         self.parts[PRIM_TRIANGLE as usize].push(GpuPrim {
             p0: v[0],
+            f0: uv_slot,
             p1: v[1],
             f1: slot,
             p2: v[2],
             tag: tag(PRIM_TRIANGLE, material),
-            ..Default::default()
         });
     }
 
@@ -251,7 +289,7 @@ impl FlatScene {
             prims.sphere(s);
         }
         for t in std::mem::take(&mut scene.triangles) {
-            prims.triangle(t.v, t.n.map(|n| *n), t.material);
+            prims.triangle(t.v, t.n.map(|n| *n), t.uv.map(|uv| *uv), t.material);
         }
         for c in std::mem::take(&mut scene.cones) {
             prims.cone(c);

@@ -1,7 +1,7 @@
 //! Mesh files (STL, OBJ, PLY) read into a sink, and the transform the `mesh` statement applies
 //! to them on their way in (`Placed`).
 
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec2, Vec3};
 
 use super::bounds::Bounds;
 use super::io::{FileKind, Input};
@@ -62,9 +62,10 @@ impl MeshTransform {
     pub fn apply(&self, tris: &mut [Triangle]) {
         let Some(m) = self.matrices() else { return };
         for t in tris {
-            let (v, n) = m.place(t.v, t.n.as_deref().copied());
+            let (v, n, uv) = m.place(t.v, t.n.as_deref().copied(), t.uv.as_deref().copied());
             t.v = v;
             t.n = n.map(Box::new);
+            t.uv = uv.map(Box::new);
         }
     }
 
@@ -95,15 +96,26 @@ struct Placement {
 }
 
 impl Placement {
-    fn place(&self, v: [Vec3; 3], n: Option<[Vec3; 3]>) -> ([Vec3; 3], Option<[Vec3; 3]>) {
-        let turn = |[a, b, c]: [Vec3; 3]| if self.mirrored { [a, c, b] } else { [a, b, c] };
+    /// The corners placed, and their normals and texture coordinates (which the
+    /// placement does not move) kept at their corners.
+    #[allow(clippy::type_complexity)]
+    fn place(
+        &self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+    ) -> ([Vec3; 3], Option<[Vec3; 3]>, Option<[Vec2; 3]>) {
+        fn turn<T>(mirrored: bool, [a, b, c]: [T; 3]) -> [T; 3] {
+            if mirrored { [a, c, b] } else { [a, b, c] }
+        }
         let v = v.map(|p| self.m * p + self.translate);
         // A normal the transform leaves without a direction makes the triangle flat.
         let n = n.and_then(|[a, b, c]| {
             let unit = |v| unit(self.nm * v);
             Some([unit(a)?, unit(b)?, unit(c)?])
         });
-        (turn(v), n.map(turn))
+        let m = self.mirrored;
+        (turn(m, v), n.map(|n| turn(m, n)), uv.map(|uv| turn(m, uv)))
     }
 }
 
@@ -126,13 +138,19 @@ impl<'a> Placed<'a> {
 }
 
 impl Sink for Placed<'_> {
-    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId) {
-        let (v, n) = match &self.placement {
-            Some(p) => p.place(v, n),
-            None => (v, n),
+    fn triangle(
+        &mut self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+        material: MaterialId,
+    ) {
+        let (v, n, uv) = match &self.placement {
+            Some(p) => p.place(v, n, uv),
+            None => (v, n, uv),
         };
         self.placed += 1;
-        self.sink.triangle(v, n, material);
+        self.sink.triangle(v, n, uv, material);
     }
     // Mesh files hold triangles only.
     fn sphere(&mut self, s: Sphere) {
@@ -168,6 +186,7 @@ mod tests {
             v: [Vec3::X, Vec3::Y, Vec3::Z],
             n: Some(Box::new([Vec3::X; 3])),
             material: MaterialId(0),
+            uv: None,
         }];
         xf.apply(&mut t);
         // X scaled to 2, rotated onto +Y, moved by 10 in x.
@@ -186,6 +205,7 @@ mod tests {
             v: [Vec3::ZERO, Vec3::X, Vec3::Y],
             n: Some(Box::new(n)),
             material: MaterialId(0),
+            uv: None,
         }];
         assert_eq!(t[0].cross(), Vec3::Z);
         let xf = MeshTransform {

@@ -7,7 +7,7 @@
 //! Primitives carry a `MaterialId` that indexes `Scene::materials` directly, so the same
 //! index is used on the GPU.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Index into `Scene::materials`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -154,6 +154,8 @@ pub struct Triangle {
     /// (8.4 million of them in mount-11).
     pub n: Option<Box<[Vec3; 3]>>,
     pub material: MaterialId,
+    /// Texture coordinates per vertex (OBJ's `vt`, glTF's `TEXCOORD_0`), boxed as `n` is.
+    pub uv: Option<Box<[Vec2; 3]>>,
 }
 
 impl Triangle {

@@ -1,6 +1,6 @@
-//! Wavefront OBJ reader: positions (`v`), normals (`vn`), faces (`f`) and their materials
-//! (`mtllib`, `usemtl`: `mtl`); polygons are triangulated by our ear clipper. Every other
-//! statement (`vt`, `o`, `g`, `s`, `l`, `p`, ...) is skipped.
+//! Wavefront OBJ reader: positions (`v`), normals (`vn`), texture coordinates (`vt`), faces
+//! (`f`) and their materials (`mtllib`, `usemtl`: `mtl`); polygons are triangulated by our
+//! ear clipper. Every other statement (`o`, `g`, `s`, `l`, `p`, ...) is skipped.
 //!
 //! Read as a stream: a face goes to the sink as soon as it is read, when every corner
 //! refers to a vertex already defined. A face may refer to vertices defined later, so the
@@ -12,7 +12,7 @@
 //! and column like every other reader's, and a face whose corners lack `vn` indices must get
 //! no shading normals (tobj makes up normals for them by repeating the previous index).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::lex::{Lexer, Token};
 use super::model::{MaterialId, Mesh, Triangle, unit};
@@ -22,11 +22,13 @@ use super::triangulate::triangulate;
 use crate::util::error::Result;
 use crate::util::limits::{MAX_MESH_VERTICES, MAX_POLYGON_VERTICES, MAX_PRIMITIVES};
 
-/// One face corner: 0-based position and normal indices (not yet checked against the
-/// arrays, since a face may refer to vertices defined later), and where it was written.
+/// One face corner: 0-based position, texture coordinate and normal indices (not yet
+/// checked against the arrays, since a face may refer to vertices defined later), and
+/// where it was written.
 #[derive(Clone, Copy)]
 struct Corner {
     v: i64,
+    t: Option<i64>,
     n: Option<i64>,
     /// Where it was written: its line and column, and its bytes for a message to quote
     /// while the reader still holds them.
@@ -53,11 +55,13 @@ pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
     let mut r = Reader {
         positions: Vec::new(),
         normals: Vec::new(),
+        uvs: Vec::new(),
         held: Vec::new(),
         faces: Vec::new(),
         face: Vec::new(),
         poly: Vec::new(),
         poly_n: Vec::new(),
+        poly_uv: Vec::new(),
         idx: Vec::new(),
     };
     while let Some(t) = lx.next_token()? {
@@ -91,6 +95,23 @@ pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
                 // `v x y z w` and `v x y z r g b` (vertex colours): the rest is ignored.
                 lx.skip_line(line)?;
             }
+            b"vt" => {
+                if r.uvs.len() >= MAX_MESH_VERTICES {
+                    return Err(lx.error_at(
+                        &t,
+                        format!("more than {MAX_MESH_VERTICES} texture coordinates (the limit)"),
+                    ));
+                }
+                // `vt u [v [w]]`: v is 0 where it is not given; w is not read.
+                let u = lx.number_on_line(&mut last, "texture coordinate")?;
+                let v = if lx.peek()?.is_some_and(|n| n.line == line) {
+                    lx.number_on_line(&mut last, "texture coordinate")?
+                } else {
+                    0.0
+                };
+                r.uvs.push(Vec2::new(u, v));
+                lx.skip_line(line)?;
+            }
             b"f" | b"fo" => {
                 r.face.clear();
                 while let Some(c) = lx.token_on_line(line)? {
@@ -102,7 +123,8 @@ pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
                             ),
                         ));
                     }
-                    let corner = corner(&lx, &c, r.positions.len(), r.normals.len())?;
+                    let defined = [r.positions.len(), r.uvs.len(), r.normals.len()];
+                    let corner = corner(&lx, &c, defined)?;
                     r.face.push(corner);
                 }
                 if out.sink.count() >= MAX_PRIMITIVES {
@@ -137,6 +159,7 @@ pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
 struct Reader {
     positions: Vec<Vec3>,
     normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
     /// Corners of the faces held until the end, and where each face starts in it with
     /// its material.
     held: Vec<Corner>,
@@ -145,14 +168,17 @@ struct Reader {
     face: Vec<Corner>,
     poly: Vec<Vec3>,
     poly_n: Vec<Vec3>,
+    poly_uv: Vec<Vec2>,
     idx: Vec<[u32; 3]>,
 }
 
 impl Reader {
-    /// Whether the corner's vertex (and normal) are defined by now.
+    /// Whether the corner's vertex (and texture coordinate and normal) are defined by now.
     fn defined(&self, c: &Corner) -> bool {
         let ok = |i: i64, n: usize| usize::try_from(i).is_ok_and(|i| i < n);
-        ok(c.v, self.positions.len()) && c.n.is_none_or(|n| ok(n, self.normals.len()))
+        ok(c.v, self.positions.len())
+            && c.t.is_none_or(|t| ok(t, self.uvs.len()))
+            && c.n.is_none_or(|n| ok(n, self.normals.len()))
     }
 
     /// Triangulates a face of `material` and gives its triangles to `out`'s sink, or warns
@@ -167,6 +193,7 @@ impl Reader {
         let at = |c: &Corner, msg: String| lx.error_at(&c.at, msg);
         self.poly.clear();
         self.poly_n.clear();
+        self.poly_uv.clear();
         for c in face {
             let p = usize::try_from(c.v)
                 .ok()
@@ -193,8 +220,22 @@ impl Reader {
                 };
                 self.poly_n.push(unit(n).unwrap_or(Vec3::ZERO));
             }
+            if let Some(t) = c.t {
+                let Some(&uv) = usize::try_from(t).ok().and_then(|i| self.uvs.get(i)) else {
+                    return Err(at(
+                        c,
+                        format!(
+                            "face corner refers to a texture coordinate that does not exist (the file has {})",
+                            self.uvs.len()
+                        ),
+                    ));
+                };
+                self.poly_uv.push(uv);
+            }
         }
-        let (poly, poly_n) = (&self.poly, &self.poly_n);
+        let (poly, poly_n, poly_uv) = (&self.poly, &self.poly_n, &self.poly_uv);
+        // Texture coordinates only when every corner has one.
+        let textured = poly_uv.len() == poly.len();
         // Shading normals only when every corner has a usable one; otherwise flat.
         let smooth = poly_n.len() == poly.len() && poly_n.iter().all(|n| n.length_squared() > 0.0);
         self.idx.clear();
@@ -210,15 +251,16 @@ impl Reader {
         for &[a, b, c] in &self.idx {
             let ix = [a, b, c].map(|i| i as usize);
             let n = smooth.then(|| ix.map(|i| poly_n[i]));
-            out.sink.triangle(ix.map(|i| poly[i]), n, material);
+            let uv = textured.then(|| ix.map(|i| poly_uv[i]));
+            out.sink.triangle(ix.map(|i| poly[i]), n, uv, material);
         }
         Ok(())
     }
 }
 
 /// A face corner `v`, `v/vt`, `v//vn` or `v/vt/vn`. Negative indices count back from the
-/// last vertex (or normal) defined so far; texture indices are ignored.
-fn corner(lx: &Lexer, t: &Token, n_pos: usize, n_nrm: usize) -> Result<Corner> {
+/// last vertex (texture coordinate, normal) defined so far, `defined` of each.
+fn corner(lx: &Lexer, t: &Token, [n_pos, n_uv, n_nrm]: [usize; 3]) -> Result<Corner> {
     let bad = || {
         lx.error_at(
             t,
@@ -238,13 +280,21 @@ fn corner(lx: &Lexer, t: &Token, n_pos: usize, n_nrm: usize) -> Result<Corner> {
         }
     };
     let v = resolve(parts.next().unwrap_or_default(), n_pos).ok_or_else(bad)?;
-    let _texture = parts.next();
-    let n = match parts.next() {
-        None | Some(b"") => None,
-        Some(s) => Some(resolve(s, n_nrm).ok_or_else(bad)?),
+    let mut index = |defined: usize| -> Result<Option<i64>> {
+        match parts.next() {
+            None | Some(b"") => Ok(None),
+            Some(s) => Ok(Some(resolve(s, defined).ok_or_else(bad)?)),
+        }
     };
+    let uv = index(n_uv)?;
+    let n = index(n_nrm)?;
     if parts.next().is_some() {
         return Err(bad());
     }
-    Ok(Corner { v, n, at: *t })
+    Ok(Corner {
+        v,
+        t: uv,
+        n,
+        at: *t,
+    })
 }

@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::bounds::Bounds;
 use super::model::{BoxPrim, Cone, Material, MaterialId, Mesh, Scene, Sphere, Triangle};
@@ -17,8 +17,15 @@ use crate::util::error::Result;
 /// Takes a reader's bounded primitives in the order it reads them.
 pub trait Sink {
     fn sphere(&mut self, s: Sphere);
-    /// A triangle, with its unit shading normals if it has them.
-    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId);
+    /// A triangle, with its unit shading normals and its texture coordinates if it has
+    /// them.
+    fn triangle(
+        &mut self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+        material: MaterialId,
+    );
     fn cone(&mut self, c: Cone);
     fn cuboid(&mut self, b: BoxPrim);
     /// Bounded primitives taken so far (held to `limits::MAX_PRIMITIVES` by the readers).
@@ -101,11 +108,18 @@ impl Sink for Collect {
     fn sphere(&mut self, s: Sphere) {
         self.spheres.push(s);
     }
-    fn triangle(&mut self, v: [Vec3; 3], n: Option<[Vec3; 3]>, material: MaterialId) {
+    fn triangle(
+        &mut self,
+        v: [Vec3; 3],
+        n: Option<[Vec3; 3]>,
+        uv: Option<[Vec2; 3]>,
+        material: MaterialId,
+    ) {
         self.triangles.push(Triangle {
             v,
             n: n.map(Box::new),
             material,
+            uv: uv.map(Box::new),
         });
     }
     fn cone(&mut self, c: Cone) {
@@ -137,7 +151,12 @@ impl Scene {
             sink.sphere(*s);
         }
         for t in &self.triangles {
-            sink.triangle(t.v, t.n.as_deref().copied(), t.material);
+            sink.triangle(
+                t.v,
+                t.n.as_deref().copied(),
+                t.uv.as_deref().copied(),
+                t.material,
+            );
         }
         for c in &self.cones {
             sink.cone(*c);

@@ -182,7 +182,7 @@ fn read_binary(
                 format!("triangle {} has a non-finite vertex", i + 1),
             ));
         }
-        sink.triangle(v, facet_normal(v3(&rec, 0)), material);
+        sink.triangle(v, facet_normal(v3(&rec, 0)), None, material);
     }
     // A stream whose size was not known may go on past the count.
     let extra = std::io::copy(&mut r, &mut std::io::sink()).map_err(io)?;
@@ -238,7 +238,7 @@ fn read_ascii(mut lx: Lexer, sink: &mut dyn Sink, material: MaterialId) -> Resul
                     }
                     expect(&mut lx, "endloop")?;
                     expect(&mut lx, "endfacet")?;
-                    sink.triangle(v, facet_normal(n), material);
+                    sink.triangle(v, facet_normal(n), None, material);
                 }
                 _ => {
                     return Err(lx.error_at(

@@ -77,6 +77,7 @@ fn stl_facet_normal_too_long_to_square_reads_as_a_unit_normal() {
         v: [Vec3::ZERO, Vec3::X, Vec3::Y],
         n: Some(Box::new([Vec3::new(3e38, 0.0, 0.0); 3])),
         material: MaterialId(0),
+        uv: None,
     };
     let bytes = stl::write_binary(&[tri], &[b'x'; 80]);
     let tris = stl::parse(&bytes, "t.stl").unwrap();
@@ -121,12 +122,14 @@ fn pack_shades_triangles_with_unusable_normals_flat() {
             v,
             n: Some(Box::new([Vec3::NEG_Y, b, Vec3::NEG_Y])),
             material: MaterialId(0),
+            uv: None,
         });
     }
     scene.triangles.push(Triangle {
         v,
         n: Some(Box::new([Vec3::new(0.0, -3e38, 3e38); 3])),
         material: MaterialId(0),
+        uv: None,
     });
     scene.materials.push(scene::Material::DEFAULT);
     let buffers = gpurt::pack::pack(scene.clone()).unwrap();

@@ -336,6 +336,7 @@ const WGSL_ONLY: &[(&str, &str)] = &[
         "load_tri_normals",
         "texture fetch: the CPU indexes the arrays",
     ),
+    ("load_tri_uvs", "texture fetch: the CPU indexes the arrays"),
     ("load_prim_tag", "texture fetch: the CPU indexes the arrays"),
     (
         "load_wide_node",

@@ -28,5 +28,6 @@ mod spd;
 #[path = "../../examples/spd.rs"]
 #[allow(dead_code)]
 mod spd_example;
+mod texture;
 mod view;
 mod window;

@@ -219,6 +219,7 @@ fn emitter_over(scene: &mut Scene) {
             v,
             n: None,
             material: lamp,
+            uv: None,
         });
     }
 }

@@ -16,7 +16,7 @@ mod material;
 use std::io::Read;
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -251,6 +251,17 @@ impl Reader<'_> {
                     )));
                 }
             }
+            if let Some(t) = prim.get(&gltf::Semantic::TexCoords(0)) {
+                // Floats, or normalised bytes and shorts.
+                let types = [DataType::F32, DataType::U8, DataType::U16];
+                let what = what("TEXCOORD_0");
+                buffers::check(&t, Dimensions::Vec2, &types, &self.buffers, &what, self.err)?;
+                if t.count() != pos.count() {
+                    return Err((self.err)(
+                        what + " has a count other than its POSITION count",
+                    ));
+                }
+            }
             if let Some(ix) = prim.indices() {
                 let types = [DataType::U8, DataType::U16, DataType::U32];
                 buffers::check(
@@ -277,6 +288,10 @@ impl Reader<'_> {
                 Some(n) => n
                     .map(|n| unit(normal_matrix * Vec3::from(n)).unwrap_or(Vec3::ZERO))
                     .collect(),
+                None => Vec::new(),
+            };
+            let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+                Some(t) => t.into_f32().map(Vec2::from).collect(),
                 None => Vec::new(),
             };
             let indices: Vec<u32> = match reader.read_indices() {
@@ -307,7 +322,8 @@ impl Reader<'_> {
                 let n = (!normals.is_empty())
                     .then(|| [normals[a], normals[b], normals[c]])
                     .filter(|n| n.iter().all(|n| *n != Vec3::ZERO));
-                sink.triangle(v, n, material);
+                let uv = (uvs.len() == points.len()).then(|| [uvs[a], uvs[b], uvs[c]]);
+                sink.triangle(v, n, uv, material);
                 Ok(())
             };
             let n = indices.len();

@@ -334,7 +334,7 @@ impl Parser<'_> {
             let (a, b, c) = (a as usize, b as usize, c as usize);
             let n = smooth.then(|| [self.normals[a], self.normals[b], self.normals[c]]);
             let v = [self.verts[a], self.verts[b], self.verts[c]];
-            self.sink.triangle(v, n, material);
+            self.sink.triangle(v, n, None, material);
         }
         Ok(())
     }

@@ -228,7 +228,7 @@ fn read_faces(body: &mut Body, el: &Element, mesh: &Vertices, out: &mut MeshOut)
         for &[a, b, c] in &idx {
             let ix = [a, b, c].map(|i| i as usize);
             let n = smooth.then(|| ix.map(|i| poly_n[i]));
-            out.sink.triangle(ix.map(|i| poly[i]), n, material);
+            out.sink.triangle(ix.map(|i| poly[i]), n, None, material);
         }
     }
     Ok(())

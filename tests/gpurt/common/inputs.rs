@@ -74,6 +74,7 @@ pub fn tri(v: [[f32; 3]; 3], n: Option<[f32; 3]>) -> Triangle {
         v: v.map(Vec3::from),
         n: n.map(|n| Box::new([Vec3::from(n); 3])),
         material: MaterialId(0),
+        uv: None,
     }
 }
 

@@ -233,6 +233,13 @@ pub fn check_variants(g: &Gpu, label: &str, scene: &Scene) -> Vec<Outcome> {
             "cost",
             RenderOptions {
                 aov: AOV_COST,
+                ..base.clone()
+            },
+        ),
+        (
+            "uv",
+            RenderOptions {
+                aov: AOV_UV,
                 ..base
             },
         ),

@@ -206,6 +206,7 @@ fn flat_bare_mesh_does_not_fight_its_ground() {
         ],
         n: None,
         material: gpurt::scene::MaterialId(0),
+        uv: None,
     };
     let dir = crate::common::temp_dir("flat-mesh");
     let path = dir.join("flat.stl");

@@ -37,6 +37,7 @@ fn with_triangles(n: usize) -> Scene {
             ],
             n: Some(Box::new([glam::Vec3::Y; 3])),
             material,
+            uv: None,
         });
     }
     scene
@@ -60,6 +61,7 @@ fn with_a_wall_of_normals(n: usize) -> Scene {
                 v: [a, b, c].map(|(x, z)| Vec3::new(x, 2.5, z)),
                 n: Some(Box::new([a, b, c].map(|(x, z)| normal(x, z).normalize()))),
                 material,
+                uv: None,
             });
         }
     }

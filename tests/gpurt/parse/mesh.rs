@@ -186,6 +186,13 @@ f 8 9 10 11 12 13
             8,
             "normal that does not exist",
         ),
+        (
+            "v 0 0 0\nvt 0 0\nf 1/1 1/2 1/1\n",
+            3,
+            7,
+            "texture coordinate that does not exist (the file has 1)",
+        ),
+        ("v 0 0 0\nvt 0 x\n", 2, 6, "number"),
         ("v 0 0 0\nf 1 0 1\n", 2, 5, "face corner"),
         ("v 0 0 0\nf 1 a/b 1\n", 2, 5, "'a/b'"),
         ("v 0 0\nv 1 1 1\n", 1, 6, "end of line"),

@@ -193,6 +193,7 @@ fn binary_stl_streams_and_reports_its_size_errors_plain_and_gzip() {
                 v: [o, o + Vec3::X, o + Vec3::Y],
                 n: (i % 2 == 0).then(|| Box::new([Vec3::Z; 3])),
                 material: scene::MaterialId(0),
+                uv: None,
             }
         })
         .collect();
@@ -343,6 +344,7 @@ fn obj_mtl_stl_and_mesh_includes_read_the_same_through_a_tiny_window() {
                 v: [o, o + Vec3::X, o + Vec3::Y],
                 n: (i % 2 == 0).then(|| Box::new([Vec3::Z; 3])),
                 material: scene::MaterialId(0),
+                uv: None,
             }
         })
         .collect();
