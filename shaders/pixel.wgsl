@@ -351,7 +351,8 @@ fn resume(
                 continue;
             }
             let s = surface(ray, hit);
-            let m = materials[s.material];
+            let m = textured(materials[s.material], hit);
+            st.albedo = m.color;
             st.ray_in = ray_in;
             st.point = s.point;
             st.ng = s.ng;
@@ -365,7 +366,8 @@ fn resume(
         } else {
             let s = Surface(st.point, st.ng, st.ns, st.entering != 0u, st.material);
             let ray_in = st.ray_in;
-            let m = materials[s.material];
+            var m = materials[s.material];
+            m.color = st.albedo;
             if (st.light < g.n_lights) {
                 let light = lights[st.light];
                 let samples = light_samples(light);

@@ -65,6 +65,67 @@ fn hit_uv(hit: Hit) -> vec2<f32> {
     return (1.0 - hit.u - hit.v) * t.uv0 + hit.u * t.uv1 + hit.v * t.uv2;
 }
 
+// Texel i along an axis of n texels whose coordinates wrap by `mode` (WRAP_*).
+fn wrap_index(i: i32, n: u32, mode: u32) -> u32 {
+    let m = i32(n);
+    if (mode == WRAP_CLAMP) {
+        return u32(clamp(i, 0, m - 1));
+    }
+    if (mode == WRAP_MIRROR) {
+        var k = i % (2 * m);
+        if (k < 0) {
+            k += 2 * m;
+        }
+        return u32(select(k, 2 * m - 1 - k, k >= m));
+    }
+    var k = i % m;
+    if (k < 0) {
+        k += m;
+    }
+    return u32(k);
+}
+
+// Coordinate c along an axis of n texels, reduced to one period of its wrap (so that the
+// texel indices stay small whatever c is), in texels with their centres at whole numbers.
+fn texel_coordinate(c: f32, n: u32, mode: u32) -> f32 {
+    var r: f32;
+    if (mode == WRAP_CLAMP) {
+        r = clamp(c, 0.0, 1.0);
+    } else if (mode == WRAP_MIRROR) {
+        r = c - 2.0 * floor(0.5 * c);
+    } else {
+        r = c - floor(c);
+    }
+    return r * f32(n) - 0.5;
+}
+
+// Texture i at `uv` (v up, the image's rows from the top), filtered bilinearly.
+fn texture_sample(i: u32, uv: vec2<f32>) -> vec3<f32> {
+    let t = load_texture(i);
+    let wrap_u = t.wrap & 3u;
+    let wrap_v = (t.wrap >> 2u) & 3u;
+    let x = texel_coordinate(uv.x, t.width, wrap_u);
+    let y = texel_coordinate(1.0 - uv.y, t.height, wrap_v);
+    let fx = x - floor(x);
+    let fy = y - floor(y);
+    let xa = wrap_index(i32(floor(x)), t.width, wrap_u);
+    let xb = wrap_index(i32(floor(x)) + 1, t.width, wrap_u);
+    let row_a = t.first + wrap_index(i32(floor(y)), t.height, wrap_v) * t.width;
+    let row_b = t.first + wrap_index(i32(floor(y)) + 1, t.height, wrap_v) * t.width;
+    let top = mix(load_texel(row_a + xa), load_texel(row_a + xb), fx);
+    let bottom = mix(load_texel(row_b + xa), load_texel(row_b + xb), fx);
+    return mix(top, bottom, fy);
+}
+
+// Material m where `hit` meets it: its colour times its texture's there.
+fn textured(m: Material, hit: Hit) -> Material {
+    var t = m;
+    if (TEXTURES && m.texture != NO_TEXTURE) {
+        t.color = m.color * texture_sample(m.texture, hit_uv(hit));
+    }
+    return t;
+}
+
 fn offset_origin(s: Surface, dir: vec3<f32>, eps: f32) -> vec3<f32> {
     if (dot(s.ng, dir) >= 0.0) {
         return s.point + eps * s.ng;
@@ -240,8 +301,8 @@ fn light_sample(s: Surface, m: Material, dir: vec3<f32>, r: vec3<f32>, light: Li
     return vec4<f32>(shadow * lr.intensity * lr.term, 1.0);
 }
 
-fn direct(s: Surface, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
-    let m = materials[s.material];
+// Direct light at surface `s` of material m (`textured`).
+fn direct(s: Surface, m: Material, dir: vec3<f32>, rng: ptr<function, u32>, rays: ptr<function, u32>) -> vec3<f32> {
     var colour = unlit(s, m);
     let r = reflect_dir(dir, s.ns);
     var li = 0u;
@@ -300,11 +361,11 @@ fn trace_ray(stack: ptr<function, array<Pending, TRACE_STACK>>, sp: ptr<function
         return ray_in.weight * globals.background;
     }
     let s = surface(ray, hit);
-    let colour = ray_in.weight * direct(s, ray.dir, rng, rays);
+    let m = textured(materials[s.material], hit);
+    let colour = ray_in.weight * direct(s, m, ray.dir, rng, rays);
     if (ray_in.depth >= globals.max_depth) {
         return colour;
     }
-    let m = materials[s.material];
     if (REFLECTION && m.ks > 0.0) {
         let dir = reflect_dir(ray.dir, s.ns);
         *rays += 1u;

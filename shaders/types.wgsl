@@ -77,7 +77,14 @@ struct Material {
     t: f32,
     ior: f32,
     emission: vec3<f32>,
-    _pad: u32,
+    texture: u32,
+}
+
+struct Texture {
+    first: u32,
+    width: u32,
+    height: u32,
+    wrap: u32,
 }
 
 struct Light {
@@ -116,6 +123,8 @@ struct Globals {
     counters: u32,
     wavefront: u32,
     shading: u32,
+    textures_at: u32,
+    _pad: array<u32, 3>,
 }
 
 struct Tile {
@@ -183,6 +192,8 @@ struct PixelState {
     light: u32,
     ns: vec3<f32>,
     light_sample: u32,
+    albedo: vec3<f32>,
+    _pad: u32,
     ray_in: Pending,
     material: u32,
     entering: u32,
@@ -215,6 +226,8 @@ override AREA_LIGHTS: bool = true;
 // Some material emits: its surfaces are seen with their own light and its triangles are
 // lights (LIGHT_EMITTER).
 override EMITTERS: bool = true;
+// Some material has a texture.
+override TEXTURES: bool = true;
 // Some material has Ks > 0 / T > 0.
 override REFLECTION: bool = true;
 override REFRACTION: bool = true;
@@ -376,6 +389,17 @@ fn load_tri_uvs(i: u32) -> TriUvs {
     let a = normal_texel(3u * i);
     let b = normal_texel(3u * i + 1u);
     return TriUvs(bitcast<vec2<f32>>(a.xy), bitcast<vec2<f32>>(a.zw), bitcast<vec2<f32>>(b.xy), array<u32, 6>());
+}
+
+// The header of texture i (src/gpu_types.rs: GpuTexture).
+fn load_texture(i: u32) -> Texture {
+    let t = normal_texel(globals.textures_at + i);
+    return Texture(t.x, t.y, t.z, t.w);
+}
+
+// Texel k of the textures' (counted from the first header), linear RGB.
+fn load_texel(k: u32) -> vec3<f32> {
+    return bitcast<vec3<f32>>(normal_texel(globals.textures_at + k).xyz);
 }
 
 fn load_tri_normals(i: u32) -> TriNormals {

@@ -150,7 +150,7 @@ fn wf_shade(@builtin(global_invocation_id) gid: vec3<u32>) {
     let r = wave_rays[wave_ray_index(d, k)];
     let ray = Ray(r.origin, r.dir);
     let s = surface(ray, hit);
-    let m = materials[s.material];
+    let m = textured(materials[s.material], hit);
     wave_hits[k].ambient = unlit(s, m);
     let mirror = reflect_dir(ray.dir, s.ns);
     // Area lights and emitters take the one kernel: no light here draws from the random

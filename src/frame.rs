@@ -154,6 +154,8 @@ pub fn globals_from(buffers: &SceneBuffers, c: &Camera, opts: &RenderOptions) ->
         counters: 0,
         wavefront: 0,
         shading: opts.shading.code(),
+        textures_at: buffers.textures_at(),
+        _pad: [0; 3],
     }
 }
 

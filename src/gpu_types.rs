@@ -113,8 +113,29 @@ pub struct GpuMaterial {
     pub t: f32,
     pub ior: f32,
     pub emission: Vec3,
-    pub _pad: u32,
+    /// Its texture's index (`GpuTexture`), or `NO_TEXTURE`.
+    pub texture: u32,
 }
+
+/// `GpuMaterial::texture` of a material without one.
+pub const NO_TEXTURE: u32 = u32::MAX;
+
+/// A texture's header, one texel in the triangle surfaces' texels
+/// (`SceneBuffers::surface_texels`, from `GpuGlobals::textures_at`): where its texels
+/// start, counted from that first header (each a texel of linear RGB floats, row by row
+/// from the top), its size, and how u (bits 0-1) and v (bits 2-3) wrap (`WRAP_*`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    pub first: u32,
+    pub width: u32,
+    pub height: u32,
+    pub wrap: u32,
+}
+
+pub const WRAP_REPEAT: u32 = 0;
+pub const WRAP_CLAMP: u32 = 1;
+pub const WRAP_MIRROR: u32 = 2;
 
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_DIRECTIONAL: u32 = 1;
@@ -228,6 +249,10 @@ pub struct GpuGlobals {
     /// The highlight's model: `SHADING_PHONG` or `SHADING_BLINN_PHONG` (see shade.wgsl's
     /// `highlight`).
     pub shading: u32,
+    /// Where the textures' headers start in the triangle surfaces' texels (after the
+    /// normals' and texture coordinates' records).
+    pub textures_at: u32,
+    pub _pad: [u32; 3],
 }
 
 /// The image region one dispatch traces, which of its samples, and where its pixels go in
@@ -351,6 +376,10 @@ pub const WGSL_CONSTANTS: &[(&str, WgslValue)] = wgsl_constants![
     U32 LIGHT_DIRECTIONAL,
     U32 LIGHT_AREA,
     U32 LIGHT_EMITTER,
+    U32 NO_TEXTURE,
+    U32 WRAP_REPEAT,
+    U32 WRAP_CLAMP,
+    U32 WRAP_MIRROR,
     U32 AOV_COLOR,
     U32 AOV_NORMAL,
     U32 AOV_DEPTH,
@@ -398,7 +427,8 @@ const _: () = {
     assert!(size_of::<GpuPlane>() == 32);
     assert!(size_of::<GpuMaterial>() == 48);
     assert!(size_of::<GpuLight>() == 64);
-    assert!(size_of::<GpuGlobals>() == 144);
+    assert!(size_of::<GpuGlobals>() == 160);
+    assert!(size_of::<GpuTexture>() == 16);
     assert!(size_of::<GpuTile>() == 40);
     assert!(std::mem::offset_of!(GpuGlobals, width) == 96);
 };

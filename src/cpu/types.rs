@@ -18,6 +18,9 @@ pub struct Bindings<'a> {
     pub tri_normals: &'a [GpuTriNormals],
     /// Texture coordinates, whose slots count on from the normals' (`GpuPrim`).
     pub tri_uvs: &'a [GpuTriUvs],
+    /// The textures' headers and texels, which the shader reads after `tri_uvs`.
+    pub textures: &'a [GpuTexture],
+    pub texels: &'a [glam::Vec4],
     pub planes: &'a [GpuPlane],
     pub materials: &'a [GpuMaterial],
     pub lights: &'a [GpuLight],
@@ -52,6 +55,8 @@ impl<'a> Bindings<'a> {
             prims: &buffers.prims,
             tri_normals: &buffers.tri_normals,
             tri_uvs: &buffers.tri_uvs,
+            textures: &buffers.textures,
+            texels: &buffers.texels,
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,
@@ -75,6 +80,8 @@ impl<'a> Bindings<'a> {
             prims: cwide.map_or(&buffers.prims, |c| &c.prims),
             tri_normals: &buffers.tri_normals,
             tri_uvs: &buffers.tri_uvs,
+            textures: &buffers.textures,
+            texels: &buffers.texels,
             planes: &buffers.planes,
             materials: &buffers.materials,
             lights: &buffers.lights,

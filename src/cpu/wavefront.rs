@@ -12,7 +12,8 @@ use glam::Vec3;
 
 use super::pixel::sample_ray;
 use super::shade::{
-    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface, unlit,
+    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface, textured,
+    unlit,
 };
 use super::traverse::{closest_hit, transmission};
 use super::types::{Bindings, Ray, RayCounts};
@@ -129,7 +130,7 @@ impl Wave<'_, '_> {
             dir: r.dir,
         };
         let s = surface(b, &ray, &hit);
-        let m = &b.materials[s.material as usize];
+        let m = &textured(b, &b.materials[s.material as usize], &hit);
         self.hits[k as usize].ambient = unlit(g, &s, m);
         let mirror = reflect_dir(ray.dir, s.ns);
         // Area lights and emitters take the one kernel: no light here draws from the random

@@ -22,6 +22,8 @@ pub struct Specialization {
     pub area_lights: bool,
     /// Some material emits (seen, and its triangles lights).
     pub emitters: bool,
+    /// Some material has a texture.
+    pub textures: bool,
     pub reflection: bool,
     pub refraction: bool,
     pub lens: bool,
@@ -74,6 +76,7 @@ impl Specialization {
                 .materials
                 .iter()
                 .any(|m| m.emission != glam::Vec3::ZERO),
+            textures: scene.materials.iter().any(|m| m.texture != NO_TEXTURE),
             reflection: scene.materials.iter().any(|m| m.ks > 0.0),
             refraction: scene.materials.iter().any(|m| m.t > 0.0),
             lens: g.aperture > 0.0,
@@ -111,6 +114,7 @@ impl Specialization {
             ("DIRECTIONAL_LIGHTS", b(self.directional_lights)),
             ("AREA_LIGHTS", b(self.area_lights)),
             ("EMITTERS", b(self.emitters)),
+            ("TEXTURES", b(self.textures)),
             ("REFLECTION", b(self.reflection)),
             ("REFRACTION", b(self.refraction)),
             ("LENS", b(self.lens)),
@@ -154,6 +158,7 @@ mod tests {
             directional_lights: true,
             area_lights: true,
             emitters: true,
+            textures: true,
             reflection: true,
             refraction: true,
             lens: true,

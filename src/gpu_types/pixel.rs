@@ -26,6 +26,9 @@ pub struct GpuPixelState {
     pub light: u32,
     pub ns: Vec3,
     pub light_sample: u32,
+    /// The colour of the surface being lit, its texture's applied (`textured`).
+    pub albedo: Vec3,
+    pub _pad: u32,
     pub ray_in: [u32; 12],
     pub material: u32,
     pub entering: u32,
@@ -79,6 +82,6 @@ pub const RESUME_X_MASK: u32 = (1 << RESUME_Y_SHIFT) - 1;
 pub const PIXEL_CUT_SHORT: u32 = 1 << 31;
 
 const _: () = {
-    assert!(size_of::<GpuPixelState>() == 192 + 48 * RAY_STACK);
+    assert!(size_of::<GpuPixelState>() == 208 + 48 * RAY_STACK);
     assert!(size_of::<GpuPixelCounts>() == 32);
 };

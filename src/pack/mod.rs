@@ -11,9 +11,9 @@ use crate::bvh::{self, FlatBvh};
 use crate::bvh::{cwide, qwide};
 use crate::gpu_types::*;
 use crate::scene::flat::{self, FlatScene};
-use crate::scene::{Bounds, Camera, Light, Scene, Sink};
+use crate::scene::{Bounds, Camera, Light, Scene, Sink, Texture, Wrap};
 use crate::util::error::{Error, Result};
-use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH};
+use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH, MAX_TEXELS};
 
 mod check;
 mod emitters;
@@ -41,6 +41,10 @@ pub struct SceneBuffers {
     pub tri_normals: Vec<GpuTriNormals>,
     /// Texture coordinates, which the shader reads after `tri_normals` (`surface_texels`).
     pub tri_uvs: Vec<GpuTriUvs>,
+    /// The textures' headers and their texels (linear RGB, each a texel), which the shader
+    /// reads after `tri_uvs`: a header's `first` counts from the first header.
+    pub textures: Vec<GpuTexture>,
+    pub texels: Vec<glam::Vec4>,
     pub planes: Vec<GpuPlane>,
     pub materials: Vec<GpuMaterial>,
     /// The scene's lights, then one `LIGHT_EMITTER` per emissive material
@@ -155,9 +159,10 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             t: m.t,
             ior: m.ior,
             emission: m.emission,
-            _pad: 0,
+            texture: m.texture.unwrap_or(NO_TEXTURE),
         })
         .collect();
+    let (textures, texels) = pack_textures(&scene.textures).map_err(too_big)?;
     let mut lights = pack_lights(&scene.lights);
     lights.append(&mut emitters);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
@@ -182,6 +187,8 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
         prims: records,
         tri_normals,
         tri_uvs,
+        textures,
+        texels,
         planes,
         materials,
         lights,
@@ -238,10 +245,23 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 }
 
 impl SceneBuffers {
-    /// The shader's texels of triangle surfaces: `tri_normals`, then `tri_uvs`.
+    /// The shader's texels of triangle surfaces: `tri_normals`, then `tri_uvs`, then the
+    /// textures' headers and texels.
     pub fn surface_texels(&self) -> Vec<u8> {
         let normals: &[u8] = bytemuck::cast_slice(&self.tri_normals);
-        [normals, bytemuck::cast_slice(&self.tri_uvs)].concat()
+        let parts = [
+            normals,
+            bytemuck::cast_slice(&self.tri_uvs),
+            bytemuck::cast_slice(&self.textures),
+            bytemuck::cast_slice(&self.texels),
+        ];
+        parts.concat()
+    }
+
+    /// The texel of `surface_texels` where the textures' headers start (three a record
+    /// before them).
+    pub fn textures_at(&self) -> u32 {
+        3 * (self.tri_normals.len() + self.tri_uvs.len()) as u32
     }
 
     /// The shader's lights buffer: `lights`, then `emitter_triangles`.
@@ -395,6 +415,38 @@ pub fn epsilon(b: Bounds, camera: &Camera) -> f32 {
     EPSILON_REL * size.max(1e-3)
 }
 
+/// The textures' headers and texels (`SceneBuffers::textures`), or why they cannot be
+/// held: more texels than `MAX_TEXELS`.
+fn pack_textures(
+    textures: &[Texture],
+) -> std::result::Result<(Vec<GpuTexture>, Vec<glam::Vec4>), String> {
+    let total: u64 = textures.iter().map(|t| t.texels.len() as u64).sum();
+    if total > MAX_TEXELS {
+        return Err(format!(
+            "{total} texels of textures exceed the limit of {MAX_TEXELS}"
+        ));
+    }
+    let code = |w: Wrap| match w {
+        Wrap::Repeat => WRAP_REPEAT,
+        Wrap::Clamp => WRAP_CLAMP,
+        Wrap::Mirror => WRAP_MIRROR,
+    };
+    let mut first = textures.len() as u32;
+    let mut headers = Vec::with_capacity(textures.len());
+    let mut texels = Vec::with_capacity(total as usize);
+    for t in textures {
+        headers.push(GpuTexture {
+            first,
+            width: t.width,
+            height: t.height,
+            wrap: code(t.wrap[0]) | code(t.wrap[1]) << 2,
+        });
+        texels.extend(t.texels.iter().map(|c| c.extend(1.0)));
+        first += t.texels.len() as u32;
+    }
+    Ok((headers, texels))
+}
+
 /// Uncoloured lights get SPD's intensity `1/sqrt(number of lights)`.
 fn pack_lights(lights: &[Light]) -> Vec<GpuLight> {
     let default = Vec3::splat(1.0 / (lights.len().max(1) as f32).sqrt());
@@ -450,6 +502,7 @@ mod tests {
             n_planes: b.planes.len() as u32,
             n_lights: b.lights.len() as u32,
             traversal: TRAVERSAL_SINGLE,
+            textures_at: b.textures_at(),
             ..GpuGlobals::default()
         }
     }

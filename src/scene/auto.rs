@@ -102,6 +102,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
         t: 0.0,
         ior: 1.0,
         emission: Vec3::ZERO,
+        texture: None,
     });
     // A little below the mesh's lowest point (a thousandth of its size), so that a flat
     // mesh lying on that plane does not z-fight with the ground.

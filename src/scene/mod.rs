@@ -32,8 +32,8 @@ use std::path::Path;
 pub use bounds::{Bounded, Bounds};
 pub use flat::{Flat, FlatScene};
 pub use model::{
-    BoxPrim, Camera, Cone, Light, Material, MaterialId, Mesh, Plane, Scene, Sphere, Triangle,
-    nff_default_camera, unit,
+    BoxPrim, Camera, Cone, Light, Material, MaterialId, Mesh, Plane, Scene, Sphere, Texture,
+    Triangle, Wrap, nff_default_camera, unit,
 };
 pub use options::ReadOptions;
 pub use sink::{Collect, Sink};

@@ -87,6 +87,9 @@ pub struct Material {
     pub t: f32,
     pub ior: f32,
     pub emission: Vec3,
+    /// The image its colour is multiplied by where its surfaces have texture coordinates
+    /// (`Scene::textures`): OBJ's `map_Kd`, glTF's `baseColorTexture`.
+    pub texture: Option<u32>,
 }
 
 impl Material {
@@ -104,6 +107,7 @@ impl Material {
         t: 0.0,
         ior: 1.0,
         emission: Vec3::ZERO,
+        texture: None,
     };
     /// Neutral grey given to a bare mesh rendered without a scene file.
     pub const NEUTRAL_GREY: Material = Material {
@@ -114,6 +118,7 @@ impl Material {
         t: 0.0,
         ior: 1.0,
         emission: Vec3::ZERO,
+        texture: None,
     };
 }
 
@@ -195,6 +200,27 @@ pub struct BoxPrim {
     pub material: MaterialId,
 }
 
+/// An image a material's colour is multiplied by: linear RGB (decoded from sRGB where
+/// its format says so), row by row from the top, and how it repeats beyond [0, 1].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    /// Where it came from, for messages and `gpurt info`.
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<Vec3>,
+    /// How u and v wrap.
+    pub wrap: [Wrap; 2],
+}
+
+/// What a texture coordinate beyond [0, 1] reads (glTF's sampler wrap modes; OBJ repeats).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
 /// A whole scene as read from one file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Scene {
@@ -206,6 +232,8 @@ pub struct Scene {
     pub ambient: Option<Vec3>,
     pub lights: Vec<Light>,
     pub materials: Vec<Material>,
+    /// The images materials name (`Material::texture`).
+    pub textures: Vec<Texture>,
     pub spheres: Vec<Sphere>,
     pub triangles: Vec<Triangle>,
     pub planes: Vec<Plane>,
@@ -231,6 +259,7 @@ impl Scene {
             ambient: None,
             lights: Vec::new(),
             materials: Vec::new(),
+            textures: Vec::new(),
             spheres: Vec::new(),
             triangles: Vec::new(),
             planes: Vec::new(),

@@ -69,6 +69,7 @@ impl Block {
             t: 1.0 - self.d,
             ior: if glass { self.ni } else { 1.0 },
             emission: self.ke,
+            texture: None,
         }
     }
 }

@@ -27,6 +27,9 @@ pub const DEFAULT_AMBIENT: f32 = 0.1;
 /// readers stream, so a bomb no longer costs memory, but it would cost time (a plain
 /// file is as long as it is on disk, and has no limit).
 pub const MAX_FILE_BYTES: u64 = 4 << 30;
+/// Most texels a scene's textures may hold together (16 bytes each on the device and in
+/// memory: 1 GiB).
+pub const MAX_TEXELS: u64 = 1 << 26;
 /// Most bytes of glTF JSON read (a `.gltf`, or a `.glb`'s JSON chunk): the JSON is parsed
 /// whole, and only data URIs make it this large, each held three times over while it is
 /// parsed and decoded. A buffer of more belongs in a `.bin` file or a `.glb`'s binary chunk.

@@ -24,6 +24,7 @@ fn rust_layouts() -> Vec<Layout> {
             GpuTriNormals,
             [n0, _pad0, n1, _pad1, n2, _pad2]
         ),
+        layout!("TriUvs", GpuTriUvs, [uv0, uv1, uv2, _pad]),
         layout!("Node", GpuNode, [min, offset, max, count_axis]),
         layout!("WideNode", GpuWideNode, [lo, hi, entry]),
         layout!(
@@ -63,7 +64,7 @@ fn rust_layouts() -> Vec<Layout> {
         layout!(
             "Material",
             GpuMaterial,
-            [color, kd, ks, shine, t, ior, emission, _pad]
+            [color, kd, ks, shine, t, ior, emission, texture]
         ),
         layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, first]),
         layout!(
@@ -94,8 +95,11 @@ fn rust_layouts() -> Vec<Layout> {
                 counters,
                 wavefront,
                 shading,
+                textures_at,
+                _pad
             ]
         ),
+        layout!("Texture", GpuTexture, [first, width, height, wrap]),
         layout!(
             "Tile",
             GpuTile,
@@ -337,6 +341,8 @@ const WGSL_ONLY: &[(&str, &str)] = &[
         "texture fetch: the CPU indexes the arrays",
     ),
     ("load_tri_uvs", "texture fetch: the CPU indexes the arrays"),
+    ("load_texture", "texture fetch: the CPU indexes the arrays"),
+    ("load_texel", "texture fetch: the CPU indexes the arrays"),
     ("load_prim_tag", "texture fetch: the CPU indexes the arrays"),
     (
         "load_wide_node",

@@ -234,7 +234,7 @@ pub fn render_tile(
                 // Shadow rays to each point and directional light, one packet a light, and
                 // what the light gives each surface, as `light_sample` works it out.
                 let dirs = lanes.map(|(_, ray, _)| ray.dir);
-                let lit = Surfaces::new(b, &surfaces, &dirs);
+                let lit = Surfaces::new(b, &surfaces, &hits, &dirs);
                 for (j, &li) in shadowed.iter().enumerate() {
                     packet.clear();
                     let rays = light_rays(b, &lit, &b.lights[li], &mut packet);

@@ -19,8 +19,8 @@ use glam::Vec3;
 
 use super::packet::{MAX_LANES, Packet};
 use crate::cpu::intersect::lanes_of;
-use crate::cpu::shade::{Surface, light_samples};
-use crate::cpu::types::{Bindings, Ray};
+use crate::cpu::shade::{Surface, light_samples, textured};
+use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::gpu_types::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, SHADING_BLINN_PHONG};
 
 /// One value a lane.
@@ -55,8 +55,13 @@ pub struct Surfaces {
 
 impl Surfaces {
     /// The surfaces `surfaces` (a lane each, `None` where the camera ray met nothing) of
-    /// the camera rays with directions `dirs`.
-    pub fn new(b: &Bindings, surfaces: &[Option<Surface>; MAX_LANES], dirs: &[Vec3]) -> Self {
+    /// the camera rays with directions `dirs`, met at `hits` (their materials `textured`).
+    pub fn new(
+        b: &Bindings,
+        surfaces: &[Option<Surface>; MAX_LANES],
+        hits: &[Hit; MAX_LANES],
+        dirs: &[Vec3],
+    ) -> Self {
         let zero = [[0.0; MAX_LANES]; 3];
         let mut all = Surfaces {
             live: 0,
@@ -72,7 +77,7 @@ impl Surfaces {
         };
         for (k, s) in surfaces.iter().enumerate() {
             let Some(s) = s else { continue };
-            let m = &b.materials[s.material as usize];
+            let m = &textured(b, &b.materials[s.material as usize], &hits[k]);
             all.live |= 1 << k;
             for a in 0..3 {
                 all.point[a][k] = s.point[a];

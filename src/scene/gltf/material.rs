@@ -56,5 +56,6 @@ pub fn whitted(m: &gltf::Material) -> Material {
                 0.0
             }
         }),
+        texture: None,
     }
 }

@@ -82,6 +82,7 @@ impl Parser<'_> {
             // T = 0 makes ior meaningless (SPD writes 0): keep a harmless value.
             ior: if t > 0.0 { ior } else { 1.0 },
             emission: Vec3::ZERO,
+            texture: None,
         };
         self.material = Some(self.intern(m));
         Ok(())

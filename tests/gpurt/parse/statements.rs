@@ -71,6 +71,7 @@ fn materials_default_sharing_and_zero_ior() {
         t: 0.0,
         ior: 1.0,
         emission: Vec3::ZERO,
+        texture: None,
     };
     assert_eq!(Material::DEFAULT, default);
     let m = |i: usize| s.materials[s.spheres[i].material.0 as usize];
@@ -86,6 +87,7 @@ fn materials_default_sharing_and_zero_ior() {
             t: 0.0,
             ior: 1.0,
             emission: Vec3::ZERO,
+            texture: None,
         }
     );
     let cone_m = s.materials[s.cones[0].material.0 as usize];
