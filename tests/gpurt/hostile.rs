@@ -35,6 +35,41 @@ fn peak_memory_kib(pid: u32) -> Option<u64> {
     line.trim().trim_end_matches(" kB").parse().ok()
 }
 
+/// `gpurt SCENE --backend cpu -o out.png` in `dir`, its peak resident memory sampled from
+/// /proc every 10 ms while it runs: its output, that peak in KiB and the seconds it took.
+/// Killed, and the test failed, after 120 s.
+fn render_sampling_peak(dir: &Path, scene: &str) -> (std::process::Output, u64, f64) {
+    use std::process::{Command, Stdio};
+    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args([scene, "--backend", "cpu", "-o", "out.png"])
+        .current_dir(dir)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("gpurt starts");
+    let id = child.id();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(child.wait_with_output());
+    });
+    let (mut peak_kib, start) = (0u64, std::time::Instant::now());
+    loop {
+        if let Ok(out) = rx.recv_timeout(Duration::from_millis(10)) {
+            return (
+                out.expect("gpurt ends"),
+                peak_kib,
+                start.elapsed().as_secs_f64(),
+            );
+        }
+        peak_kib = peak_kib.max(peak_memory_kib(id).unwrap_or(0));
+        if start.elapsed() > Duration::from_secs(120) {
+            let _ = Command::new("kill")
+                .args(["-KILL", &id.to_string()])
+                .status();
+            panic!("still reading {scene} after 120 s");
+        }
+    }
+}
+
 /// A directory with the hostile entries: `dir.obj/`, `fifo.stl` (where `mkfifo` exists;
 /// under `CI=true` it must), `zero.stl` -> /dev/zero, and `scene.nff`, a scene that names
 /// itself as a mesh.
@@ -277,7 +312,6 @@ fn a_16k_frame_at_4096_spp_starts_small_and_stops_on_ctrl_c() {
 #[test]
 fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
     use std::io::Write;
-    use std::process::{Command, Stdio};
     let dir = temp_dir("bomb");
     let mut blanks = vec![b' '; 64 << 20];
     blanks[0] = b'#';
@@ -290,34 +324,11 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
     bomb.extend(last.finish().unwrap());
     drop(blanks);
     std::fs::write(dir.join("bomb.nff.gz"), &bomb).unwrap();
-    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(["bomb.nff.gz", "--backend", "cpu", "-o", "out.png"])
-        .current_dir(&dir)
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("gpurt starts");
-    let id = child.id();
-    let pid = id.to_string();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(child.wait_with_output());
-    });
-    let (mut peak_kib, start) = (0u64, std::time::Instant::now());
-    let out = loop {
-        if let Ok(out) = rx.recv_timeout(Duration::from_millis(20)) {
-            break out.expect("gpurt ends");
-        }
-        peak_kib = peak_kib.max(peak_memory_kib(id).unwrap_or(0));
-        if start.elapsed() > Duration::from_secs(120) {
-            let _ = Command::new("kill").args(["-KILL", &pid]).status();
-            panic!("still reading the bomb after 120 s");
-        }
-    };
+    let (out, peak_kib, secs) = render_sampling_peak(&dir, "bomb.nff.gz");
     let stderr = String::from_utf8_lossy(&out.stderr);
     println!(
-        "{} bytes of gzip refused in {:.1} s, peak {} MiB",
+        "{} bytes of gzip refused in {secs:.1} s, peak {} MiB",
         bomb.len(),
-        start.elapsed().as_secs_f64(),
         peak_kib / 1024
     );
     assert_eq!(out.status.code(), Some(2), "{stderr}");
@@ -339,7 +350,6 @@ fn a_gzip_bomb_past_4_gib_is_refused_within_bounded_memory() {
 #[test]
 fn a_gltf_data_uri_of_gigabytes_is_refused_within_bounded_memory() {
     use std::io::Write;
-    use std::process::{Command, Stdio};
     let dir = temp_dir("data-uri");
     let path = dir.join("huge.gltf");
     let mut f = std::fs::File::create(&path).unwrap();
@@ -347,35 +357,11 @@ fn a_gltf_data_uri_of_gigabytes_is_refused_within_bounded_memory() {
         .unwrap();
     f.set_len(3 << 30).unwrap();
     drop(f);
-    let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(["huge.gltf", "--backend", "cpu", "-o", "out.png"])
-        .current_dir(&dir)
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("gpurt starts");
-    let id = child.id();
-    let (tx, rx) = mpsc::channel();
-    std::thread::spawn(move || {
-        let _ = tx.send(child.wait_with_output());
-    });
-    let (mut peak_kib, start) = (0u64, std::time::Instant::now());
-    let out = loop {
-        if let Ok(out) = rx.recv_timeout(Duration::from_millis(10)) {
-            break out.expect("gpurt ends");
-        }
-        peak_kib = peak_kib.max(peak_memory_kib(id).unwrap_or(0));
-        if start.elapsed() > Duration::from_secs(120) {
-            let _ = Command::new("kill")
-                .args(["-KILL", &id.to_string()])
-                .status();
-            panic!("still reading the data URI after 120 s");
-        }
-    };
+    let (out, peak_kib, secs) = render_sampling_peak(&dir, "huge.gltf");
     let _ = std::fs::remove_file(&path);
     let stderr = String::from_utf8_lossy(&out.stderr);
     println!(
-        "a 3 GiB data URI refused in {:.1} s, peak {} MiB",
-        start.elapsed().as_secs_f64(),
+        "a 3 GiB data URI refused in {secs:.1} s, peak {} MiB",
         peak_kib / 1024
     );
     assert_eq!(out.status.code(), Some(2), "{stderr}");

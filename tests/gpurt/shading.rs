@@ -9,7 +9,6 @@
 //! binary before and after.
 
 use std::path::Path;
-use std::sync::atomic::AtomicBool;
 
 use glam::DVec3;
 use glam::Vec3;
@@ -73,23 +72,7 @@ fn render(scene: &Scene, shading: Shading, gpu: Option<&Gpu>) -> Film {
     {
         l.nu = EMITTER_SAMPLES;
     }
-    let globals = frame::globals(&buffers, &opts);
-    let never = AtomicBool::new(false);
-    match gpu {
-        None => gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).map(|r| r.0),
-        Some(g) => g
-            .renderer
-            .render(
-                &g.ctx.device,
-                &g.ctx.queue,
-                &buffers,
-                &globals,
-                &|_| {},
-                &never,
-            )
-            .map(|r| r.0),
-    }
-    .expect("renders")
+    versus::render_on(&buffers, &frame::globals(&buffers, &opts), gpu)
 }
 
 fn centre(film: &Film) -> DVec3 {

@@ -4,8 +4,6 @@
 //! same quad written as OBJ and as glTF. Textures: a checkerboard on the quad against the
 //! bilinear filter written out again, on both renderers, and lit under every variant.
 
-use std::sync::atomic::AtomicBool;
-
 use base64::Engine;
 use glam::{DVec2, DVec3, Vec3};
 use gpurt::film::Film;
@@ -50,23 +48,7 @@ fn render_uv(scene: &Scene, gpu: Option<&Gpu>) -> Film {
 
 fn render(scene: &Scene, gpu: Option<&Gpu>, opts: RenderOptions) -> Film {
     let buffers = pack::pack(scene.clone()).expect("packs");
-    let globals = frame::globals(&buffers, &opts);
-    let never = AtomicBool::new(false);
-    match gpu {
-        None => gpurt::cpu::render(&buffers, &globals, &|_| {}, &never).map(|r| r.0),
-        Some(g) => g
-            .renderer
-            .render(
-                &g.ctx.device,
-                &g.ctx.queue,
-                &buffers,
-                &globals,
-                &|_| {},
-                &never,
-            )
-            .map(|r| r.0),
-    }
-    .expect("renders")
+    versus::render_on(&buffers, &frame::globals(&buffers, &opts), gpu)
 }
 
 /// Every pixel whose ray meets the quad clearly inside (not within 1% of its rim or of

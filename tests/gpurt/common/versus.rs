@@ -56,6 +56,26 @@ pub fn gpu() -> Option<&'static Gpu> {
     }
 }
 
+/// The frame `globals` of `buffers` on the CPU, or on the GPU given one.
+pub fn render_on(buffers: &SceneBuffers, globals: &GpuGlobals, gpu: Option<&Gpu>) -> Film {
+    let never = AtomicBool::new(false);
+    match gpu {
+        None => gpurt::cpu::render(buffers, globals, &|_| {}, &never).map(|r| r.0),
+        Some(g) => g
+            .renderer
+            .render(
+                &g.ctx.device,
+                &g.ctx.queue,
+                buffers,
+                globals,
+                &|_| {},
+                &never,
+            )
+            .map(|r| r.0),
+    }
+    .expect("renders")
+}
+
 pub fn render_both(
     g: &Gpu,
     scene: &Scene,
