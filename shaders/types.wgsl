@@ -384,24 +384,6 @@ fn load_cwide_node(i: u32) -> CwideNode {
     );
 }
 
-// The texture coordinates of uv slot i, a record of the normals' three texels.
-fn load_tri_uvs(i: u32) -> TriUvs {
-    let a = normal_texel(3u * i);
-    let b = normal_texel(3u * i + 1u);
-    return TriUvs(bitcast<vec2<f32>>(a.xy), bitcast<vec2<f32>>(a.zw), bitcast<vec2<f32>>(b.xy), array<u32, 6>());
-}
-
-// The header of texture i (src/gpu_types.rs: GpuTexture).
-fn load_texture(i: u32) -> Texture {
-    let t = normal_texel(globals.textures_at + i);
-    return Texture(t.x, t.y, t.z, t.w);
-}
-
-// Texel k of the textures' (counted from the first header), linear RGB.
-fn load_texel(k: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(normal_texel(globals.textures_at + k).xyz);
-}
-
 fn load_tri_normals(i: u32) -> TriNormals {
     let a = normal_texel(3u * i);
     let b = normal_texel(3u * i + 1u);

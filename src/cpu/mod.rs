@@ -4,7 +4,8 @@
 //!
 //! Two rooms. Here, the twins: one module per WGSL file, same function names, same order
 //! of operations: `types`, `intersect`, `walk` (where a traversal stands), `cwide` (the
-//! compressed tree's walk), `traverse`, `shade`, `pixel` (a pixel's camera rays),
+//! compressed tree's walk), `traverse`, `texture` (what a hit's texture gives its
+//! material), `shade`, `pixel` (a pixel's camera rays),
 //! `wave` (a wave's records) and `wavefront` (the wavefront kernels' steps over queues of
 //! pixels). In `fast/`, what
 //! only the CPU has, which finds the same hits faster: its eight-wide walk, coherent rays
@@ -15,6 +16,7 @@ pub mod fast;
 pub mod intersect;
 pub mod pixel;
 pub mod shade;
+pub mod texture;
 pub mod traverse;
 pub mod types;
 pub mod walk;

@@ -3,7 +3,8 @@
 
 use glam::{Vec2, Vec3};
 
-use super::shade::{Tracer, count_nodes, hit_uv, surface, trace};
+use super::shade::{Tracer, count_nodes, surface, trace};
+use super::texture::hit_uv;
 use super::types::{Bindings, Ray, RayCounts, rand, rng_seed};
 use crate::gpu_types::*;
 

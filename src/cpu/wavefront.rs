@@ -12,9 +12,9 @@ use glam::Vec3;
 
 use super::pixel::sample_ray;
 use super::shade::{
-    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface, textured,
-    unlit,
+    Pending, light_ray, light_samples, reflect_dir, refracted_dir, secondary, surface, unlit,
 };
+use super::texture::textured;
 use super::traverse::{closest_hit, transmission};
 use super::types::{Bindings, Ray, RayCounts};
 use super::wave::{W, Wave, WaveHit, WavePath, WaveRay, WaveShadow};

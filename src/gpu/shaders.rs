@@ -5,7 +5,7 @@
 use crate::gpu_types::{WGSL_CONSTANTS, WgslValue};
 
 /// The files, in the order they are joined; each is mirrored by `src/cpu/<name>.rs`.
-pub const FILES: [(&str, &str); 9] = [
+pub const FILES: [(&str, &str); 10] = [
     ("types.wgsl", include_str!("../../shaders/types.wgsl")),
     (
         "intersect.wgsl",
@@ -14,6 +14,7 @@ pub const FILES: [(&str, &str); 9] = [
     ("walk.wgsl", include_str!("../../shaders/walk.wgsl")),
     ("cwide.wgsl", include_str!("../../shaders/cwide.wgsl")),
     ("traverse.wgsl", include_str!("../../shaders/traverse.wgsl")),
+    ("texture.wgsl", include_str!("../../shaders/texture.wgsl")),
     ("shade.wgsl", include_str!("../../shaders/shade.wgsl")),
     ("pixel.wgsl", include_str!("../../shaders/pixel.wgsl")),
     ("wave.wgsl", include_str!("../../shaders/wave.wgsl")),

@@ -5,7 +5,7 @@
 
 use super::device::Gpu;
 use super::shaders::Fetch;
-use crate::gpu_types::{TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
+use crate::gpu_types::{GpuLight, TEXTURE_WIDTH, TRAVERSAL_CWIDE, TRAVERSAL_QWIDE, TRAVERSAL_WIDE};
 use crate::pack::SceneBuffers;
 use crate::util::error::{Error, Result};
 use crate::util::fault::AddressSpaceCap;
@@ -79,11 +79,11 @@ pub(super) fn scene_bytes(
     };
     texture(node_bytes(scene, traversal).len())
         + texture(size_of_val(&scene.prims[..]))
-        + texture(scene.surface_texels().len())
+        + texture(scene.surface_texel_bytes())
         + [
             non_empty(&scene.planes).len(),
             non_empty(&scene.materials).len(),
-            non_empty(&scene.gpu_lights()).len(),
+            scene.gpu_light_bytes().max(size_of::<GpuLight>()),
         ]
         .iter()
         .map(|&b| b as u64)
@@ -253,7 +253,7 @@ fn texel_arrays(scene: &SceneBuffers, traversal: u32) -> [(&'static str, usize);
         ("primitives", size_of_val(&scene.prims[..])),
         (
             "triangle normals and texture coordinates",
-            scene.surface_texels().len(),
+            scene.surface_texel_bytes(),
         ),
     ]
 }
@@ -318,7 +318,7 @@ fn check_buffers<const N: usize>(
     let arrays = [
         ("planes", size_of_val(&scene.planes[..]) as u64),
         ("materials", size_of_val(&scene.materials[..]) as u64),
-        ("lights", size_of_val(&scene.gpu_lights()[..]) as u64),
+        ("lights", scene.gpu_light_bytes() as u64),
         ("output band", out_bytes),
     ];
     // Textures may hold the large arrays where a buffer cannot: they grow by layers.

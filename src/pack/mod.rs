@@ -1,6 +1,7 @@
 //! Scene + BVH -> `SceneBuffers`: the flat arrays both renderers read (one `Vec` per GPU
 //! binding), with the camera, background and ambient the frames of `frame` start from.
 
+use std::borrow::Cow;
 use std::sync::OnceLock;
 
 use glam::Vec3;
@@ -246,16 +247,28 @@ pub fn trace_stack(materials: &[GpuMaterial], max_depth: u32) -> u32 {
 
 impl SceneBuffers {
     /// The shader's texels of triangle surfaces: `tri_normals`, then `tri_uvs`, then the
-    /// textures' headers and texels.
-    pub fn surface_texels(&self) -> Vec<u8> {
-        let normals: &[u8] = bytemuck::cast_slice(&self.tri_normals);
-        let parts = [
-            normals,
+    /// textures' headers and texels; borrowed where only normals exist (most scenes), so
+    /// that a large mesh's normals are not copied for the upload.
+    pub fn surface_texels(&self) -> Cow<'_, [u8]> {
+        let parts: [&[u8]; 4] = [
+            bytemuck::cast_slice(&self.tri_normals),
             bytemuck::cast_slice(&self.tri_uvs),
             bytemuck::cast_slice(&self.textures),
             bytemuck::cast_slice(&self.texels),
         ];
-        parts.concat()
+        if parts[1..].iter().all(|p| p.is_empty()) {
+            Cow::Borrowed(parts[0])
+        } else {
+            Cow::Owned(parts.concat())
+        }
+    }
+
+    /// The length of `surface_texels` in bytes, without assembling it.
+    pub fn surface_texel_bytes(&self) -> usize {
+        size_of_val(&self.tri_normals[..])
+            + size_of_val(&self.tri_uvs[..])
+            + size_of_val(&self.textures[..])
+            + size_of_val(&self.texels[..])
     }
 
     /// The texel of `surface_texels` where the textures' headers start (three a record
@@ -264,9 +277,19 @@ impl SceneBuffers {
         3 * (self.tri_normals.len() + self.tri_uvs.len()) as u32
     }
 
-    /// The shader's lights buffer: `lights`, then `emitter_triangles`.
-    pub fn gpu_lights(&self) -> Vec<GpuLight> {
-        [&self.lights[..], &self.emitter_triangles[..]].concat()
+    /// The shader's lights buffer: `lights`, then `emitter_triangles` (borrowed where there
+    /// are none).
+    pub fn gpu_lights(&self) -> Cow<'_, [GpuLight]> {
+        if self.emitter_triangles.is_empty() {
+            Cow::Borrowed(&self.lights)
+        } else {
+            Cow::Owned([&self.lights[..], &self.emitter_triangles[..]].concat())
+        }
+    }
+
+    /// The length of `gpu_lights` in bytes, without assembling it.
+    pub fn gpu_light_bytes(&self) -> usize {
+        size_of_val(&self.lights[..]) + size_of_val(&self.emitter_triangles[..])
     }
 
     /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first

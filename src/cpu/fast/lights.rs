@@ -19,7 +19,8 @@ use glam::Vec3;
 
 use super::packet::{MAX_LANES, Packet};
 use crate::cpu::intersect::lanes_of;
-use crate::cpu::shade::{Surface, light_samples, textured};
+use crate::cpu::shade::{Surface, light_samples};
+use crate::cpu::texture::textured;
 use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::gpu_types::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, SHADING_BLINN_PHONG};
 
