@@ -214,6 +214,14 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             buffers.planes.len(),
             buffers.lights.len()
         );
+        if !buffers.textures.is_empty() {
+            eprintln!(
+                "textures    {} ({} texels, {:.1} MiB)",
+                buffers.textures.len(),
+                buffers.texels.len(),
+                size_of_val(&buffers.texels[..]) as f64 / (1 << 20) as f64
+            );
+        }
         eprintln!("parse       {:.3} s", parse_time.as_secs_f64());
         eprintln!(
             "build       {:.3} s (BVH, {} quality, + packing)",

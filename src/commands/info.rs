@@ -5,7 +5,7 @@ use glam::Vec3;
 use serde_json::{Value, json};
 
 use crate::pack::EMITTER_SAMPLES;
-use crate::scene::{FlatScene, Light, MaterialId};
+use crate::scene::{FlatScene, Light, MaterialId, Wrap};
 use crate::util::limits::DEFAULT_AMBIENT;
 
 /// An f32 as the shortest decimal that reads back as the same f32 (`0.05`, not the
@@ -80,6 +80,15 @@ fn emitters(f: &FlatScene) -> impl Iterator<Item = Emitter> + '_ {
 /// counts per primitive kind (after triangulation), every light and material with its
 /// parameters, and the reader's warnings. From a scene read as `scene::summary` reads
 /// it (or any `FlatScene`).
+/// A wrap mode as `info` names it.
+fn wrap_name(w: Wrap) -> &'static str {
+    match w {
+        Wrap::Repeat => "repeat",
+        Wrap::Clamp => "clamp",
+        Wrap::Mirror => "mirror",
+    }
+}
+
 pub fn to_json(f: &FlatScene) -> Value {
     let (s, b, [spheres, triangles, cones, boxes]) = (&f.scene, f.bounds(), f.counts());
     let c = &s.camera;
@@ -100,6 +109,20 @@ pub fn to_json(f: &FlatScene) -> Value {
                 "t": num(m.t),
                 "ior": num(m.ior),
                 "emission": vec3(m.emission),
+                "texture": m.texture,
+            })
+        })
+        .collect();
+    let textures: Vec<Value> = s
+        .textures
+        .iter()
+        .map(|t| {
+            json!({
+                "name": t.name,
+                "width": t.width,
+                "height": t.height,
+                "texels": t.texels.len(),
+                "wrap": t.wrap.map(wrap_name),
             })
         })
         .collect();
@@ -133,6 +156,7 @@ pub fn to_json(f: &FlatScene) -> Value {
             "samples": [EMITTER_SAMPLES, EMITTER_SAMPLES],
         }))).collect::<Vec<_>>(),
         "materials": materials,
+        "textures": textures,
         "warnings": s.warnings,
     })
 }
@@ -234,7 +258,7 @@ pub fn to_text(f: &FlatScene) -> String {
     for (i, m) in s.materials.iter().enumerate() {
         let _ = writeln!(
             o,
-            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}{}",
+            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}{}{}",
             v(m.color),
             m.kd,
             m.ks,
@@ -245,8 +269,30 @@ pub fn to_text(f: &FlatScene) -> String {
                 format!("  emits {}", v(m.emission))
             } else {
                 String::new()
-            }
+            },
+            m.texture
+                .map_or(String::new(), |t| format!("  texture {t}"))
         );
+    }
+    if !s.textures.is_empty() {
+        let texels: usize = s.textures.iter().map(|t| t.texels.len()).sum();
+        let _ = writeln!(
+            o,
+            "textures    {} ({texels} texels, {:.1} MiB on the device)",
+            s.textures.len(),
+            (texels * size_of::<glam::Vec4>()) as f64 / (1 << 20) as f64
+        );
+        for (i, t) in s.textures.iter().enumerate() {
+            let _ = writeln!(
+                o,
+                "  {i}: {} x {}, wrap {} {}: {}",
+                t.width,
+                t.height,
+                wrap_name(t.wrap[0]),
+                wrap_name(t.wrap[1]),
+                t.name
+            );
+        }
     }
     let _ = writeln!(o, "warnings    {}", s.warnings.len());
     for w in &s.warnings {

@@ -6,7 +6,7 @@
 //! know nothing of files.
 
 use std::io::{self, BufRead, BufReader, Read};
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 
 use crate::util::error::{Error, Result};
 use crate::util::limits::MAX_FILE_BYTES;
@@ -124,6 +124,32 @@ pub fn read_error(name: &str, e: io::Error) -> Error {
         }
         None => Error::io(PathBuf::from(name), e),
     }
+}
+
+/// The file `rel` names below the model's folder `dir`, read whole: a relative path with
+/// no `..`, root, drive or scheme (a model's file may name only what travels with it, not
+/// whatever the machine that renders it holds), and a regular file of at most `limit`
+/// bytes. Why not, in words for a message.
+pub fn read_inside(dir: &Path, rel: &str, limit: u64) -> std::result::Result<Vec<u8>, String> {
+    let path = Path::new(rel);
+    let inside = !rel.contains(':')
+        && path
+            .components()
+            .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    if !inside {
+        return Err(format!(
+            "'{rel}' is outside the model's folder (only relative paths below it are read)"
+        ));
+    }
+    let full = dir.join(path);
+    let meta = std::fs::metadata(&full).map_err(|e| format!("cannot read '{rel}': {e}"))?;
+    if !meta.is_file() || meta.len() > limit {
+        return Err(format!(
+            "'{rel}' is not a regular file of at most {} MiB",
+            limit >> 20
+        ));
+    }
+    std::fs::read(&full).map_err(|e| format!("cannot read '{rel}': {e}"))
 }
 
 /// Reads a file whole, decompressed. For tools and tests: the renderer itself streams.

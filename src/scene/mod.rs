@@ -11,6 +11,7 @@ pub mod auto;
 pub mod bounds;
 pub mod flat;
 pub mod gltf;
+pub mod images;
 pub mod io;
 pub mod lex;
 pub mod mesh;
@@ -142,6 +143,7 @@ fn read_input(
                 warnings: &mut scene.warnings,
                 materials: &mut scene.materials,
                 palette: &mut palette,
+                textures: &mut scene.textures,
                 default: grey,
                 mtl: true,
                 dir: Some(dir),

@@ -5,25 +5,50 @@
 //! the mirror and highlight weight where `illum` asks for reflection (3 and up), `Ns` the
 //! Phong exponent, `d`/`Tr` the transmission, `Ni` the index of refraction of glass
 //! (`illum` 4, 6, 7), `Ke` the radiance an emitter gives off (its triangles are then
-//! lights). Statements the model has no room for (texture maps, ...) are skipped with one
-//! warning each per file.
+//! lights), `map_Kd` the image the colour is multiplied by (read when a face first uses
+//! the material: `images`). Statements the model has no room for (other maps, ...) are
+//! skipped with one warning each per file.
 
 use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Affine2, Vec2, Vec3};
 
+use super::images;
 use super::io;
 use super::lex::{Lexer, Token};
-use super::model::{Material, MaterialId};
+use super::model::{Material, MaterialId, Wrap};
 use super::sink::MeshOut;
 use crate::util::error::{Error, Result, escape};
-use crate::util::limits::{MAX_LIGHT, MAX_SHINE};
+use crate::util::limits::{MAX_IMAGE_BYTES, MAX_LIGHT, MAX_SHINE};
 
 /// A library's materials by name (a later `newmtl` of a name replaces the earlier).
-pub type Library = HashMap<String, Material>;
+pub type Library = HashMap<String, Entry>;
+
+/// A library's material: the shading model's, and its `map_Kd` if it has one.
+#[derive(Clone, Debug)]
+pub struct Entry {
+    pub material: Material,
+    pub map_kd: Option<MapKd>,
+}
+
+/// A `map_Kd` statement: the image and how it lies on the surface.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapKd {
+    /// The path as written, after the options, relative to `dir`.
+    pub path: String,
+    /// The library's folder (`None` for a library that is not a file).
+    pub dir: Option<PathBuf>,
+    /// `-clamp on`: clamped to the edge, else repeated.
+    pub wrap: Wrap,
+    /// `-s` and `-o`: the texture coordinates scaled, then offset.
+    pub uv: Affine2,
+    /// Where it is written (`FILE:LINE:COL`), for its warnings.
+    pub at: String,
+}
 
 /// What a `newmtl` block says, with the defaults of a block that says nothing.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Block {
     kd: Vec3,
     ks: Vec3,
@@ -33,6 +58,7 @@ struct Block {
     d: f32,
     ni: f32,
     illum: u32,
+    map_kd: Option<MapKd>,
 }
 
 impl Default for Block {
@@ -45,12 +71,22 @@ impl Default for Block {
             d: 1.0,
             ni: 1.0,
             illum: 2,
+            map_kd: None,
         }
     }
 }
 
 impl Block {
-    /// The shading model's material for this block.
+    /// The library's entry for this block.
+    fn entry(self) -> Entry {
+        Entry {
+            material: self.material(),
+            map_kd: self.map_kd,
+        }
+    }
+
+    /// The shading model's material for this block (its texture is added when a face
+    /// uses it).
     fn material(&self) -> Material {
         let kd = self.kd.max_element();
         // A black diffuse colour (glass often has one) keeps a white colour: the colour is
@@ -74,9 +110,15 @@ impl Block {
     }
 }
 
-/// Reads a material library from `lx` into `library`; what is skipped goes into
-/// `warnings` (`FILE:LINE:COL: message`). A number that is not one is an error.
-pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) -> Result<()> {
+/// Reads a material library from `lx`, a file in folder `dir`, into `library`; what is
+/// skipped goes into `warnings` (`FILE:LINE:COL: message`). A number that is not one is
+/// an error.
+pub fn read(
+    mut lx: Lexer,
+    dir: Option<&Path>,
+    library: &mut Library,
+    warnings: &mut Vec<String>,
+) -> Result<()> {
     let mut current: Option<(String, Block)> = None;
     let mut skipped: Vec<String> = Vec::new();
     let warn = |warnings: &mut Vec<String>, lx: &Lexer, t: &Token, msg: String| {
@@ -91,7 +133,7 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
                 return Err(lx.error_at(&t, "expected a material name after 'newmtl'"));
             }
             if let Some((name, block)) = current.replace((name, Block::default())) {
-                library.insert(name, block.material());
+                library.insert(name, block.entry());
             }
             continue;
         }
@@ -162,6 +204,10 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
                 }
                 block.ni = if ni > 0.0 { ni } else { 1.0 };
             }
+            "map_Kd" => {
+                block.map_kd = map_kd(&mut lx, &t, dir, warnings, &mut skipped)?;
+                continue;
+            }
             "illum" => {
                 let n = lx.number_on_line(&mut last, "illum (an illumination model, 0 to 10)")?;
                 block.illum = n.clamp(0.0, 10.0) as u32;
@@ -169,7 +215,7 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
             _ => {
                 if !skipped.contains(&word) {
                     let msg = format!(
-                        "'{word}' is not read (the shading model has no textures or the like); skipped here and below"
+                        "'{word}' is not read (of the maps, the shading model reads map_Kd only); skipped here and below"
                     );
                     warn(warnings, &lx, &t, msg);
                     skipped.push(word.clone());
@@ -179,17 +225,128 @@ pub fn read(mut lx: Lexer, library: &mut Library, warnings: &mut Vec<String>) ->
         lx.skip_line(line)?;
     }
     if let Some((name, block)) = current {
-        library.insert(name, block.material());
+        library.insert(name, block.entry());
     }
     Ok(())
+}
+
+/// `map_Kd [OPTIONS] FILE` after its keyword `t`, in a library in folder `dir`. Of the
+/// options, `-s`, `-o` (the texture coordinates scaled, then offset) and `-clamp` are
+/// read; the others are skipped with their values and a warning each per file. A name
+/// may hold spaces.
+fn map_kd(
+    lx: &mut Lexer,
+    t: &Token,
+    dir: Option<&Path>,
+    warnings: &mut Vec<String>,
+    skipped: &mut Vec<String>,
+) -> Result<Option<MapKd>> {
+    let line = t.line;
+    let (mut scale, mut offset, mut wrap) = (Vec2::ONE, Vec2::ZERO, Wrap::Repeat);
+    while let Some(o) = lx.peek()?.filter(|o| o.line == line) {
+        let option = String::from_utf8_lossy(lx.text(&o)).into_owned();
+        // The values each option takes; `-s`, `-o` and `-t` take one to three numbers.
+        let values = match option.as_str() {
+            "-s" | "-o" | "-t" => 3,
+            "-mm" => 2,
+            "-blendu" | "-blendv" | "-boost" | "-texres" | "-clamp" | "-bm" | "-imfchan"
+            | "-cc" | "-type" => 1,
+            _ => break,
+        };
+        lx.next_token()?;
+        let numbers = values == 3;
+        let mut args = Vec::new();
+        while args.len() < values {
+            let Some(a) = lx.peek()?.filter(|a| a.line == line) else {
+                break;
+            };
+            let arg = String::from_utf8_lossy(lx.text(&a)).into_owned();
+            let number = arg.parse::<f32>().ok().filter(|x| x.is_finite());
+            if numbers && number.is_none() {
+                break;
+            }
+            lx.next_token()?;
+            args.push((arg, number.unwrap_or(0.0)));
+        }
+        let uv = |default: Vec2| {
+            Vec2::new(
+                args.first().map_or(default.x, |a| a.1),
+                args.get(1).map_or(default.y, |a| a.1),
+            )
+        };
+        match option.as_str() {
+            "-s" => scale = uv(Vec2::ONE),
+            "-o" => offset = uv(Vec2::ZERO),
+            "-clamp" => {
+                wrap = if args.first().is_some_and(|a| a.0 == "on") {
+                    Wrap::Clamp
+                } else {
+                    Wrap::Repeat
+                }
+            }
+            _ => {
+                let key = format!("map_Kd {option}");
+                if !skipped.contains(&key) {
+                    warnings.push(format!(
+                        "{}:{}:{}: map_Kd's option '{option}' is not read; skipped here and below",
+                        lx.name(),
+                        o.line,
+                        o.col
+                    ));
+                    skipped.push(key);
+                }
+            }
+        }
+    }
+    let path = lx.rest_of_line(line)?;
+    if path.is_empty() {
+        warnings.push(format!(
+            "{}:{}:{}: map_Kd names no image; skipped",
+            lx.name(),
+            t.line,
+            t.col
+        ));
+        return Ok(None);
+    }
+    Ok(Some(MapKd {
+        path,
+        dir: dir.map(Path::to_path_buf),
+        wrap,
+        uv: Affine2::from_scale_angle_translation(scale, 0.0, offset),
+        at: format!("{}:{}:{}", lx.name(), t.line, t.col),
+    }))
+}
+
+/// The texture of `map`, read the first time a material names it (and shared after), or
+/// why it cannot be had.
+fn texture(map: &MapKd, out: &mut MeshOut) -> std::result::Result<u32, String> {
+    let dir = map
+        .dir
+        .as_deref()
+        .ok_or("the library was not read from a file")?;
+    // Libraries written on Windows separate folders with backslashes.
+    let rel = if map.path.contains('\\') && !dir.join(&map.path).exists() {
+        map.path.replace('\\', "/")
+    } else {
+        map.path.clone()
+    };
+    let wrap = [map.wrap; 2];
+    let name = dir.join(&rel).display().to_string();
+    if let Some(i) = images::find(out.textures, &name, wrap) {
+        return Ok(i);
+    }
+    let bytes = io::read_inside(dir, &rel, MAX_IMAGE_BYTES)?;
+    let texture = images::decode(&bytes, &name, wrap)?;
+    Ok(images::add(out.textures, texture, out.warnings))
 }
 
 /// An OBJ file's materials as its `mtllib` and `usemtl` lines name them.
 #[derive(Default)]
 pub struct ObjMaterials {
     library: Library,
-    /// The ids of the names used so far, and the names no library defines (warned of).
-    ids: HashMap<String, MaterialId>,
+    /// What the names used so far gave (`usemtl`), and the names no library defines
+    /// (warned of).
+    used: HashMap<String, (MaterialId, Affine2)>,
     unknown: Vec<String>,
 }
 
@@ -232,9 +389,11 @@ impl ObjMaterials {
                     continue;
                 }
             };
-            let file = path.expect("opened").display().to_string();
+            let path = path.expect("opened");
+            let file = path.display().to_string();
             read(
                 Lexer::through(input, &file, out.window),
+                path.parent(),
                 &mut self.library,
                 out.warnings,
             )?;
@@ -242,14 +401,22 @@ impl ObjMaterials {
         Ok(())
     }
 
-    /// `usemtl NAME` at token `t`: the material of the faces after it. A name no library
-    /// defines is a warning (the first time it is used), and its faces get the default.
-    pub fn usemtl(&mut self, lx: &mut Lexer, t: &Token, out: &mut MeshOut) -> Result<MaterialId> {
+    /// `usemtl NAME` at token `t`: the material of the faces after it, and the map of
+    /// their texture coordinates onto its texture (`map_Kd -s -o`). A name no library
+    /// defines is a warning (the first time it is used), and its faces get the default. A
+    /// texture that cannot be had is a warning naming it and the material, whose colour
+    /// the faces keep.
+    pub fn usemtl(
+        &mut self,
+        lx: &mut Lexer,
+        t: &Token,
+        out: &mut MeshOut,
+    ) -> Result<(MaterialId, Affine2)> {
         let name = lx.rest_of_line(t.line)?;
-        if let Some(&id) = self.ids.get(&name) {
-            return Ok(id);
+        if let Some(&used) = self.used.get(&name) {
+            return Ok(used);
         }
-        let Some(&m) = self.library.get(&name) else {
+        let Some(entry) = self.library.get(&name) else {
             if !self.unknown.contains(&name) {
                 out.warnings.push(format!(
                     "{}:{}:{}: unknown material '{}' (no material library read defines it); its faces get the default material",
@@ -260,11 +427,23 @@ impl ObjMaterials {
                 ));
                 self.unknown.push(name);
             }
-            return Ok(out.default);
+            return Ok((out.default, Affine2::IDENTITY));
         };
-        let id = out.palette.id(out.materials, m);
-        self.ids.insert(name, id);
-        Ok(id)
+        let (mut m, mut uv) = (entry.material, Affine2::IDENTITY);
+        if let Some(map) = &entry.map_kd {
+            match texture(map, out) {
+                Ok(i) => (m.texture, uv) = (Some(i), map.uv),
+                Err(why) => out.warnings.push(format!(
+                    "{}: texture '{}' of material '{}' is not used: {why}; its faces keep the material's colour",
+                    map.at,
+                    escape(map.path.as_bytes()),
+                    escape(name.as_bytes())
+                )),
+            }
+        }
+        let used = (out.palette.id(out.materials, m), uv);
+        self.used.insert(name, used);
+        Ok(used)
     }
 }
 
@@ -306,7 +485,14 @@ mod tests {
     fn library(src: &str) -> (Library, Vec<String>) {
         let mut lib = Library::new();
         let mut warnings = Vec::new();
-        read(Lexer::new(src.as_bytes(), "m.mtl"), &mut lib, &mut warnings).unwrap();
+        let dir = Some(Path::new("models"));
+        read(
+            Lexer::new(src.as_bytes(), "m.mtl"),
+            dir,
+            &mut lib,
+            &mut warnings,
+        )
+        .unwrap();
         (lib, warnings)
     }
 
@@ -318,7 +504,7 @@ mod tests {
              newmtl mirror\nKd 0.1\nKs 0.9 0.6 0.3\nillum 3\nmap_Kd b.png\nTr 0.25\n\
              newmtl light\nKd 0.78\nKe 17 12 4\n",
         );
-        let red = lib["red"];
+        let red = lib["red"].material;
         assert_eq!((red.kd, red.ks, red.t, red.ior), (0.8, 0.0, 0.0, 1.0));
         assert!(
             (red.color * red.kd - Vec3::new(0.8, 0.2, 0.2))
@@ -326,19 +512,49 @@ mod tests {
                 .max_element()
                 < 1e-6
         );
-        let glass = lib["glass pane"];
+        let glass = lib["glass pane"].material;
         assert_eq!((glass.color, glass.kd), (Vec3::ONE, 0.0));
         assert_eq!((glass.ks, glass.ior, glass.shine), (1.0, 1.5, 30.0));
         assert!((glass.t - 0.9).abs() < 1e-6);
-        let mirror = lib["mirror"];
+        let mirror = lib["mirror"].material;
         assert!((mirror.ks - 0.6).abs() < 1e-6 && mirror.kd == 0.1);
         // Tr without glass: dissolve, straight through.
         assert_eq!((mirror.t, mirror.ior), (0.25, 1.0));
         // `Ke` is radiance: kept above 1; the others emit nothing.
-        assert_eq!(lib["light"].emission, Vec3::new(17.0, 12.0, 4.0));
-        assert!(lib["light"].emits() && !red.emits() && !glass.emits());
-        assert_eq!(warnings.len(), 1, "{warnings:?}");
-        assert!(warnings[0].starts_with("m.mtl:13:1: 'map_Kd' is not read"));
+        let light = lib["light"].material;
+        assert_eq!(light.emission, Vec3::new(17.0, 12.0, 4.0));
+        assert!(light.emits() && !red.emits() && !glass.emits());
+        assert!(warnings.is_empty(), "{warnings:?}");
+        let map = lib["mirror"].map_kd.as_ref().unwrap();
+        assert_eq!((map.path.as_str(), map.wrap), ("b.png", Wrap::Repeat));
+        assert_eq!(map.dir.as_deref(), Some(Path::new("models")));
+        assert!(lib["red"].map_kd.is_none());
+    }
+
+    #[test]
+    fn map_kd_reads_its_options_and_names_with_spaces() {
+        let (lib, warnings) = library(
+            "newmtl a\nmap_Kd -s 2 3 1 -o 0.5 -clamp on -bm 0.2 -mm 0 1 my wood.png\n\
+             newmtl b\nmap_Kd -s 4 -bm 1 b.png\nmap_Ks s.png\nnewmtl c\nmap_Kd -o 1\n",
+        );
+        let a = lib["a"].map_kd.as_ref().unwrap();
+        assert_eq!((a.path.as_str(), a.wrap), ("my wood.png", Wrap::Clamp));
+        let uv = a.uv.transform_point2(Vec2::new(1.0, 1.0));
+        assert_eq!(uv, Vec2::new(2.5, 3.0));
+        let b = lib["b"].map_kd.as_ref().unwrap();
+        assert_eq!(b.path, "b.png");
+        assert_eq!(b.uv.transform_point2(Vec2::ONE), Vec2::new(4.0, 1.0));
+        assert!(lib["c"].map_kd.is_none());
+        let want = [
+            "m.mtl:2:34: map_Kd's option '-bm' is not read",
+            "m.mtl:2:42: map_Kd's option '-mm' is not read",
+            "m.mtl:5:1: 'map_Ks' is not read",
+            "m.mtl:7:1: map_Kd names no image",
+        ];
+        assert_eq!(warnings.len(), want.len(), "{warnings:?}");
+        for (w, want) in warnings.iter().zip(want) {
+            assert!(w.starts_with(want), "{w}");
+        }
     }
 
     #[test]
@@ -346,6 +562,7 @@ mod tests {
         let mut lib = Library::new();
         let e = read(
             Lexer::new(b"newmtl a\nKd 1 x 1\n", "m.mtl"),
+            None,
             &mut lib,
             &mut Vec::new(),
         );

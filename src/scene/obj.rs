@@ -12,7 +12,7 @@
 //! and column like every other reader's, and a face whose corners lack `vn` indices must get
 //! no shading normals (tobj makes up normals for them by repeating the previous index).
 
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 
 use super::lex::{Lexer, Token};
 use super::model::{MaterialId, Mesh, Triangle, unit};
@@ -51,7 +51,8 @@ pub fn parse_with_warnings(bytes: &[u8], name: &str) -> Result<Mesh> {
 /// (`out.default` without one), and a warning for each face dropped.
 pub fn read(mut lx: Lexer, out: &mut MeshOut) -> Result<()> {
     let mut materials = ObjMaterials::default();
-    let mut material = out.default;
+    // The faces' material, and the map of their texture coordinates onto its texture.
+    let mut material = (out.default, Affine2::IDENTITY);
     let mut r = Reader {
         positions: Vec::new(),
         normals: Vec::new(),
@@ -161,9 +162,9 @@ struct Reader {
     normals: Vec<Vec3>,
     uvs: Vec<Vec2>,
     /// Corners of the faces held until the end, and where each face starts in it with
-    /// its material.
+    /// its material and texture map.
     held: Vec<Corner>,
-    faces: Vec<(usize, MaterialId)>,
+    faces: Vec<(usize, (MaterialId, Affine2))>,
     // Scratch buffers reused by every face.
     face: Vec<Corner>,
     poly: Vec<Vec3>,
@@ -181,12 +182,12 @@ impl Reader {
             && c.n.is_none_or(|n| ok(n, self.normals.len()))
     }
 
-    /// Triangulates a face of `material` and gives its triangles to `out`'s sink, or warns
-    /// that it is dropped.
+    /// Triangulates a face of `material` (whose texture coordinates `uv_map` maps onto its
+    /// texture) and gives its triangles to `out`'s sink, or warns that it is dropped.
     fn emit(
         &mut self,
         face: &[Corner],
-        material: MaterialId,
+        (material, uv_map): (MaterialId, Affine2),
         lx: &Lexer,
         out: &mut MeshOut,
     ) -> Result<()> {
@@ -230,7 +231,7 @@ impl Reader {
                         ),
                     ));
                 };
-                self.poly_uv.push(uv);
+                self.poly_uv.push(uv_map.transform_point2(uv));
             }
         }
         let (poly, poly_n, poly_uv) = (&self.poly, &self.poly_n, &self.poly_uv);

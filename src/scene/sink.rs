@@ -10,7 +10,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::bounds::Bounds;
-use super::model::{BoxPrim, Cone, Material, MaterialId, Mesh, Scene, Sphere, Triangle};
+use super::model::{BoxPrim, Cone, Material, MaterialId, Mesh, Scene, Sphere, Texture, Triangle};
 use super::palette::Palette;
 use crate::util::error::Result;
 
@@ -36,12 +36,13 @@ pub trait Sink {
 
 /// Where a mesh file's reader puts what it reads: its triangles into `sink`, what it drops
 /// or skips into `warnings`, and the materials of an OBJ's `.mtl` libraries into the
-/// scene's `materials` (through its `palette`).
+/// scene's `materials` (through its `palette`), their images into its `textures`.
 pub struct MeshOut<'a> {
     pub sink: &'a mut dyn Sink,
     pub warnings: &'a mut Vec<String>,
     pub materials: &'a mut Vec<Material>,
     pub palette: &'a mut Palette,
+    pub textures: &'a mut Vec<Texture>,
     /// The material of faces without one of their own: every STL triangle, OBJ faces
     /// before any `usemtl` or under one whose material no library defines.
     pub default: MaterialId,
@@ -65,6 +66,7 @@ impl MeshOut<'_> {
             warnings: &mut warnings,
             materials: &mut Vec::new(),
             palette: &mut Palette::default(),
+            textures: &mut Vec::new(),
             default: MaterialId(0),
             mtl: false,
             dir: None,

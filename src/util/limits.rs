@@ -30,6 +30,9 @@ pub const MAX_FILE_BYTES: u64 = 4 << 30;
 /// Most texels a scene's textures may hold together (16 bytes each on the device and in
 /// memory: 1 GiB).
 pub const MAX_TEXELS: u64 = 1 << 26;
+/// Most bytes an image file of a texture may have, and most its decoder may allocate:
+/// `MAX_TEXELS` of sixteen-bit RGBA.
+pub const MAX_IMAGE_BYTES: u64 = MAX_TEXELS * 8;
 /// Most bytes of glTF JSON read (a `.gltf`, or a `.glb`'s JSON chunk): the JSON is parsed
 /// whole, and only data URIs make it this large, each held three times over while it is
 /// parsed and decoded. A buffer of more belongs in a `.bin` file or a `.glb`'s binary chunk.

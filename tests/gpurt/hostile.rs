@@ -38,7 +38,7 @@ fn peak_memory_kib(pid: u32) -> Option<u64> {
 /// `gpurt SCENE --backend cpu -o out.png` in `dir`, its peak resident memory sampled from
 /// /proc every 10 ms while it runs: its output, that peak in KiB and the seconds it took.
 /// Killed, and the test failed, after 120 s.
-fn render_sampling_peak(dir: &Path, scene: &str) -> (std::process::Output, u64, f64) {
+pub(crate) fn render_sampling_peak(dir: &Path, scene: &str) -> (std::process::Output, u64, f64) {
     use std::process::{Command, Stdio};
     let child = Command::new(env!("CARGO_BIN_EXE_gpurt"))
         .args([scene, "--backend", "cpu", "-o", "out.png"])

@@ -29,5 +29,6 @@ mod spd;
 #[allow(dead_code)]
 mod spd_example;
 mod texture;
+mod texture_files;
 mod view;
 mod window;

@@ -4,7 +4,6 @@
 //! same quad written as OBJ and as glTF. Textures: a checkerboard on the quad against the
 //! bilinear filter written out again, on both renderers, and lit under every variant.
 
-use base64::Engine;
 use glam::{DVec2, DVec3, Vec3};
 use gpurt::film::Film;
 use gpurt::frame::{self, RenderOptions};
@@ -14,10 +13,11 @@ use gpurt::scene::{self, Scene, Texture, Wrap};
 
 use crate::common::oracle::Camera;
 use crate::common::versus::{self, Gpu};
+use crate::texture_files;
 
 /// The quad x, y in [-1, 1] at z = 0, its corners' texture coordinates running over
 /// [0, 2] in u and [0.5, 1.5] in v (beyond [0, 1], as tiled textures are), seen at a slant.
-const VIEW: &str = "v from 0.6 -0.8 3 at 0 0 0 up 0 1 0 angle 50 resolution 48 40\nb 0 0 0\nl 0 0 5\nf 1 1 1 1 0 1 0 1\n";
+pub(crate) const VIEW: &str = "v from 0.6 -0.8 3 at 0 0 0 up 0 1 0 angle 50 resolution 48 40\nb 0 0 0\nl 0 0 5\nf 1 1 1 1 0 1 0 1\n";
 const OBJ: &str = "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n\
                    vt 0 0.5\nvt 2 0.5\nvt 2 1.5\nvt 0 1.5\nf 1/1 2/2 3/3 4/4\n";
 
@@ -46,7 +46,7 @@ fn render_uv(scene: &Scene, gpu: Option<&Gpu>) -> Film {
     render(scene, gpu, opts)
 }
 
-fn render(scene: &Scene, gpu: Option<&Gpu>, opts: RenderOptions) -> Film {
+pub(crate) fn render(scene: &Scene, gpu: Option<&Gpu>, opts: RenderOptions) -> Film {
     let buffers = pack::pack(scene.clone()).expect("packs");
     versus::render_on(&buffers, &frame::globals(&buffers, &opts), gpu)
 }
@@ -100,47 +100,12 @@ fn the_uv_aov_is_the_coordinates_through_the_camera_on_the_gpu() {
     check_uv(Some(g));
 }
 
-/// The quad as glTF: the OBJ's corners and coordinates, its two triangles as the OBJ's
-/// quad is split ((3, 0, 1) and (3, 1, 2)), in a data URI.
-fn gltf_quad() -> String {
-    let pos: [[f32; 3]; 4] = [
-        [-1.0, -1.0, 0.0],
-        [1.0, -1.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [-1.0, 1.0, 0.0],
-    ];
-    let uv: [[f32; 2]; 4] = [[0.0, 0.5], [2.0, 0.5], [2.0, 1.5], [0.0, 1.5]];
-    let ix: [u16; 6] = [3, 0, 1, 3, 1, 2];
-    let mut bytes: Vec<u8> = bytemuck::cast_slice(&pos).to_vec();
-    bytes.extend_from_slice(bytemuck::cast_slice(&uv));
-    bytes.extend_from_slice(bytemuck::cast_slice(&ix));
-    let data = base64::engine::general_purpose::STANDARD.encode(&bytes);
-    serde_json::json!({
-        "asset": {"version": "2.0"},
-        "scenes": [{"nodes": [0]}],
-        "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2}]}],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
-            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}
-        ],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-            {"buffer": 0, "byteOffset": 80, "byteLength": 12}
-        ],
-        "buffers": [{"byteLength": bytes.len(), "uri": format!("data:application/octet-stream;base64,{data}")}]
-    })
-    .to_string()
-}
-
 /// The same quad with the same coordinates from OBJ and from glTF: the same triangles
 /// with the same coordinates at their corners, so the same `uv` image.
 #[test]
 fn obj_and_gltf_of_one_quad_give_one_uv_image() {
     let from_obj = scene_with(OBJ, "quad.obj");
-    let from_gltf = scene_with(&gltf_quad(), "quad.gltf");
+    let from_gltf = scene_with(&texture_files::gltf_quad(None, &[]).0, "quad.gltf");
     let (a, b) = (&from_obj.triangles, &from_gltf.triangles);
     assert_eq!(a.len(), 2);
     assert_eq!(
@@ -176,17 +141,16 @@ fn checker() -> Texture {
     }
 }
 
-/// The checkerboard filtered bilinearly at `uv` (v up, rows from the top, texel centres
-/// at half-texels, repeating), in f64: the filter written out again from its definition.
-fn checker_at(uv: DVec2, flip: bool) -> DVec3 {
-    let t = checker();
-    let n = 4.0;
-    let x = uv.x.rem_euclid(1.0) * n - 0.5;
+/// Texture `t` filtered bilinearly at `uv` (v up, rows from the top, texel centres at
+/// half-texels, repeating), in f64: the filter written out again from its definition.
+pub(crate) fn filtered_at(t: &Texture, uv: DVec2, flip: bool) -> DVec3 {
+    let (w, h) = (f64::from(t.width), f64::from(t.height));
+    let x = uv.x.rem_euclid(1.0) * w - 0.5;
     let v = if flip { uv.y } else { 1.0 - uv.y };
-    let y = v.rem_euclid(1.0) * n - 0.5;
+    let y = v.rem_euclid(1.0) * h - 0.5;
     let at = |i: f64, j: f64| {
-        let (i, j) = (i.rem_euclid(n) as usize, j.rem_euclid(n) as usize);
-        t.texels[j * 4 + i].as_dvec3()
+        let (i, j) = (i.rem_euclid(w) as u32, j.rem_euclid(h) as u32);
+        t.texels[(j * t.width + i) as usize].as_dvec3()
     };
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
@@ -213,8 +177,20 @@ fn textured_quad() -> Scene {
 /// fails it.
 fn check_checker(gpu: Option<&Gpu>) {
     let scene = textured_quad();
-    let cam = Camera::of(&scene);
     let film = render(&scene, gpu, RenderOptions::for_camera(&scene.camera));
+    check_texture_on_quad(&scene, &film, &checker(), |uv| uv);
+}
+
+/// Every pixel of the quad of `VIEW` in `film` (clearly inside it) against texture `t`
+/// filtered at `map` of the coordinates through the camera (`analytic`), within 1e-4;
+/// the texture flipped upside down must fail it.
+pub(crate) fn check_texture_on_quad(
+    scene: &Scene,
+    film: &Film,
+    texture: &Texture,
+    map: impl Fn(DVec2) -> DVec2,
+) {
+    let cam = Camera::of(scene);
     let (mut worst, mut flipped, mut n) = (0.0f64, 0.0f64, 0);
     for (x, y) in cam.pixels() {
         let d = cam.dir(x, y);
@@ -223,10 +199,10 @@ fn check_checker(gpu: Option<&Gpu>) {
         if !(t > 0.0 && p.x.abs() < 0.99 && p.y.abs() < 0.99 && (p.x - p.y).abs() > 0.02) {
             continue;
         }
-        let uv = analytic(p.x, p.y);
+        let uv = map(analytic(p.x, p.y));
         let got = DVec3::from(film.get(x, y).map(f64::from));
-        worst = worst.max((got - checker_at(uv, false)).abs().max_element());
-        flipped = flipped.max((got - checker_at(uv, true)).abs().max_element());
+        worst = worst.max((got - filtered_at(texture, uv, false)).abs().max_element());
+        flipped = flipped.max((got - filtered_at(texture, uv, true)).abs().max_element());
         n += 1;
     }
     assert!(n > 600, "{n} pixels on the quad");

@@ -3,11 +3,12 @@
 //! `gltf` crate reads them (its reader trusts counts, strides and types, and would panic or
 //! overflow on a file that lies).
 
-use std::path::{Component, Path};
+use std::path::Path;
 
 use base64::Engine;
 use gltf::accessor::{DataType, Dimensions};
 
+use crate::scene::io;
 use crate::util::error::{Error, Result};
 use crate::util::limits::MAX_FILE_BYTES;
 
@@ -31,14 +32,7 @@ pub fn resolve(
                 .take()
                 .ok_or_else(|| err(format!("{what} is the binary chunk, which the file lacks")))?,
             gltf::buffer::Source::Uri(uri) => match uri.strip_prefix("data:") {
-                Some(data) => {
-                    let (_, payload) = data
-                        .split_once(";base64,")
-                        .ok_or_else(|| err(format!("{what}: a data URI that is not base64")))?;
-                    base64::engine::general_purpose::STANDARD
-                        .decode(payload)
-                        .map_err(|e| err(format!("{what}: bad base64 in its data URI ({e})")))?
-                }
+                Some(data) => data_uri(data).map_err(|e| err(format!("{what}: {e}")))?,
                 None => file(uri, dir, &what, &err)?,
             },
         };
@@ -54,6 +48,16 @@ pub fn resolve(
     Ok(out)
 }
 
+/// The bytes of a data URI, `data:` taken off.
+pub fn data_uri(data: &str) -> std::result::Result<Vec<u8>, String> {
+    let (_, payload) = data
+        .split_once(";base64,")
+        .ok_or("a data URI that is not base64")?;
+    base64::engine::general_purpose::STANDARD
+        .decode(payload)
+        .map_err(|e| format!("bad base64 in its data URI ({e})"))
+}
+
 /// A buffer in a file named by a relative URI: inside the model's folder only.
 fn file(
     uri: &str,
@@ -62,34 +66,16 @@ fn file(
     err: &dyn Fn(String) -> Error,
 ) -> Result<Vec<u8>> {
     let rel = percent_decode(uri);
-    let path = Path::new(&rel);
-    let inside = !rel.contains(':')
-        && path
-            .components()
-            .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
-    if !inside {
-        return Err(err(format!(
-            "{what}: '{uri}' is outside the model's folder (only relative paths below it are read)"
-        )));
-    }
     let Some(dir) = dir else {
         return Err(err(format!(
             "{what} is in the file '{rel}', which must be given with the model (or the model made self-contained: .glb, or data URIs)"
         )));
     };
-    let full = dir.join(path);
-    let meta =
-        std::fs::metadata(&full).map_err(|e| err(format!("{what}: cannot read '{rel}': {e}")))?;
-    if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
-        return Err(err(format!(
-            "{what}: '{rel}' is not a regular file of at most 4 GiB"
-        )));
-    }
-    std::fs::read(&full).map_err(|e| err(format!("{what}: cannot read '{rel}': {e}")))
+    io::read_inside(dir, &rel, MAX_FILE_BYTES).map_err(|e| err(format!("{what}: {e}")))
 }
 
 /// `%20` and the like in a URI made bytes again (a malformed escape is kept as written).
-fn percent_decode(s: &str) -> String {
+pub fn percent_decode(s: &str) -> String {
     let b = s.as_bytes();
     let mut out = Vec::with_capacity(b.len());
     let mut i = 0;

@@ -1,10 +1,115 @@
 //! glTF's metallic-roughness materials on the Whitted model: one table, documented in
-//! docs/scene-format.md ("glTF materials"), written here once.
+//! docs/scene-format.md ("glTF materials"), written here once; and their base colour
+//! textures, read from a file beside the model, a data URI or a buffer view.
 
-use glam::Vec3;
+use std::path::Path;
 
-use crate::scene::model::Material;
-use crate::util::limits::MAX_LIGHT;
+use glam::{Affine2, Vec2, Vec3};
+use gltf::texture::WrappingMode;
+
+use super::buffers;
+use crate::scene::images;
+use crate::scene::io;
+use crate::scene::model::{Material, Texture, Wrap};
+use crate::util::limits::{MAX_IMAGE_BYTES, MAX_LIGHT};
+
+/// glTF's texture coordinates put v = 0 at the image's top row, gpurt's at its bottom
+/// (OBJ's convention): every TEXCOORD_0 is read through this flip.
+pub const FLIP_V: Affine2 = Affine2::from_cols(Vec2::X, Vec2::NEG_Y, Vec2::Y);
+
+/// Where a file's images come from: its buffers, and its folder for images named by
+/// relative URIs (`None` for bytes that come from no file).
+pub struct Images<'a> {
+    pub file: &'a str,
+    pub buffers: &'a [Vec<u8>],
+    pub dir: Option<&'a Path>,
+}
+
+impl Images<'_> {
+    /// Material `m`'s base colour texture, an index into `textures` (read the first time
+    /// a material names it), and the map of TEXCOORD_0 onto it: `KHR_texture_transform`
+    /// (offset, rotation, scale as its specification's matrix), then `FLIP_V`. `None` for
+    /// a material without one, and for one that cannot be had, with a warning naming the
+    /// image and the material: its surfaces keep the material's colour.
+    pub fn base_color(
+        &self,
+        m: &gltf::Material,
+        textures: &mut Vec<Texture>,
+        warnings: &mut Vec<String>,
+    ) -> Option<(u32, Affine2)> {
+        let info = m.pbr_metallic_roughness().base_color_texture()?;
+        let image = info.texture().source();
+        let what = format!(
+            "{}: image {} (the base colour of material {})",
+            self.file,
+            image.index(),
+            m.index().map_or("default".into(), |i| i.to_string())
+        );
+        let transform = info.texture_transform();
+        let set = transform
+            .as_ref()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord());
+        let mut read = || -> Result<u32, String> {
+            if set != 0 {
+                return Err(format!(
+                    "it uses TEXCOORD_{set}, and gpurt reads TEXCOORD_0 only"
+                ));
+            }
+            let sampler = info.texture().sampler();
+            let wrap = [sampler.wrap_s(), sampler.wrap_t()].map(|w| match w {
+                WrappingMode::ClampToEdge => Wrap::Clamp,
+                WrappingMode::MirroredRepeat => Wrap::Mirror,
+                WrappingMode::Repeat => Wrap::Repeat,
+            });
+            if let Some(i) = images::find(textures, &what, wrap) {
+                return Ok(i);
+            }
+            let texture = images::decode(&self.bytes(&image)?, &what, wrap)?;
+            Ok(images::add(textures, texture, warnings))
+        };
+        match read() {
+            Ok(i) => {
+                let uv = transform.map_or(Affine2::IDENTITY, |t| {
+                    Affine2::from_scale_angle_translation(
+                        Vec2::from(t.scale()),
+                        t.rotation(),
+                        Vec2::from(t.offset()),
+                    )
+                });
+                Some((i, FLIP_V * uv))
+            }
+            Err(why) => {
+                warnings.push(format!(
+                    "{what} is not used: {why}; its surfaces keep the material's colour"
+                ));
+                None
+            }
+        }
+    }
+
+    /// The encoded bytes of `image`.
+    fn bytes(&self, image: &gltf::Image) -> Result<Vec<u8>, String> {
+        match image.source() {
+            gltf::image::Source::View { view, .. } => self
+                .buffers
+                .get(view.buffer().index())
+                .and_then(|b| b.get(view.offset()..view.offset().checked_add(view.length())?))
+                .map(<[u8]>::to_vec)
+                .ok_or_else(|| format!("buffer view {} reaches past its buffer", view.index())),
+            gltf::image::Source::Uri { uri, .. } => match uri.strip_prefix("data:") {
+                Some(data) => buffers::data_uri(data),
+                None => {
+                    let rel = buffers::percent_decode(uri);
+                    let dir = self.dir.ok_or_else(|| {
+                        format!("'{rel}' must be given with the model, which is not a file")
+                    })?;
+                    io::read_inside(dir, &rel, MAX_IMAGE_BYTES)
+                }
+            },
+        }
+    }
+}
 
 /// The Whitted material of glTF material `m`:
 ///

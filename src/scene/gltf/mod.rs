@@ -13,10 +13,11 @@
 mod buffers;
 mod material;
 
+use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Affine2, Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::mesh::Mode;
 
@@ -71,6 +72,8 @@ pub fn read(mut input: Input, name: &str, dir: &Path, sink: &mut dyn Sink) -> Re
     scene.background = auto::BACKGROUND;
     let mut r = Reader {
         buffers,
+        dir,
+        materials: HashMap::new(),
         palette: Palette::default(),
         camera: None,
         instances: 0,
@@ -189,6 +192,11 @@ fn parse_error(name: &str, bytes: &[u8], e: gltf::Error) -> Error {
 
 struct Reader<'a> {
     buffers: Vec<Vec<u8>>,
+    /// The model's folder, where images named by relative URIs are.
+    dir: &'a Path,
+    /// What each glTF material gave (by index; `None` the default material): the scene's
+    /// material and the map of TEXCOORD_0 onto its texture.
+    materials: HashMap<Option<usize>, (MaterialId, Affine2)>,
     palette: Palette,
     camera: Option<usize>,
     instances: usize,
@@ -196,9 +204,27 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    /// The scene's material for glTF material `m`.
-    fn material(&mut self, m: gltf::Material, scene: &mut Scene) -> MaterialId {
-        self.palette.id(&mut scene.materials, material::whitted(&m))
+    /// The scene's material for glTF material `m` (with its texture, read the first time
+    /// it is named), and the map of TEXCOORD_0 onto the texture (`FLIP_V` without one).
+    fn material(&mut self, m: gltf::Material, scene: &mut Scene) -> (MaterialId, Affine2) {
+        if let Some(&known) = self.materials.get(&m.index()) {
+            return known;
+        }
+        let mut whitted = material::whitted(&m);
+        let images = material::Images {
+            file: &scene.name,
+            buffers: &self.buffers,
+            dir: Some(self.dir),
+        };
+        let mut uv = material::FLIP_V;
+        if let Some((texture, map)) =
+            images.base_color(&m, &mut scene.textures, &mut scene.warnings)
+        {
+            (whitted.texture, uv) = (Some(texture), map);
+        }
+        let known = (self.palette.id(&mut scene.materials, whitted), uv);
+        self.materials.insert(m.index(), known);
+        known
     }
 
     /// The triangles of `mesh` placed by `world`, into `sink`.
@@ -277,7 +303,7 @@ impl Reader<'_> {
             if pos.count() == 0 || prim.indices().is_some_and(|ix| ix.count() == 0) {
                 continue;
             }
-            let material = self.material(prim.material(), scene);
+            let (material, uv_map) = self.material(prim.material(), scene);
             let buffers = &self.buffers;
             let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
             let points: Vec<Vec3> = match reader.read_positions() {
@@ -291,7 +317,10 @@ impl Reader<'_> {
                 None => Vec::new(),
             };
             let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
-                Some(t) => t.into_f32().map(Vec2::from).collect(),
+                Some(t) => t
+                    .into_f32()
+                    .map(|t| uv_map.transform_point2(Vec2::from(t)))
+                    .collect(),
                 None => Vec::new(),
             };
             let indices: Vec<u32> = match reader.read_indices() {

@@ -89,6 +89,7 @@ impl Parser<'_> {
             warnings: &mut self.scene.warnings,
             materials: &mut self.scene.materials,
             palette: &mut self.palette,
+            textures: &mut self.scene.textures,
             default: material,
             mtl,
             dir: path.parent(),

@@ -78,17 +78,22 @@ fn a_bare_obj_gets_the_materials_its_mtl_names() {
         s.planes[0].material,
         MaterialId(s.materials.len() as u32 - 1)
     );
-    // Each statement the model cannot hold is named once, at its first place.
+    // Each statement the model cannot hold is named once, at its first place; each
+    // texture that cannot be read where a face first uses its material.
     let file = d.join("two.mtl").display().to_string();
+    let missing = |line, name, material| {
+        format!(
+            "{file}:{line}:1: texture '{name}' of material '{material}' is not used: cannot read '{name}': No such file or directory (os error 2); its faces keep the material's colour"
+        )
+    };
     assert_eq!(
         s.warnings,
         [
             format!(
-                "{file}:8:1: 'map_Kd' is not read (the shading model has no textures or the like); skipped here and below"
+                "{file}:16:1: 'map_Bump' is not read (of the maps, the shading model reads map_Kd only); skipped here and below"
             ),
-            format!(
-                "{file}:16:1: 'map_Bump' is not read (the shading model has no textures or the like); skipped here and below"
-            ),
+            missing(8, "red.png", "red"),
+            missing(15, "green.png", "green mirror"),
         ]
     );
 }
