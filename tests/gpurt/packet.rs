@@ -52,7 +52,7 @@ fn all_kernels() -> Vec<Kernels> {
 }
 
 fn scenes() -> Vec<PathBuf> {
-    let mut all = files_with(&own_scenes(), &[".nff", ".ply", ".gltf"]);
+    let mut all = files_with(&own_scenes(), &[".nff", ".ply", ".gltf", ".glb"]);
     if let Some(dir) = shared_scenes() {
         all.extend(files_with(&dir, &[".nff", ".nff.gz"]));
     }
@@ -539,7 +539,7 @@ fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
     let dir = crate::common::temp_dir("packet-lights");
     let many = dir.join("many-lights.nff");
     std::fs::write(&many, MANY_LIGHTS).expect("writes");
-    let mut paths: Vec<PathBuf> = files_with(&own_scenes(), &[".nff", ".ply", ".gltf"]);
+    let mut paths: Vec<PathBuf> = files_with(&own_scenes(), &[".nff", ".ply", ".gltf", ".glb"]);
     paths.push(many);
     if let Some(shared) = shared_scenes() {
         for s in [

@@ -66,7 +66,7 @@ fn own_scenes_match_cpu() {
     let Some(g) = gpu() else {
         return;
     };
-    let files = files_with(&own_scenes(), &[".nff", ".ply", ".gltf"]);
+    let files = files_with(&own_scenes(), &[".nff", ".ply", ".gltf", ".glb"]);
     assert!(!files.is_empty(), "scenes/ has no scene files");
     check_all(files.iter().flat_map(|f| {
         let scene = scene::load(f).expect("own scene loads");
