@@ -77,6 +77,7 @@ CASES = [
     ("icosahedron.stl", ROOT / "scenes" / "icosahedron.stl", 32, 32, 1, 5),
     ("torus.ply", ROOT / "scenes" / "torus.ply", 36, 28, 1, 5),
     ("blocks.gltf", ROOT / "scenes" / "blocks.gltf", 40, 30, 1, 6),
+    ("textured.glb", ROOT / "scenes" / "textured.glb", 48, 32, 2, 5),
     ("tetra.obj", OBJ, 33, 25, 1, 5),
     ("mirrors.nff.gz", ("gzip", ROOT / "scenes" / "mirrors.nff"), 40, 30, 1, 5),
     ("teapot-2.nff", SHARED / "spd" / "teapot-2.nff", 40, 40, 1, 5),

@@ -13,7 +13,7 @@ def cli_info(path):
 
 
 @pytest.mark.parametrize(
-    "name", ["spheres.nff", "arealight.nff", "lens.nff", "patches.nff", "icosahedron.stl", "blocks.gltf", "cornell.nff"]
+    "name", ["spheres.nff", "arealight.nff", "lens.nff", "patches.nff", "icosahedron.stl", "blocks.gltf", "cornell.nff", "textured.glb"]
 )
 def test_info_equals_the_cli_json_on_bundled_scenes(name):
     want = cli_info(SCENES / name)

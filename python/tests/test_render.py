@@ -7,7 +7,7 @@ import pytest
 import gpurt
 from conftest import SCENES, assert_same, cli_render, generated_scene, shared_scenes
 
-BUNDLED = ["spheres.nff", "glass.nff", "cones.nff", "mirrors.nff", "icosahedron.stl", "torus.ply", "blocks.gltf", "cornell.nff"]
+BUNDLED = ["spheres.nff", "glass.nff", "cones.nff", "mirrors.nff", "icosahedron.stl", "torus.ply", "blocks.gltf", "cornell.nff", "textured.glb"]
 SPD = ["balls-1.nff", "gears-1.nff", "mount-1.nff", "teapot-2.nff", "tree-1.nff", "rings-1.nff"]
 
 
