@@ -1,8 +1,8 @@
 //! glTF 2.0 (`.gltf` with its buffers as files beside it or as data URIs, and `.glb`):
 //! the default scene (else the first), its node hierarchy with each node's TRS or matrix,
 //! the triangles of its meshes (indexed or not; strips and fans made triangles; points and
-//! lines skipped with a warning), positions and normals; materials on the Whitted model
-//! (`material`); the first perspective camera met as the view, and `KHR_lights_punctual`
+//! lines skipped with a warning), positions, normals and texture coordinates; materials on
+//! the Whitted model with their base colour textures (`material`); the first perspective camera met as the view, and `KHR_lights_punctual`
 //! point and directional lights (spot lights as point lights, with a warning). A file
 //! with no camera is framed as a bare mesh is, and one with no light gets its light.
 //!
