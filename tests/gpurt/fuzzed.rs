@@ -228,3 +228,39 @@ fn surface_normals_are_finite_where_the_geometry_has_none() {
         }
     }
 }
+
+/// `gltf` target: an image with neither a `uri` nor a `bufferView` panicked inside the
+/// `gltf` crate (`Image::source` unwraps one of them, as it does a buffer view's
+/// `mimeType`), which its validation lets through. Both are now warnings naming the image,
+/// and the surfaces keep their material's colour.
+#[test]
+fn gltf_images_without_a_source_or_a_mime_type_are_warnings() {
+    let glb = std::fs::read(crate::common::own_scenes().join("textured.glb")).unwrap();
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let mut doc: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
+    let images = doc["images"].as_array_mut().unwrap();
+    images[0].as_object_mut().unwrap().clear();
+    images[1].as_object_mut().unwrap().remove("mimeType");
+    let mut text = doc.to_string().into_bytes();
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let bin = &glb[20 + json_len..];
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend((20 + text.len() as u32 + bin.len() as u32).to_le_bytes());
+    out.extend((text.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(text);
+    out.extend(bin);
+    let path = temp_dir("fuzzed-gltf-image").join("no-source.glb");
+    std::fs::write(&path, out).unwrap();
+    let s = scene::load(&path).expect("reads");
+    assert!(s.textures.is_empty());
+    assert_eq!(s.warnings.len(), 2, "{:?}", s.warnings);
+    assert!(s.warnings[0].contains(
+        "image 0 (the base colour of material 0) is not used: neither a uri nor a buffer view"
+    ));
+    assert!(s.warnings[1].contains(
+        "image 1 (the base colour of material 1) is not used: a buffer view without a mimeType"
+    ));
+    assert_renders_finite(s);
+}

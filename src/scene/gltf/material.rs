@@ -21,6 +21,8 @@ pub const FLIP_V: Affine2 = Affine2::from_cols(Vec2::X, Vec2::NEG_Y, Vec2::Y);
 /// relative URIs (`None` for bytes that come from no file).
 pub struct Images<'a> {
     pub file: &'a str,
+    /// The file's JSON, where an image's source is checked before the crate reads it.
+    pub json: &'a gltf::json::Root,
     pub buffers: &'a [Vec<u8>],
     pub dir: Option<&'a Path>,
 }
@@ -90,6 +92,14 @@ impl Images<'_> {
 
     /// The encoded bytes of `image`.
     fn bytes(&self, image: &gltf::Image) -> Result<Vec<u8>, String> {
+        // The crate's `source` unwraps a buffer view's MIME type and, without a view, the
+        // URI (gltf 1.4.1, `Image::source`); its validation requires neither.
+        let json = &self.json.images[image.index()];
+        match (&json.buffer_view, &json.mime_type, &json.uri) {
+            (Some(_), None, _) => return Err("a buffer view without a mimeType".into()),
+            (None, _, None) => return Err("neither a uri nor a buffer view".into()),
+            _ => {}
+        }
         match image.source() {
             gltf::image::Source::View { view, .. } => self
                 .buffers

@@ -72,6 +72,7 @@ pub fn read(mut input: Input, name: &str, dir: &Path, sink: &mut dyn Sink) -> Re
     scene.background = auto::BACKGROUND;
     let mut r = Reader {
         buffers,
+        json: doc.as_json(),
         dir,
         materials: HashMap::new(),
         palette: Palette::default(),
@@ -192,6 +193,7 @@ fn parse_error(name: &str, bytes: &[u8], e: gltf::Error) -> Error {
 
 struct Reader<'a> {
     buffers: Vec<Vec<u8>>,
+    json: &'a gltf::json::Root,
     /// The model's folder, where images named by relative URIs are.
     dir: &'a Path,
     /// What each glTF material gave (by index; `None` the default material): the scene's
@@ -213,6 +215,7 @@ impl Reader<'_> {
         let mut whitted = material::whitted(&m);
         let images = material::Images {
             file: &scene.name,
+            json: self.json,
             buffers: &self.buffers,
             dir: Some(self.dir),
         };
