@@ -16,7 +16,8 @@ use cli::{farm, render, shell, tools};
 
 fn main() -> ExitCode {
     let launch = Instant::now();
-    cli::quiet_device_select();
+    // Before any thread: the environment is written (`quiet_device_select`'s safety).
+    gpurt::gpu::quiet_device_select();
     let args = Cli::parse();
     if let Some(n) = args.threads
         && let Err(e) = cli::use_threads(n)

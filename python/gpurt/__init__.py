@@ -25,6 +25,7 @@ from ._native import (
     __version__,
     info,
     png as _png,
+    release,
     render,
     to_srgb8,
 )
@@ -36,6 +37,7 @@ __all__ = [
     "SceneError",
     "__version__",
     "info",
+    "release",
     "render",
     "to_srgb8",
 ]

@@ -8,7 +8,7 @@ import numpy.typing as npt
 
 from . import Image
 
-__all__ = ["__version__", "SceneError", "Scene", "Renderer", "render", "info", "to_srgb8", "png"]
+__all__ = ["__version__", "SceneError", "Scene", "Renderer", "render", "info", "to_srgb8", "png", "release", "_devices_opened"]
 
 __version__: str
 
@@ -138,3 +138,9 @@ def to_srgb8(array: npt.ArrayLike) -> npt.NDArray[np.uint8]:
 
 def png(array: npt.ArrayLike, aov: _Aov = None) -> bytes:
     """The PNG file the command line writes for these values and AOV."""
+
+def release() -> None:
+    """Drops the GPU device `render` keeps between calls (and the scene it holds); the next render opens one again."""
+
+def _devices_opened() -> int:
+    """GPU devices `render` has opened in this process."""

@@ -48,8 +48,7 @@ impl Frames {
             .detach(|| session::choose(backend, None, Missing::Cpu))
             .map_err(to_py)?;
         if let Some(note) = found.note.filter(|n| n.warning) {
-            let text = CString::new(note.text).unwrap_or_default();
-            PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &text, 2)?;
+            warn_note(py, &note.text)?;
         }
         let renderer = match found.gpu {
             Some(ctx) => Traced::Gpu(Box::new(
@@ -97,43 +96,57 @@ impl Frames {
         }
     }
 
-    /// Renders every sample of `globals` (the renderer's own frame of it, as the command
-    /// line renders), with the GIL released; Ctrl-C raises KeyboardInterrupt.
+    /// Renders every sample of `globals` (`trace`).
     pub fn render(&mut self, py: Python<'_>, globals: &GpuGlobals) -> PyResult<Film> {
-        let renderer = self.renderer();
-        let globals = renderer.frame(globals);
-        let cancel = AtomicBool::new(false);
-        let done = AtomicBool::new(false);
-        let mut interrupt = None;
-        let result = std::thread::scope(|s| {
-            let waiter = std::thread::current();
-            let (cancel, done, globals) = (&cancel, &done, &globals);
-            let tracer = s.spawn(move || {
-                let _finish = Finish { done, waiter };
-                run::render_frame(renderer, globals, &|_| {}, cancel)
-            });
-            while !done.load(Ordering::Acquire) {
-                py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
-                if interrupt.is_none()
-                    && let Err(e) = py.check_signals()
-                {
-                    // Stop the render, and wait for it to stop before raising.
-                    cancel.store(true, Ordering::Relaxed);
-                    interrupt = Some(e);
-                }
-            }
-            tracer.join()
-        });
-        if let Some(e) = interrupt {
-            return Err(e);
-        }
-        let rendered = result
-            .map_err(|_| PyRuntimeError::new_err("gpurt: the render thread panicked"))?
-            .map_err(to_py)?;
+        let rendered = trace(py, self.renderer(), globals)?.map_err(to_py)?;
         self.frames += 1;
         self.rays = rendered.rays;
         Ok(rendered.film)
     }
+}
+
+/// A note of the renderer's choice that is a warning (no GPU where one was asked for), as
+/// a Python RuntimeWarning.
+pub fn warn_note(py: Python<'_>, text: &str) -> PyResult<()> {
+    let text = CString::new(text).unwrap_or_default();
+    PyErr::warn(py, &py.get_type::<PyRuntimeWarning>(), &text, 2)
+}
+
+/// Renders every sample of `globals` on `renderer` (the renderer's own frame of it, as the
+/// command line renders), with the GIL released: Ctrl-C raises KeyboardInterrupt (the
+/// outer error), the library's failure is the inner one.
+pub fn trace(
+    py: Python<'_>,
+    renderer: &mut (dyn Renderer + Send),
+    globals: &GpuGlobals,
+) -> PyResult<gpurt::Result<run::Rendered>> {
+    let globals = renderer.frame(globals);
+    let cancel = AtomicBool::new(false);
+    let done = AtomicBool::new(false);
+    let mut interrupt = None;
+    let result = std::thread::scope(|s| {
+        let waiter = std::thread::current();
+        let (cancel, done, globals) = (&cancel, &done, &globals);
+        let tracer = s.spawn(move || {
+            let _finish = Finish { done, waiter };
+            run::render_frame(renderer, globals, &|_| {}, cancel)
+        });
+        while !done.load(Ordering::Acquire) {
+            py.detach(|| std::thread::park_timeout(SIGNAL_POLL));
+            if interrupt.is_none()
+                && let Err(e) = py.check_signals()
+            {
+                // Stop the render, and wait for it to stop before raising.
+                cancel.store(true, Ordering::Relaxed);
+                interrupt = Some(e);
+            }
+        }
+        tracer.join()
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    result.map_err(|_| PyRuntimeError::new_err("gpurt: the render thread panicked"))
 }
 
 /// Wakes the thread waiting on a render when the render's thread ends its work, by

@@ -6,12 +6,14 @@
 //! - `scene`: `Scene` (a parsed scene), `render` and `info`, the one-call shortcuts;
 //! - `renderer`: `Renderer`, one uploaded scene and many frames;
 //! - `options`: Python arguments into the library's `Overrides`, `Backend` and `Camera`;
-//! - `frames`: a frame traced with the GIL released and Ctrl-C watched, into numpy.
+//! - `frames`: a frame traced with the GIL released and Ctrl-C watched, into numpy;
+//! - `shared`: the device `render` keeps between calls.
 
 mod frames;
 mod options;
 mod renderer;
 mod scene;
+mod shared;
 
 use gpurt::Error;
 use gpurt::film::{self, Film};
@@ -157,6 +159,8 @@ pub(crate) fn film_to_numpy(py: Python<'_>, film: Film) -> Bound<'_, PyArray3<f3
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // Mesa's device-select layer off before any GPU instance: no stray lines on stderr.
+    gpurt::gpu::quiet_device_select();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     let scene_error = m.py().get_type::<SceneError>();
     // The attributes every SceneError is given (`scene_error`), at their empty values on
@@ -174,5 +178,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::info, m)?)?;
     m.add_function(wrap_pyfunction!(to_srgb8, m)?)?;
     m.add_function(wrap_pyfunction!(png, m)?)?;
+    m.add_function(wrap_pyfunction!(shared::release, m)?)?;
+    m.add_function(wrap_pyfunction!(shared::_devices_opened, m)?)?;
     Ok(())
 }

@@ -2,12 +2,11 @@
 //! of frames of it, each from the scene's camera or one the call gives. The library's
 //! `session::Renderer` does the work; this keeps it between calls.
 
-use std::sync::Mutex;
+use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
 
 use gpurt::frame::{self, Overrides, RenderOptions};
 use gpurt::pack;
 use gpurt::scene::Camera;
-use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 
 use crate::frames::Frames;
@@ -30,10 +29,20 @@ pub struct Renderer {
 }
 
 impl Renderer {
-    fn frames(&self) -> PyResult<std::sync::MutexGuard<'_, Frames>> {
-        self.frames
-            .try_lock()
-            .map_err(|_| PyRuntimeError::new_err("this Renderer is rendering in another thread"))
+    /// The renderer's frames, once no other thread is rendering with them: calls from
+    /// several threads wait their turn, without the GIL (a guard cannot leave `detach`,
+    /// which needs what it returns to be `Send`: the lock is waited for there, then taken
+    /// with the GIL held, again if another thread took it meanwhile).
+    fn frames(&self, py: Python<'_>) -> MutexGuard<'_, Frames> {
+        loop {
+            match self.frames.try_lock() {
+                Ok(guard) => return guard,
+                Err(TryLockError::Poisoned(p)) => return p.into_inner(),
+                Err(TryLockError::WouldBlock) => {
+                    py.detach(|| drop(self.frames.lock().unwrap_or_else(PoisonError::into_inner)))
+                }
+            }
+        }
     }
 }
 
@@ -119,7 +128,7 @@ impl Renderer {
             Some(dict) => options::camera(&self.camera, dict)?,
             None => gpurt::scene::auto::fitted(&self.camera, opts.width, opts.height),
         };
-        let mut frames = self.frames()?;
+        let mut frames = self.frames(py);
         let globals = frame::globals_from(&frames.buffers, &camera, &opts);
         let film = frames.render(py, &globals)?;
         image(py, film, aov)
@@ -127,33 +136,33 @@ impl Renderer {
 
     /// "gpu" or "cpu": where this renderer traces.
     #[getter]
-    fn backend(&self) -> PyResult<&'static str> {
-        Ok(self.frames()?.backend())
+    fn backend(&self, py: Python<'_>) -> &'static str {
+        self.frames(py).backend()
     }
 
     /// One line naming what renders: the adapter, or the CPU and its threads.
     #[getter]
-    fn device(&self) -> PyResult<String> {
-        Ok(self.frames()?.describe())
+    fn device(&self, py: Python<'_>) -> String {
+        self.frames(py).describe()
     }
 
     /// How many times the scene went to the GPU (1 after any number of frames), or None
     /// on the CPU, which traces the packed scene where it is.
     #[getter]
-    fn scene_uploads(&self) -> PyResult<Option<u32>> {
-        Ok(self.frames()?.scene_uploads())
+    fn scene_uploads(&self, py: Python<'_>) -> Option<u32> {
+        self.frames(py).scene_uploads()
     }
 
     /// How many frames this renderer has traced.
     #[getter]
-    fn frames_rendered(&self) -> PyResult<u64> {
-        Ok(self.frames()?.frames)
+    fn frames_rendered(&self, py: Python<'_>) -> u64 {
+        self.frames(py).frames
     }
 
     /// Rays the last frame traced (eye, shadow and secondary), as `gpurt --stats` counts.
     #[getter]
-    fn rays(&self) -> PyResult<u64> {
-        Ok(self.frames()?.rays)
+    fn rays(&self, py: Python<'_>) -> u64 {
+        self.frames(py).rays
     }
 
     /// (width, height) of the frames.
@@ -163,11 +172,8 @@ impl Renderer {
         (opts.width, opts.height)
     }
 
-    fn __repr__(&self) -> PyResult<String> {
+    fn __repr__(&self, py: Python<'_>) -> String {
         let (w, h) = self.size();
-        Ok(format!(
-            "<gpurt.Renderer {w}x{h} on {}>",
-            self.frames()?.describe()
-        ))
+        format!("<gpurt.Renderer {w}x{h} on {}>", self.frames(py).describe())
     }
 }

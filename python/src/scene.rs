@@ -7,12 +7,14 @@ use gpurt::film::Film;
 use gpurt::frame::{self, RenderOptions};
 use gpurt::pack;
 use gpurt::scene::{self, io::FileKind};
+use gpurt::session::Backend;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::pybacked::{PyBackedBytes, PyBackedStr};
 
 use crate::frames::Frames;
 use crate::options::{self, Frame};
+use crate::shared;
 use crate::{film_to_numpy, to_py};
 
 /// A scene read from a file or a string: NFF (with the P3D dialect), STL, OBJ, PLY or glTF.
@@ -83,8 +85,11 @@ pub fn render_scene<'py>(
         .detach(|| pack::pack_for(scene, opts.samples()))
         .map_err(to_py)?;
     let globals = frame::globals(&buffers, &opts);
-    let mut frames = Frames::open(py, buffers, backend)?;
-    let film = frames.render(py, &globals)?;
+    let film = match backend {
+        Backend::Cpu => Frames::open(py, buffers, backend)?.render(py, &globals)?,
+        // The process's device, kept between calls (`shared`).
+        _ => shared::render(py, buffers, backend, &globals)?,
+    };
     image(py, film, frame.aov)
 }
 

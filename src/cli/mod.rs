@@ -15,17 +15,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use gpurt::session::Found;
 
-/// Mesa's Vulkan device-select layer connects to a Wayland display to choose a default
-/// GPU, and on a headless machine prints "error: XDG_RUNTIME_DIR is invalid or not set"
-/// twice although nothing failed. gpurt chooses its adapter itself (`gpu::open`), so the
-/// layer is turned off unless the user set `NODEVICE_SELECT` either way.
-pub fn quiet_device_select() {
-    if std::env::var_os("NODEVICE_SELECT").is_none() {
-        // SAFETY: called first thing in `main`, before any other thread exists.
-        unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
-    }
-}
-
 /// Makes rayon's global pool, which every CPU render, BVH build and image conversion
 /// runs on, `n` threads (`--threads`); called before anything uses it.
 pub fn use_threads(n: u32) -> Result<(), String> {

@@ -36,6 +36,34 @@ impl GpuContext {
     }
 }
 
+/// Mesa's Vulkan device-select layer connects to a Wayland display to choose a default
+/// GPU, and on a headless machine prints "error: XDG_RUNTIME_DIR is invalid or not set"
+/// twice for every instance although nothing failed. gpurt chooses its adapter itself
+/// (`open`), so the layer is turned off, once a process, unless the user set
+/// `NODEVICE_SELECT` either way. `instance` calls it, so that every front end (the command
+/// line, the Python module, a program over the library) is quiet; a program that starts
+/// threads of its own before its first render calls it first thing in `main`, as the
+/// command line does.
+pub fn quiet_device_select() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        if std::env::var_os("NODEVICE_SELECT").is_none() {
+            // SAFETY: the environment may be written only while no other thread reads or
+            // writes it. The command line calls this first thing in `main`, the Python
+            // module when it is imported, and otherwise it runs before the process's
+            // first GPU instance, before wgpu or the Vulkan loader has read anything.
+            unsafe { std::env::set_var("NODEVICE_SELECT", "1") };
+        }
+    });
+}
+
+/// A wgpu instance for the backends `WGPU_BACKEND` allows, the device-select layer
+/// silenced first (`quiet_device_select`): what every GPU path opens adapters on.
+pub fn instance() -> wgpu::Instance {
+    quiet_device_select();
+    wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+}
+
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
     format!("{} ({:?}, {:?})", info.name, info.backend, info.device_type)
 }
@@ -60,8 +88,7 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 /// (case-insensitive; from `--adapter` or `GPURT_ADAPTER`). `WGPU_BACKEND` limits the
 /// backends searched, as in every wgpu program.
 pub fn open(filter: Option<&str>) -> Result<GpuContext> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance = instance();
     open_on(&instance, filter, None)
 }
 
@@ -94,8 +121,7 @@ pub fn choose(filter: Option<&str>) -> Result<Choice> {
     if !named && let Some(why) = no_gpu_device() {
         return Ok(Choice::Cpu(why));
     }
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let instance = instance();
     match best_adapter(&instance, filter, None) {
         Ok(adapter) if named || !is_software(&adapter.get_info()) => {
             open_adapter(adapter).map(|ctx| Choice::Gpu(Box::new(ctx)))

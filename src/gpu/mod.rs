@@ -47,7 +47,9 @@ mod wavefront;
 #[cfg(feature = "native")]
 mod waves;
 
-pub use context::{Choice, GpuContext, choose, is_software, open, open_on, request};
+pub use context::{
+    Choice, GpuContext, choose, instance, is_software, open, open_on, quiet_device_select, request,
+};
 pub use cut::DISPATCH_BUDGET;
 #[cfg(feature = "native")]
 pub use oneshot::render_gpu;

@@ -48,8 +48,7 @@ impl Surface {
         readable: bool,
         buffers: &SceneBuffers,
     ) -> Result<Surface> {
-        let instance =
-            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance = gpu::instance();
         let surface = instance
             .create_surface(window.clone())
             .map_err(|e| Error::Gpu(format!("cannot draw into the window: {e}")))?;
