@@ -266,7 +266,7 @@ static unsigned agree(Array rays, enum Kind kind, const float *answer, unsigned 
 }
 
 int main(int argc, char **argv) {
-    if (argc < 2) { fprintf(stderr, "usage: %s FILE [THREADS]\n", argv[0]); return 2; }
+    if (argc < 2) { fprintf(stderr, "usage: %s FILE [THREADS [ISA]]\n", argv[0]); return 2; }
     int threads = argc > 2 ? atoi(argv[2]) : 2;
     cpu_clock = getenv("CLOCK") && strcmp(getenv("CLOCK"), "cpu") == 0;
     if (threads < 1 || threads > 64) { fprintf(stderr, "1 to 64 threads\n"); return 2; }
@@ -286,8 +286,12 @@ int main(int argc, char **argv) {
     fclose(f);
     if (primary.n % 16 || shadow.n % 16) { fprintf(stderr, "rays not in blocks of 16\n"); return 2; }
 
-    char config[32];
-    snprintf(config, sizeof config, "threads=%d", threads);
+    /* ISA (avx2, sse4.2, ...) holds Embree to that instruction set, as GPURT_SIMD holds ours. */
+    char config[64];
+    if (argc > 3)
+        snprintf(config, sizeof config, "threads=%d,isa=%s", threads, argv[3]);
+    else
+        snprintf(config, sizeof config, "threads=%d", threads);
     RTCDevice device = rtcNewDevice(config);
     RTCScene scene = rtcNewScene(device);
     double t0 = now();
