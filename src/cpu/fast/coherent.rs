@@ -23,7 +23,7 @@ use super::packet::{Kernels, MAX_LANES, Packet};
 use super::tracer::Alone;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
-    Shaded, Surface, Tracer, light_sample, offset_origin, reflect_dir, surface, trace,
+    Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, surface, trace,
 };
 use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
@@ -278,6 +278,15 @@ pub fn render_tile(
                     0
                 };
                 for (k, &(i, ray, mut rng)) in lanes[..n].iter().enumerate() {
+                    if surfaces[k].is_none() {
+                        // A camera ray that met nothing (most of a scene with sky around
+                        // it): what `trace` gives it and counts for it, `0 + 1 *
+                        // background`, without setting up its stack and answers.
+                        sums[i] += g.background;
+                        count_nodes(counts, 1, hits[k].nodes);
+                        counts.eye_packed += u64::from(eye_packed & 1 << k != 0);
+                        continue;
+                    }
                     let mut known = Known {
                         eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
                         mirror: (packet.lanes() & 1 << k != 0)
