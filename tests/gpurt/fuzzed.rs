@@ -241,16 +241,9 @@ fn gltf_images_without_a_source_or_a_mime_type_are_warnings() {
     let images = doc["images"].as_array_mut().unwrap();
     images[0].as_object_mut().unwrap().clear();
     images[1].as_object_mut().unwrap().remove("mimeType");
-    let mut text = doc.to_string().into_bytes();
-    text.resize(text.len().next_multiple_of(4), b' ');
-    let bin = &glb[20 + json_len..];
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend((20 + text.len() as u32 + bin.len() as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend(bin);
+    // The binary chunk: its length, its type, its bytes.
+    let bin = &glb[20 + json_len + 8..];
+    let out = crate::common::inputs::glb(doc.to_string().as_bytes(), bin);
     let path = temp_dir("fuzzed-gltf-image").join("no-source.glb");
     std::fs::write(&path, out).unwrap();
     let s = scene::load(&path).expect("reads");

@@ -99,26 +99,6 @@ pub(crate) fn gltf_quad(material: Option<Value>, blob: &[u8]) -> (String, Vec<u8
     (doc.to_string(), bytes)
 }
 
-/// A `.glb` of glTF JSON `text` and binary chunk `blob`.
-fn glb(text: &str, blob: &[u8]) -> Vec<u8> {
-    let pad = |b: &[u8], with: u8| {
-        let mut b = b.to_vec();
-        b.resize(b.len().next_multiple_of(4), with);
-        b
-    };
-    let (text, blob) = (pad(text.as_bytes(), b' '), pad(blob, 0));
-    let mut out = b"glTF".to_vec();
-    out.extend(2u32.to_le_bytes());
-    out.extend((28 + text.len() as u32 + blob.len() as u32).to_le_bytes());
-    out.extend((text.len() as u32).to_le_bytes());
-    out.extend(b"JSON");
-    out.extend(text);
-    out.extend((blob.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(blob);
-    out
-}
-
 /// The material, texture, sampler and image keys of a glTF whose quad has the image
 /// `image` as its base colour (white, not metallic, fully rough: Kd 1, Ks 0, as the
 /// OBJ's), with the extra texture-info keys `info` and the sampler `sampler`.
@@ -191,7 +171,11 @@ fn obj_and_gltf_textures_from_files_data_uris_and_glb_give_one_image() {
         repeat,
     );
     let (text, blob) = gltf_quad(Some(view), &png);
-    std::fs::write(dir.join("quad.glb"), glb(&text, &blob)).unwrap();
+    std::fs::write(
+        dir.join("quad.glb"),
+        crate::common::inputs::glb(text.as_bytes(), &blob),
+    )
+    .unwrap();
 
     let obj = framed(&dir.join("quad.obj"));
     assert!(obj.warnings.is_empty(), "{:?}", obj.warnings);
@@ -285,25 +269,11 @@ fn textures_that_cannot_be_had_are_warnings_and_the_materials_colour() {
 fn huge_png() -> Vec<u8> {
     let mut bytes = checker_png();
     bytes[16..24].copy_from_slice(&[100_000u32.to_be_bytes(), 100_000u32.to_be_bytes()].concat());
-    let crc = crc32(&bytes[12..29]);
+    let mut crc = flate2::Crc::new();
+    crc.update(&bytes[12..29]);
+    let crc = crc.sum();
     bytes[29..33].copy_from_slice(&crc.to_be_bytes());
     bytes
-}
-
-/// PNG's chunk checksum (ISO 3309 CRC-32).
-fn crc32(bytes: &[u8]) -> u32 {
-    let mut c = !0u32;
-    for &b in bytes {
-        c ^= u32::from(b);
-        for _ in 0..8 {
-            c = if c & 1 != 0 {
-                0xedb8_8320 ^ (c >> 1)
-            } else {
-                c >> 1
-            };
-        }
-    }
-    !c
 }
 
 /// A `.glb` whose image (a buffer view) declares 100000 x 100000 texels renders, its
@@ -319,7 +289,11 @@ fn a_glb_image_declaring_ten_billion_texels_allocates_nothing() {
         json!({}),
     );
     let (text, blob) = gltf_quad(Some(view), &png);
-    std::fs::write(dir.join("huge.glb"), glb(&text, &blob)).unwrap();
+    std::fs::write(
+        dir.join("huge.glb"),
+        crate::common::inputs::glb(text.as_bytes(), &blob),
+    )
+    .unwrap();
     let (out, peak_kib, _) = crate::hostile::render_sampling_peak(&dir, "huge.glb");
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");

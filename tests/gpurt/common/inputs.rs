@@ -114,6 +114,30 @@ pub fn header(text: &[u8]) -> [u8; 80] {
     h
 }
 
+/// A `.glb` of glTF JSON `json` and binary chunk `bin`, each padded to four bytes.
+pub fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad = |b: &[u8], with: u8| {
+        let mut b = b.to_vec();
+        b.resize(b.len().next_multiple_of(4), with);
+        b
+    };
+    let (json, bin) = (pad(json, b' '), pad(bin, 0));
+    let mut out = b"glTF".to_vec();
+    for x in [
+        2,
+        28 + json.len() as u32 + bin.len() as u32,
+        json.len() as u32,
+    ] {
+        out.extend(x.to_le_bytes());
+    }
+    out.extend(b"JSON");
+    out.extend(json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(bin);
+    out
+}
+
 pub fn gzip(bytes: &[u8]) -> Vec<u8> {
     let mut e = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::fast());
     e.write_all(bytes).unwrap();

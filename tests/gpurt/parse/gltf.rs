@@ -96,21 +96,7 @@ fn data_uri() -> String {
 
 /// `.glb` of a JSON chunk and the buffer as its binary chunk.
 fn glb(doc: &Value) -> Vec<u8> {
-    let mut j = serde_json::to_vec(doc).unwrap();
-    j.resize(j.len().next_multiple_of(4), b' ');
-    let mut b = buffer();
-    b.resize(b.len().next_multiple_of(4), 0);
-    let total = 12 + 8 + j.len() + 8 + b.len();
-    let mut out = b"glTF".to_vec();
-    for x in [2, total as u32, j.len() as u32] {
-        out.extend(x.to_le_bytes());
-    }
-    out.extend(b"JSON");
-    out.extend(&j);
-    out.extend((b.len() as u32).to_le_bytes());
-    out.extend(b"BIN\0");
-    out.extend(&b);
-    out
+    crate::common::inputs::glb(&serde_json::to_vec(doc).unwrap(), &buffer())
 }
 
 /// The model as `.gltf` with a data URI and as `.glb`, for the random mutations.
