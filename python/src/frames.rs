@@ -5,8 +5,8 @@
 //! once the render has stopped.
 
 use std::ffi::CString;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard, PoisonError, TryLockError};
 use std::time::Duration;
 
 use gpurt::film::Film;
@@ -102,6 +102,22 @@ impl Frames {
         self.frames += 1;
         self.rays = rendered.rays;
         Ok(rendered.film)
+    }
+}
+
+/// `mutex` locked once no other thread holds it, waited for without the GIL (a render
+/// holding it releases the GIL itself). A guard cannot leave `detach`, which needs what
+/// it returns to be `Send`: the lock is waited for there, then taken with the GIL held,
+/// again if another thread took it meanwhile. A poisoned lock is taken as it is.
+pub fn lock_detached<'m, T: Send>(py: Python<'_>, mutex: &'m Mutex<T>) -> MutexGuard<'m, T> {
+    loop {
+        match mutex.try_lock() {
+            Ok(guard) => return guard,
+            Err(TryLockError::Poisoned(p)) => return p.into_inner(),
+            Err(TryLockError::WouldBlock) => {
+                py.detach(|| drop(mutex.lock().unwrap_or_else(PoisonError::into_inner)))
+            }
+        }
     }
 }
 

@@ -2,14 +2,14 @@
 //! of frames of it, each from the scene's camera or one the call gives. The library's
 //! `session::Renderer` does the work; this keeps it between calls.
 
-use std::sync::{Mutex, MutexGuard, PoisonError, TryLockError};
+use std::sync::{Mutex, MutexGuard};
 
 use gpurt::frame::{self, Overrides, RenderOptions};
 use gpurt::pack;
 use gpurt::scene::Camera;
 use pyo3::prelude::*;
 
-use crate::frames::Frames;
+use crate::frames::{Frames, lock_detached};
 use crate::options::{self, Frame};
 use crate::scene::{SceneArg, image};
 use crate::to_py;
@@ -30,19 +30,9 @@ pub struct Renderer {
 
 impl Renderer {
     /// The renderer's frames, once no other thread is rendering with them: calls from
-    /// several threads wait their turn, without the GIL (a guard cannot leave `detach`,
-    /// which needs what it returns to be `Send`: the lock is waited for there, then taken
-    /// with the GIL held, again if another thread took it meanwhile).
+    /// several threads wait their turn, without the GIL.
     fn frames(&self, py: Python<'_>) -> MutexGuard<'_, Frames> {
-        loop {
-            match self.frames.try_lock() {
-                Ok(guard) => return guard,
-                Err(TryLockError::Poisoned(p)) => return p.into_inner(),
-                Err(TryLockError::WouldBlock) => {
-                    py.detach(|| drop(self.frames.lock().unwrap_or_else(PoisonError::into_inner)))
-                }
-            }
-        }
+        lock_detached(py, &self.frames)
     }
 }
 

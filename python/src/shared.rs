@@ -8,7 +8,7 @@
 //! Calls wait their turn for the kept GPU, without the GIL; CPU renders do not wait.
 
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
+use std::sync::{Arc, Mutex};
 
 use gpurt::film::Film;
 use gpurt::gpu_types::GpuGlobals;
@@ -16,7 +16,7 @@ use gpurt::pack::SceneBuffers;
 use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing};
 use pyo3::prelude::*;
 
-use crate::frames::{trace, warn_note};
+use crate::frames::{lock_detached, trace, warn_note};
 use crate::to_py;
 
 /// What was found for a backend: a GPU session (its device and compiled pipelines), or
@@ -41,23 +41,6 @@ static SHARED: Mutex<Shared> = Mutex::new(Shared {
 /// tests: one for any number of calls, one more after a failure or `release`).
 static OPENED: AtomicU32 = AtomicU32::new(0);
 
-/// The kept renderers, waited for with the GIL released (a render holds them while it
-/// runs, and releases the GIL itself).
-fn shared(py: Python<'_>) -> MutexGuard<'static, Shared> {
-    loop {
-        if let Some(guard) = match SHARED.try_lock() {
-            Ok(g) => Some(g),
-            Err(std::sync::TryLockError::Poisoned(p)) => Some(p.into_inner()),
-            Err(std::sync::TryLockError::WouldBlock) => None,
-        } {
-            return guard;
-        }
-        // A guard cannot leave `detach` (it is not `Send`): wait there until the lock is
-        // free, then take it with the GIL held.
-        py.detach(|| drop(SHARED.lock().unwrap_or_else(PoisonError::into_inner)));
-    }
-}
-
 /// Renders `globals` of `buffers` on what `backend` finds, kept for the next call.
 pub fn render(
     py: Python<'_>,
@@ -66,7 +49,7 @@ pub fn render(
     globals: &GpuGlobals,
 ) -> PyResult<Film> {
     let buffers = Arc::new(buffers);
-    let mut guard = shared(py);
+    let mut guard = lock_detached(py, &SHARED);
     let slot = match backend {
         Backend::Gpu => &mut guard.gpu,
         _ => &mut guard.auto,
@@ -114,7 +97,7 @@ pub fn render(
 /// opens what it needs again.
 #[pyfunction]
 pub fn release(py: Python<'_>) {
-    let mut guard = shared(py);
+    let mut guard = lock_detached(py, &SHARED);
     (guard.auto, guard.gpu) = (None, None);
 }
 
