@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # gpurt against POV-Ray and Tachyon on five SPD scenes at 512x512, one sample per pixel,
-# both cores (WIDTH, HEIGHT and SPP change that).
+# both cores (WIDTH, HEIGHT, SPP and THREADS change that).
 #
 # Times each whole process (start-up, parsing, BVH, render, PNG writing) with
 # /usr/bin/time, keeps the fastest of REPEAT runs (default 3; the machine may be shared),
@@ -8,8 +8,8 @@
 # auto), the CPU backend, and the GPU backend with the driver's shader cache cold and
 # warm (failures are ignored: no adapter).
 # POV-Ray reads the SPD generators' own POV-Ray versions of the scenes, with the command
-# line of ../shared/peers/povray/README.md (-A: no antialiasing, +WT2: two threads).
-# Tachyon reads the NFF files themselves (-numthreads 2, -raydepth 5 as gpurt's default
+# line of ../shared/peers/povray/README.md (-A: no antialiasing, +WT: THREADS threads).
+# Tachyon reads the NFF files themselves (-numthreads THREADS, -raydepth 5 as gpurt's default
 # depth); it does no refraction, and draws gears-4 all white.
 #
 # With SPP=n (a square: 4, 9, 16) gpurt traces n jittered samples a pixel and POV-Ray
@@ -20,6 +20,8 @@
 #        REPEAT=5 benches/peers.sh
 #        WIDTH=1920 HEIGHT=1080 SPP=4 NO_GPU=1 benches/peers.sh balls-4 gears-4 teapot-6
 #        (NO_GPU=1 leaves out the two --backend gpu columns; scenes: a subset of the five)
+#        THREADS=1 REPEAT=1 benches/peers.sh  (every program on one thread: gpurt --threads,
+#        POV-Ray +WT, Tachyon -numthreads; default: one a core)
 set -euo pipefail
 
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -31,13 +33,14 @@ WIDTH=${WIDTH:-512}
 HEIGHT=${HEIGHT:-512}
 SPP=${SPP:-1}
 REPEAT=${REPEAT:-3}
+THREADS=${THREADS:-$(nproc)}
 POV_AA=(-A)
 if [[ $SPP -gt 1 ]]; then
     n=$(awk -v s="$SPP" 'BEGIN{n = int(sqrt(s) + 0.5); print (n * n == s) ? n : 0}')
     [[ $n -gt 0 ]] || { echo "SPP must be a square (4, 9, 16, ...)" >&2; exit 2; }
     POV_AA=(+A0.0 +AM1 "+R$n")
 fi
-SIZE_ARGS=(--width "$WIDTH" --height "$HEIGHT" --spp "$SPP")
+SIZE_ARGS=(--width "$WIDTH" --height "$HEIGHT" --spp "$SPP" --threads "$THREADS")
 TIME=/usr/bin/time
 
 if [[ ! -x $TIME ]]; then
@@ -109,14 +112,14 @@ for s in "${SCENES[@]}"; do
         gpu_cell="$u_wall ($u_mrays Mrays/s)"
     fi
 
-    out=$(timed tachyon "$SCENES_DIR/$s.nff" -res "$WIDTH" "$HEIGHT" -numthreads 2 -raydepth 5 \
+    out=$(timed tachyon "$SCENES_DIR/$s.nff" -res "$WIDTH" "$HEIGHT" -numthreads "$THREADS" -raydepth 5 \
         -format PNG -o "$WORK/$s-tachyon.png") || { echo "tachyon failed on $s" >&2; exit 1; }
     read -r t_wall t_kb _ <<<"$out"
 
     gunzip -c "$POV_DIR/$s.pov.gz" >"$WORK/$s.pov"
     # POV-Ray resolves relative names against the current directory.
     out=$(cd "$WORK" && timed povray "+I$s.pov" "+O$s-pov.png" \
-        "+W$WIDTH" "+H$HEIGHT" "${POV_AA[@]}" +WT2 -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
+        "+W$WIDTH" "+H$HEIGHT" "${POV_AA[@]}" "+WT$THREADS" -D +FN) || { echo "povray failed on $s" >&2; exit 1; }
     read -r p_wall p_kb p_log <<<"$out"
 
     ratio() { [[ -n $1 ]] && awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}' || echo -; }
@@ -128,6 +131,6 @@ echo "| scene | gpurt (default) wall s | peak MB | --backend cpu wall s | Mrays/
 echo "|---|---:|---:|---:|---:|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
 printf '%s\n' "${rows[@]}"
 echo
-echo "${WIDTH}x${HEIGHT}, $SPP spp (POV-Ray: ${POV_AA[*]}), $(nproc) threads; best of $REPEAT runs. Wall time and peak memory are"
+echo "${WIDTH}x${HEIGHT}, $SPP spp (POV-Ray: ${POV_AA[*]}), $THREADS threads; best of $REPEAT runs. Wall time and peak memory are"
 echo "of the whole process; the ratios are of wall times (below 1: gpurt is faster)."
 if [[ -n $adapter ]]; then echo "--backend gpu runs on: $adapter."; fi
