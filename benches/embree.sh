@@ -15,6 +15,11 @@
 #   GPURT_SIMD=sse benches/embree.sh  (our packets in SSE's four lanes)
 #   SPP=16 benches/embree.sh          (our side traces the tree gpurt builds for a 16-sample
 #                                      render; the rays are the same)
+#   GPURT_BVH=high benches/embree.sh  (our side on its high-quality tree, whatever the size)
+#
+# Embree builds its tree twice: at its default (medium) quality for every table, and at
+# RTC_BUILD_QUALITY_HIGH (spatial splits; EMBREE_QUALITY=high to benches/embree/rays.c)
+# for a second column of the mirror rays' table.
 #
 # On a machine with AVX-512 the tables are taken twice in the same run: each side at its
 # widest, then both held to AVX2 (GPURT_SIMD=avx2, Embree's device config isa=avx2).
@@ -56,6 +61,8 @@ tables() {
         echo "== $name ($set)" >&2
         ours=$(GPURT_SIMD=$simd RAYON_NUM_THREADS=$THREADS "$ROOT/target/release/examples/rays" "$scene" "$SIZE" "$WORK/$name.rays")
         theirs=$("$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)
+        # Embree's high-quality build (spatial splits), for the mirror rays' table.
+        high=$(EMBREE_QUALITY=high "$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)
         lanes=$(awk '{for (i = 1; i < NF; i++) if ($i == "lanes") print $(i + 1)}' <<<"$ours")
         isa=$(awk '{for (i = 1; i < NF; i++) if ($i == "isa") print $(i + 1)}' <<<"$ours")
         g1=$(rate "$ours" primary1) gp=$(rate "$ours" primaryP)
@@ -64,8 +71,9 @@ tables() {
         s1=$(rate "$ours" shadow1) sp=$(rate "$ours" shadowP)
         o1=$(rate "$theirs" shadow1) o8=$(rate "$theirs" shadow8) o16=$(rate "$theirs" shadow16)
         shadow+=("| $name | $(count "$ours" shadow1) | $s1 | $sp | $o1 | $o8 | $o16 | $(ratio "$s1" "$o1") | $(ratio "$sp" "$o16") |")
-        m1=$(rate "$ours" mirror1) em=$(rate "$theirs" mirror1)
-        mirror+=("| $name | $(count "$ours" mirror1) | $m1 | $em | $(ratio "$m1" "$em") |")
+        m1=$(rate "$ours" mirror1) em=$(rate "$theirs" mirror1) eh=$(rate "$high" mirror1)
+        built() { grep -o 'build [0-9.]* s' <<<"$1" | awk '{print $2}'; }
+        mirror+=("| $name | $(count "$ours" mirror1) | $m1 | $em | $eh | $(built "$theirs") / $(built "$high") | $(ratio "$m1" "$em") | $(ratio "$m1" "$eh") |")
         agree+=("| $name | $(awk '/^agree/ {print $3 ", " $5 ", " $7 " | " $9 ", " $11 ", " $13 " | " $15}' <<<"$theirs") |")
     done
 
@@ -85,8 +93,8 @@ tables() {
     echo
     echo "Mirror rays off every hit (incoherent: one at a time on both sides), Mrays/s:"
     echo
-    echo "| scene | rays | gpurt | Embree rtcIntersect1 | gpurt / Embree |"
-    echo "|---|---:|---:|---:|---:|"
+    echo "| scene | rays | gpurt | Embree rtcIntersect1 | rtcIntersect1, high-quality build | Embree build s, medium / high | gpurt / Embree | gpurt / Embree high |"
+    echo "|---|---:|---:|---:|---:|---|---:|---:|"
     printf '%s\n' "${mirror[@]}"
     echo
     echo "Embree's answers that agree with ours, % of rays (hit distance within 1e-4; shadow: blocked or not):"
