@@ -181,6 +181,12 @@ pub fn render_tile(
     }; MAX_LANES];
     let mut light = [Vec3::ZERO; MAX_LANES];
     let mut shadow_nodes = [0; MAX_LANES];
+    // The camera rays' surfaces, lane by lane (`None`: met nothing, or no pixel). Kept
+    // from block to block and written in place: building the array afresh for each
+    // block (`array::from_fn`) copied every lane's `Option` through temporaries a field
+    // at a time, and the wide loads after the narrow stores stalled (a tenth of
+    // teapot-6's render, by `perf`).
+    let mut surfaces: [Option<Surface>; MAX_LANES] = [None; MAX_LANES];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
@@ -228,9 +234,12 @@ pub fn render_tile(
                     }
                     continue;
                 }
-                let surfaces: [Option<Surface>; MAX_LANES] = std::array::from_fn(|k| {
-                    (k < n && hits[k].prim != NO_PRIM).then(|| surface(b, &lanes[k].1, &hits[k]))
-                });
+                for (k, slot) in surfaces.iter_mut().enumerate() {
+                    *slot = None;
+                    if k < n && hits[k].prim != NO_PRIM {
+                        *slot = Some(surface(b, &lanes[k].1, &hits[k]));
+                    }
+                }
                 // Shadow rays to each point and directional light, one packet a light, and
                 // what the light gives each surface, as `light_sample` works it out.
                 let dirs = lanes.map(|(_, ray, _)| ray.dir);
