@@ -78,7 +78,7 @@ pub fn sample_sum(
         let ray = sample_ray(g, px, py, s, &mut rng);
         counts.eye += 1;
         sum += if g.aov == AOV_COLOR {
-            trace(b, tracer, ray, &mut rng, counts)
+            trace(b, tracer, &ray, &mut rng, counts)
         } else {
             aov(b, tracer, &ray, counts)
         };

@@ -376,7 +376,7 @@ pub fn count_nodes(counts: &mut RayCounts, depth: u32, nodes: u32) {
 pub fn trace(
     b: &Bindings,
     tracer: &mut impl Tracer,
-    eye: Ray,
+    eye: &Ray,
     rng: &mut u32,
     counts: &mut RayCounts,
 ) -> Vec3 {
@@ -384,50 +384,58 @@ pub fn trace(
     // Not zeroed: clearing its 576 bytes for every camera ray was 2.6% of a render's
     // instructions (balls-4), and only entries below `sp` are ever read.
     let mut stack = [const { MaybeUninit::<Pending>::uninit() }; RAY_STACK];
-    stack[0].write(Pending {
+    let mut sp = 0usize;
+    // The ray being shaded: the eye ray first, then each waiting one, last in first out.
+    // The eye ray does not go through the stack: writing it there and reading it back at
+    // once made a copy whose loads straddled its stores, which stalled.
+    let mut ray_in = Pending {
         origin: eye.origin,
         dir: eye.dir,
         weight: 1.0,
         depth: 1,
         tmin: g.hither,
-    });
-    let mut sp = 1usize;
+    };
     // The most rays waiting at once: the shader's stack holds `trace_stack` of them.
     let mut most = 1usize;
     let mut colour = Vec3::ZERO;
-    while sp > 0 {
+    loop {
+        'shade: {
+            let ray = Ray {
+                origin: ray_in.origin,
+                dir: ray_in.dir,
+            };
+            let hit = tracer.closest_hit(b, &ray, ray_in.tmin, NO_HIT);
+            count_nodes(counts, ray_in.depth, hit.nodes);
+            if hit.prim == NO_PRIM {
+                colour += ray_in.weight * g.background;
+                break 'shade;
+            }
+            let s = tracer.surface(b, &ray, &hit);
+            let m = &textured(b, &b.materials[s.material as usize], &hit);
+            colour += ray_in.weight * direct(b, tracer, (&s, m), ray.dir, rng, counts);
+            if ray_in.depth >= g.max_depth {
+                break 'shade;
+            }
+            if m.ks > 0.0 {
+                let dir = reflect_dir(ray.dir, s.ns);
+                counts.reflected += 1;
+                stack[sp].write(secondary(&s, dir, &ray_in, m.ks, g.epsilon));
+                sp += 1;
+            }
+            if m.t > 0.0 {
+                counts.refracted += 1;
+                let dir = refracted_dir(&s, m, ray.dir);
+                stack[sp].write(secondary(&s, dir, &ray_in, m.t, g.epsilon));
+                sp += 1;
+            }
+            most = most.max(sp);
+        }
+        if sp == 0 {
+            break;
+        }
         sp -= 1;
         // SAFETY: entries below the old `sp` have been written.
-        let ray_in = unsafe { stack[sp].assume_init() };
-        let ray = Ray {
-            origin: ray_in.origin,
-            dir: ray_in.dir,
-        };
-        let hit = tracer.closest_hit(b, &ray, ray_in.tmin, NO_HIT);
-        count_nodes(counts, ray_in.depth, hit.nodes);
-        if hit.prim == NO_PRIM {
-            colour += ray_in.weight * g.background;
-            continue;
-        }
-        let s = tracer.surface(b, &ray, &hit);
-        let m = &textured(b, &b.materials[s.material as usize], &hit);
-        colour += ray_in.weight * direct(b, tracer, (&s, m), ray.dir, rng, counts);
-        if ray_in.depth >= g.max_depth {
-            continue;
-        }
-        if m.ks > 0.0 {
-            let dir = reflect_dir(ray.dir, s.ns);
-            counts.reflected += 1;
-            stack[sp].write(secondary(&s, dir, &ray_in, m.ks, g.epsilon));
-            sp += 1;
-        }
-        if m.t > 0.0 {
-            counts.refracted += 1;
-            let dir = refracted_dir(&s, m, ray.dir);
-            stack[sp].write(secondary(&s, dir, &ray_in, m.t, g.epsilon));
-            sp += 1;
-        }
-        most = most.max(sp);
+        ray_in = unsafe { stack[sp].assume_init() };
     }
     debug_assert!(
         most <= crate::pack::trace_stack(b.materials, g.max_depth) as usize,

@@ -293,7 +293,7 @@ fn glass_slab_displaces_rays_as_snell_says() {
             origin: Vec3::new(x0 as f32, 0.3, 5.0),
             dir,
         };
-        trace(&b, &mut Alone, ray, &mut 0, &mut RayCounts::default())
+        trace(&b, &mut Alone, &ray, &mut 0, &mut RayCounts::default())
     };
     let t2 = 0.9f32 * 0.9;
     let red = Vec3::new(t2, 0.0, 0.0);

@@ -79,12 +79,12 @@ struct Known<'a> {
 
 impl Tracer for Known<'_> {
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
-        if let Some((hit, packed)) = self.eye.and_then(|a| a.of(ray, tmin, tmax)) {
+        if let Some((hit, packed)) = self.eye.as_ref().and_then(|a| a.of(ray, tmin, tmax)) {
             self.eye = None;
             self.counts.eye_packed += u64::from(packed);
             return hit;
         }
-        if let Some((hit, packed)) = self.mirror.and_then(|a| a.of(ray, tmin, tmax)) {
+        if let Some((hit, packed)) = self.mirror.as_ref().and_then(|a| a.of(ray, tmin, tmax)) {
             self.mirror = None;
             self.counts.reflected_packed += u64::from(packed);
             return hit;
@@ -206,7 +206,11 @@ pub fn render_tile(
                         let mut rng = 0;
                         let ray = sample_ray(g, x, y, s, &mut rng);
                         let i = ((y - rows.start) * (x1 - x0) + x - x0) as usize;
-                        lanes[n] = (i, ray, rng);
+                        // Field by field: the ray comes back through memory, and a copy
+                        // whole read it back in loads that straddled the call's stores.
+                        let lane = &mut lanes[n];
+                        (lane.0, lane.2) = (i, rng);
+                        (lane.1.origin, lane.1.dir) = (ray.origin, ray.dir);
                         packet.set(n, &ray, g.hither, NO_HIT);
                         n += 1;
                     }
@@ -286,7 +290,8 @@ pub fn render_tile(
                 } else {
                     0
                 };
-                for (k, &(i, ray, mut rng)) in lanes[..n].iter().enumerate() {
+                for (k, (i, ray, rng)) in lanes[..n].iter().enumerate() {
+                    let (i, mut rng) = (*i, *rng);
                     if surfaces[k].is_none() {
                         // A camera ray that met nothing (most of a scene with sky around
                         // it): what `trace` gives it and counts for it, `0 + 1 *
@@ -297,7 +302,7 @@ pub fn render_tile(
                         continue;
                     }
                     let mut known = Known {
-                        eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
+                        eye: Some(answer(k, *ray, g.hither, hits[k], eye_packed)),
                         mirror: (packet.lanes() & 1 << k != 0)
                             .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
                         eye_surface: surfaces[k],
