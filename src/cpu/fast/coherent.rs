@@ -21,6 +21,7 @@ use glam::Vec3;
 use super::lights::{Surfaces, light_rays, packed};
 use super::packet::{Kernels, MAX_LANES, Packet};
 use super::tracer::Alone;
+use crate::cpu::intersect::lanes_of;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
     Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, surface, trace,
@@ -69,7 +70,7 @@ struct Known<'a> {
     mirror: Option<Answer<Hit>>,
     /// The camera ray's surface, for the first surface asked for (the camera ray's hit:
     /// the shading asks for that ray first).
-    eye_surface: Option<Surface>,
+    eye_surface: Option<&'a Surface>,
     /// Its light samples, one a point or directional light in the lights' order, handed
     /// out while the shading lights that surface (until it asks for the next surface).
     eye_lights: &'a [Lit],
@@ -98,7 +99,7 @@ impl Tracer for Known<'_> {
 
     fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
         match self.eye_surface.take() {
-            Some(s) => s,
+            Some(s) => *s,
             None => {
                 self.eye_lights = &[];
                 surface(b, ray, hit)
@@ -129,6 +130,15 @@ impl Tracer for Known<'_> {
         light_sample(b, self, at, (light, k), rng, counts)
     }
 }
+
+/// What a lane without a surface holds in the packet loop's array of surfaces.
+const NO_SURFACE: Surface = Surface {
+    point: Vec3::ZERO,
+    ng: Vec3::ZERO,
+    ns: Vec3::ZERO,
+    entering: false,
+    material: 0,
+};
 
 /// Pixels of a packet, `(columns, rows)`, for `lanes` lanes.
 fn block(lanes: usize) -> (u32, u32) {
@@ -181,12 +191,12 @@ pub fn render_tile(
     }; MAX_LANES];
     let mut light = [Vec3::ZERO; MAX_LANES];
     let mut shadow_nodes = [0; MAX_LANES];
-    // The camera rays' surfaces, lane by lane (`None`: met nothing, or no pixel). Kept
-    // from block to block and written in place: building the array afresh for each
-    // block (`array::from_fn`) copied every lane's `Option` through temporaries a field
-    // at a time, and the wide loads after the narrow stores stalled (a tenth of
-    // teapot-6's render, by `perf`).
-    let mut surfaces: [Option<Surface>; MAX_LANES] = [None; MAX_LANES];
+    // The camera rays' surfaces, lane by lane, those of the lanes in a block's `met` mask
+    // (the others: no surface, or no pixel). Kept from block to block and written in
+    // place: an array of `Option`s built afresh for each block (`array::from_fn`) copied
+    // every lane through temporaries a field at a time, and the wide loads after the
+    // narrow stores stalled (a tenth of teapot-6's render, by `perf`).
+    let mut surfaces = [NO_SURFACE; MAX_LANES];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
@@ -238,16 +248,15 @@ pub fn render_tile(
                     }
                     continue;
                 }
-                for (k, slot) in surfaces.iter_mut().enumerate() {
-                    *slot = None;
-                    if k < n && hits[k].prim != NO_PRIM {
-                        *slot = Some(surface(b, &lanes[k].1, &hits[k]));
-                    }
+                let mut met = 0u32;
+                for k in (0..n).filter(|&k| hits[k].prim != NO_PRIM) {
+                    surfaces[k] = surface(b, &lanes[k].1, &hits[k]);
+                    met |= 1 << k;
                 }
                 // Shadow rays to each point and directional light, one packet a light, and
                 // what the light gives each surface, as `light_sample` works it out.
                 let dirs = lanes.map(|(_, ray, _)| ray.dir);
-                let lit = Surfaces::new(b, &surfaces, &hits, &dirs);
+                let lit = Surfaces::new(b, (&surfaces, met), &hits, &dirs);
                 for (j, &li) in shadowed.iter().enumerate() {
                     packet.clear();
                     let rays = light_rays(b, &lit, &b.lights[li], &mut packet);
@@ -256,7 +265,7 @@ pub fn render_tile(
                     } else {
                         kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes)
                     };
-                    for k in (0..n).filter(|&k| surfaces[k].is_some()) {
+                    for k in lanes_of(met) {
                         eye_lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
                             // `light_sample`'s product, in its order.
                             Lit {
@@ -272,8 +281,8 @@ pub fn render_tile(
                 // Reflections off flat mirrors, where the depth lets the shading trace them.
                 packet.clear();
                 if g.max_depth > 1 {
-                    for (k, s) in surfaces.iter().enumerate() {
-                        let Some(s) = s else { continue };
+                    for k in lanes_of(met) {
+                        let s = &surfaces[k];
                         if b.materials[s.material as usize].ks > 0.0 && flat(b, &hits[k]) {
                             let dir = reflect_dir(lanes[k].1.dir, s.ns);
                             let ray = Ray {
@@ -292,7 +301,7 @@ pub fn render_tile(
                 };
                 for (k, (i, ray, rng)) in lanes[..n].iter().enumerate() {
                     let (i, mut rng) = (*i, *rng);
-                    if surfaces[k].is_none() {
+                    if met & 1 << k == 0 {
                         // A camera ray that met nothing (most of a scene with sky around
                         // it): what `trace` gives it and counts for it, `0 + 1 *
                         // background`, without setting up its stack and answers.
@@ -305,7 +314,7 @@ pub fn render_tile(
                         eye: Some(answer(k, *ray, g.hither, hits[k], eye_packed)),
                         mirror: (packet.lanes() & 1 << k != 0)
                             .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
-                        eye_surface: surfaces[k],
+                        eye_surface: Some(&surfaces[k]),
                         eye_lights: &eye_lights[k * shadowed.len()..(k + 1) * shadowed.len()],
                         counts: RayCounts::default(),
                     };

@@ -55,11 +55,12 @@ pub struct Surfaces {
 }
 
 impl Surfaces {
-    /// The surfaces `surfaces` (a lane each, `None` where the camera ray met nothing) of
-    /// the camera rays with directions `dirs`, met at `hits` (their materials `textured`).
+    /// The surfaces `surfaces` of the lanes in `met` (a lane each; the others met
+    /// nothing) of the camera rays with directions `dirs`, met at `hits` (their materials
+    /// `textured`).
     pub fn new(
         b: &Bindings,
-        surfaces: &[Option<Surface>; MAX_LANES],
+        (surfaces, met): (&[Surface; MAX_LANES], u32),
         hits: &[Hit; MAX_LANES],
         dirs: &[Vec3],
     ) -> Self {
@@ -76,8 +77,8 @@ impl Surfaces {
             ks: [0.0; MAX_LANES],
             shine: [0.0; MAX_LANES],
         };
-        for (k, s) in surfaces.iter().enumerate() {
-            let Some(s) = s else { continue };
+        for k in lanes_of(met) {
+            let s = &surfaces[k];
             let m = &textured(b, &b.materials[s.material as usize], &hits[k]);
             all.live |= 1 << k;
             for a in 0..3 {
