@@ -46,6 +46,8 @@ count() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 1);
 rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 2); exit}}' <<<"$1"; }
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
 best() { awk 'BEGIN{m = 0} {for (i = 1; i <= NF; i++) if ($i > m) m = $i} END{print m}' <<<"$*"; }
+# Embree's build time in seconds, from its summary line (`build 0.011 s`).
+built() { grep -o 'build [0-9.]* s' <<<"$1" | awk '{print $2}'; }
 
 # The tables for one instruction set: `default` (each side's widest), or `avx2` (both held
 # to AVX2: GPURT_SIMD=avx2, Embree's device config isa=avx2), so that a machine with
@@ -72,7 +74,6 @@ tables() {
         o1=$(rate "$theirs" shadow1) o8=$(rate "$theirs" shadow8) o16=$(rate "$theirs" shadow16)
         shadow+=("| $name | $(count "$ours" shadow1) | $s1 | $sp | $o1 | $o8 | $o16 | $(ratio "$s1" "$o1") | $(ratio "$sp" "$o16") |")
         m1=$(rate "$ours" mirror1) em=$(rate "$theirs" mirror1) eh=$(rate "$high" mirror1)
-        built() { grep -o 'build [0-9.]* s' <<<"$1" | awk '{print $2}'; }
         mirror+=("| $name | $(count "$ours" mirror1) | $m1 | $em | $eh | $(built "$theirs") / $(built "$high") | $(ratio "$m1" "$em") | $(ratio "$m1" "$eh") |")
         agree+=("| $name | $(awk '/^agree/ {print $3 ", " $5 ", " $7 " | " $9 ", " $11 ", " $13 " | " $15}' <<<"$theirs") |")
     done
