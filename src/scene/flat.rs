@@ -19,6 +19,7 @@ use crate::gpu_types::{
 };
 
 /// Bounded primitives as packed records, by kind.
+#[derive(Clone)]
 pub struct Flat {
     /// The records of each kind (`PRIM_SPHERE` to `PRIM_BOX`), in reading order.
     parts: [Vec<GpuPrim>; 4],
@@ -276,6 +277,7 @@ pub fn to_edges(prims: &mut [GpuPrim]) {
 
 /// A scene read into packed records: everything but its bounded primitives in `scene`
 /// (whose vectors of spheres, triangles, cones and boxes are empty), those in `prims`.
+#[derive(Clone)]
 pub struct FlatScene {
     pub scene: Scene,
     pub prims: Flat,
@@ -283,7 +285,11 @@ pub struct FlatScene {
 
 impl FlatScene {
     /// A scene of the data model, its primitives moved into records kind by kind.
-    pub fn from_scene(mut scene: Scene) -> FlatScene {
+    pub fn from_scene(scene: Scene) -> FlatScene {
+        // A scene that moves packs as it is at its default time (`Read::still` picks
+        // another for the command line, `Scene::at` for the library).
+        let t = scene.animation.as_ref().map_or(0.0, |a| a.default_time());
+        let mut scene = scene.at(t);
         let mut prims = Flat::new();
         for s in std::mem::take(&mut scene.spheres) {
             prims.sphere(s);

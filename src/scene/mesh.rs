@@ -1,13 +1,13 @@
 //! Mesh files (STL, OBJ, PLY) read into a sink, and the transform the `mesh` statement applies
-//! to them on their way in (`Placed`).
+//! to them on their way in (its `Placement`, through `place::Placed`).
 
-use glam::{Mat3, Vec2, Vec3};
+use glam::{DAffine3, Mat3, Vec3};
 
-use super::bounds::Bounds;
 use super::io::{FileKind, Input};
 use super::lex::Lexer;
-use super::model::{BoxPrim, Cone, MaterialId, Mesh, Sphere, Triangle, unit};
-use super::sink::{MeshOut, Sink};
+use super::model::{Mesh, Triangle};
+use super::place::Placement;
+use super::sink::MeshOut;
 use super::{obj, ply, stl};
 use crate::util::error::Result;
 
@@ -60,113 +60,26 @@ impl MeshTransform {
     }
 
     pub fn apply(&self, tris: &mut [Triangle]) {
-        let Some(m) = self.matrices() else { return };
+        let Some(p) = self.placement() else { return };
         for t in tris {
-            let (v, n, uv) = m.place(t.v, t.n.as_deref().copied(), t.uv.as_deref().copied());
+            let (v, n, uv) = p.triangle(t.v, t.n.as_deref().copied(), t.uv.as_deref().copied());
             t.v = v;
             t.n = n.map(Box::new);
             t.uv = uv.map(Box::new);
         }
     }
 
-    /// The matrices that place points and normals; `None` for the identity.
-    fn matrices(&self) -> Option<Placement> {
+    /// The placement this transform makes; `None` for the identity (nothing moves) and
+    /// for a zero scale (which the reader refuses).
+    pub fn placement(&self) -> Option<Placement> {
         if *self == MeshTransform::default() {
             return None;
         }
-        let m = self.linear();
-        Some(Placement {
-            m,
-            // Normals transform by the inverse transpose (non-uniform scale bends them).
-            nm: m.inverse().transpose(),
-            translate: self.translate,
-            mirrored: m.determinant() < 0.0,
-        })
-    }
-}
-
-#[derive(Clone, Copy)]
-struct Placement {
-    m: Mat3,
-    nm: Mat3,
-    translate: Vec3,
-    /// A negative scale mirrors the mesh, which turns its triangles' winding: `place`
-    /// turns it back, so that their front (an emitter's) stays the side it was.
-    mirrored: bool,
-}
-
-impl Placement {
-    /// The corners placed, and their normals and texture coordinates (which the
-    /// placement does not move) kept at their corners.
-    #[allow(clippy::type_complexity)]
-    fn place(
-        &self,
-        v: [Vec3; 3],
-        n: Option<[Vec3; 3]>,
-        uv: Option<[Vec2; 3]>,
-    ) -> ([Vec3; 3], Option<[Vec3; 3]>, Option<[Vec2; 3]>) {
-        fn turn<T>(mirrored: bool, [a, b, c]: [T; 3]) -> [T; 3] {
-            if mirrored { [a, c, b] } else { [a, b, c] }
-        }
-        let v = v.map(|p| self.m * p + self.translate);
-        // A normal the transform leaves without a direction makes the triangle flat.
-        let n = n.and_then(|[a, b, c]| {
-            let unit = |v| unit(self.nm * v);
-            Some([unit(a)?, unit(b)?, unit(c)?])
-        });
-        let m = self.mirrored;
-        (turn(m, v), n.map(|n| turn(m, n)), uv.map(|uv| turn(m, uv)))
-    }
-}
-
-/// A mesh on its way into a scene: every triangle transformed.
-pub struct Placed<'a> {
-    sink: &'a mut dyn Sink,
-    placement: Option<Placement>,
-    /// Triangles placed.
-    pub placed: usize,
-}
-
-impl<'a> Placed<'a> {
-    pub fn new(sink: &'a mut dyn Sink, xf: &MeshTransform) -> Self {
-        Placed {
-            sink,
-            placement: xf.matrices(),
-            placed: 0,
-        }
-    }
-}
-
-impl Sink for Placed<'_> {
-    fn triangle(
-        &mut self,
-        v: [Vec3; 3],
-        n: Option<[Vec3; 3]>,
-        uv: Option<[Vec2; 3]>,
-        material: MaterialId,
-    ) {
-        let (v, n, uv) = match &self.placement {
-            Some(p) => p.place(v, n, uv),
-            None => (v, n, uv),
-        };
-        self.placed += 1;
-        self.sink.triangle(v, n, uv, material);
-    }
-    // Mesh files hold triangles only.
-    fn sphere(&mut self, s: Sphere) {
-        self.sink.sphere(s);
-    }
-    fn cone(&mut self, c: Cone) {
-        self.sink.cone(c);
-    }
-    fn cuboid(&mut self, b: BoxPrim) {
-        self.sink.cuboid(b);
-    }
-    fn count(&self) -> usize {
-        self.sink.count()
-    }
-    fn bounds(&self) -> Bounds {
-        self.sink.bounds()
+        let linear = self.linear().as_dmat3();
+        Placement::new(DAffine3::from_mat3_translation(
+            linear,
+            self.translate.as_dvec3(),
+        ))
     }
 }
 

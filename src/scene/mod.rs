@@ -7,6 +7,7 @@
 //! scene of any size is read holding nothing twice. `load*` open a file (gzip-aware) and
 //! pick the reader by its first bytes and its extension (`sniff`).
 
+pub mod animation;
 pub mod auto;
 pub mod bounds;
 pub mod flat;
@@ -22,9 +23,11 @@ pub mod number;
 pub mod obj;
 pub mod options;
 pub mod palette;
+pub mod place;
 pub mod ply;
 pub mod sink;
 pub mod sniff;
+pub mod spline;
 pub mod stl;
 pub mod triangulate;
 

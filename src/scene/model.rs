@@ -7,7 +7,9 @@
 //! Primitives carry a `MaterialId` that indexes `Scene::materials` directly, so the same
 //! index is used on the GPU.
 
-use glam::{Vec2, Vec3};
+use glam::{DAffine3, DVec3, Vec2, Vec3};
+
+use super::spline::{self, PositionSpline, RotationSpline, VisibilityKey};
 
 /// Index into `Scene::materials`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -241,6 +243,8 @@ pub struct Scene {
     pub boxes: Vec<BoxPrim>,
     /// Non-fatal problems (e.g. dropped degenerate polygons), each naming its line.
     pub warnings: Vec<String>,
+    /// What moves, in an AFF scene (`None` in a still one).
+    pub animation: Option<Box<Animation>>,
 }
 
 impl Scene {
@@ -266,6 +270,7 @@ impl Scene {
             cones: Vec::new(),
             boxes: Vec::new(),
             warnings: Vec::new(),
+            animation: None,
         }
     }
 }
@@ -275,6 +280,101 @@ impl Scene {
 /// overflows or underflows f32 (components beyond about 1e19 or below 1e-19) is still
 /// normalised: `Vec3::normalize` turns `(3e38, 0, 0)` into zero, and zero shading normals
 /// into NaN pixels.
+/// Bounded primitives as `Scene` holds them, kind by kind: what a reader's `Collect` sink
+/// gathers (`sink`), and what a moving group holds.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Collect {
+    pub(super) spheres: Vec<Sphere>,
+    pub(super) triangles: Vec<Triangle>,
+    pub(super) cones: Vec<Cone>,
+    pub(super) boxes: Vec<BoxPrim>,
+}
+
+// Scenes that move (BART's AFF): the data the NFF reader produces; `animation` places
+// them at a frame's time.
+
+/// The animation's time range and frame count (the `a` statement): frame `i` of `frames`
+/// is at `start + i (end - start) / (frames - 1)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TimeRange {
+    pub start: f64,
+    pub end: f64,
+    pub frames: u32,
+}
+
+impl TimeRange {
+    /// The time of frame `frame` (counted from 0).
+    pub fn time(&self, frame: u32) -> f64 {
+        if self.frames <= 1 {
+            return self.start;
+        }
+        self.start + (self.end - self.start) * f64::from(frame) / f64::from(self.frames - 1)
+    }
+}
+
+/// A named transform's keyframes: each part absent is the identity.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Track {
+    pub name: String,
+    pub translation: Option<PositionSpline>,
+    pub rotation: Option<RotationSpline>,
+    pub scale: Option<PositionSpline>,
+    pub visibility: Vec<VisibilityKey>,
+}
+
+impl Track {
+    /// T * R * S at time `t`: scaled first, then turned, then moved.
+    pub fn transform(&self, t: f64) -> DAffine3 {
+        let translation = self.translation.as_ref().map_or(DVec3::ZERO, |s| s.at(t));
+        let rotation = self
+            .rotation
+            .as_ref()
+            .map_or(glam::DQuat::IDENTITY, |s| s.at(t));
+        let scale = self.scale.as_ref().map_or(DVec3::ONE, |s| s.at(t));
+        DAffine3::from_scale_rotation_translation(scale, rotation, translation)
+    }
+
+    pub fn visible(&self, t: f64) -> bool {
+        spline::visible(&self.visibility, t)
+    }
+}
+
+/// One transform of a chain: fixed (`xs`), or a named track's at the frame's time (`x`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Link {
+    Fixed(DAffine3),
+    Moving(usize),
+}
+
+/// What a block under an animated transform holds, in the block's own coordinates, and
+/// the transforms that place it, outermost first.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Group {
+    pub chain: Vec<Link>,
+    pub prims: Collect,
+    pub planes: Vec<Plane>,
+    pub lights: Vec<Light>,
+}
+
+/// A light that a track moves (`la name`): placed by the track's transform.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MovingLight {
+    pub track: usize,
+    pub light: Light,
+}
+
+/// Everything of a scene that moves.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Animation {
+    /// The `a` statement's range, when the scene has one.
+    pub range: Option<TimeRange>,
+    pub tracks: Vec<Track>,
+    pub groups: Vec<Group>,
+    pub lights: Vec<MovingLight>,
+    /// The track named `camera`, which moves the camera.
+    pub camera: Option<usize>,
+}
+
 pub fn unit(n: Vec3) -> Option<Vec3> {
     let largest = n.abs().max_element();
     if !n.is_finite() || largest == 0.0 {

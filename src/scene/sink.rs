@@ -10,6 +10,7 @@ use std::path::Path;
 use glam::{Vec2, Vec3};
 
 use super::bounds::Bounds;
+pub use super::model::Collect;
 use super::model::{BoxPrim, Cone, Material, MaterialId, Mesh, Scene, Sphere, Texture, Triangle};
 use super::palette::Palette;
 use crate::util::error::Result;
@@ -80,15 +81,6 @@ impl MeshOut<'_> {
     }
 }
 
-/// The primitives as `Scene` holds them.
-#[derive(Default)]
-pub struct Collect {
-    spheres: Vec<Sphere>,
-    triangles: Vec<Triangle>,
-    cones: Vec<Cone>,
-    boxes: Vec<BoxPrim>,
-}
-
 impl Collect {
     /// Moves the primitives into `scene` (whose own vectors of them are empty).
     pub fn into_scene(self, scene: &mut Scene) {
@@ -97,9 +89,28 @@ impl Collect {
         scene.cones = self.cones;
         scene.boxes = self.boxes;
     }
+
+    /// Adds the primitives to those `scene` holds.
+    pub fn append_to(self, scene: &mut Scene) {
+        scene.spheres.extend(self.spheres);
+        scene.triangles.extend(self.triangles);
+        scene.cones.extend(self.cones);
+        scene.boxes.extend(self.boxes);
+    }
 }
 
 impl Collect {
+    /// Gives every primitive to `sink`, in the order of `Scene::emit`.
+    pub fn emit(&self, sink: &mut dyn Sink) {
+        emit(
+            &self.spheres,
+            &self.triangles,
+            &self.cones,
+            &self.boxes,
+            sink,
+        );
+    }
+
     /// The triangles alone (what a mesh file holds).
     pub fn into_triangles(self) -> Vec<Triangle> {
         self.triangles
@@ -149,22 +160,39 @@ impl Sink for Collect {
 impl Scene {
     /// Gives every bounded primitive to `sink`, in the order of `bounded_prims`.
     pub fn emit(&self, sink: &mut dyn Sink) {
-        for s in &self.spheres {
-            sink.sphere(*s);
-        }
-        for t in &self.triangles {
-            sink.triangle(
-                t.v,
-                t.n.as_deref().copied(),
-                t.uv.as_deref().copied(),
-                t.material,
-            );
-        }
-        for c in &self.cones {
-            sink.cone(*c);
-        }
-        for b in &self.boxes {
-            sink.cuboid(*b);
-        }
+        emit(
+            &self.spheres,
+            &self.triangles,
+            &self.cones,
+            &self.boxes,
+            sink,
+        );
+    }
+}
+
+/// Primitives into `sink`, kind by kind.
+fn emit(
+    spheres: &[Sphere],
+    triangles: &[Triangle],
+    cones: &[Cone],
+    boxes: &[BoxPrim],
+    sink: &mut dyn Sink,
+) {
+    for s in spheres {
+        sink.sphere(*s);
+    }
+    for t in triangles {
+        sink.triangle(
+            t.v,
+            t.n.as_deref().copied(),
+            t.uv.as_deref().copied(),
+            t.material,
+        );
+    }
+    for c in cones {
+        sink.cone(*c);
+    }
+    for b in boxes {
+        sink.cuboid(*b);
     }
 }

@@ -9,7 +9,8 @@ use glam::Vec3;
 use super::{Parser, keyword};
 use crate::scene::io::{self, FileKind};
 use crate::scene::lex::Token;
-use crate::scene::mesh::{self, MeshTransform, Placed};
+use crate::scene::mesh::{self, MeshTransform};
+use crate::scene::place::Placed;
 use crate::scene::sink::MeshOut;
 use crate::util::error::{Error, Result, escape};
 
@@ -83,7 +84,8 @@ impl Parser<'_> {
         };
         let input = io::open(&path).map_err(cannot_read)?;
         let name = path.display().to_string();
-        let mut placed = Placed::new(&mut *self.sink, &xf);
+        let mut route = super::blocks::Route::new(&mut *self.sink, &mut self.blocks);
+        let mut placed = Placed::new(&mut route, xf.placement());
         let mut out = MeshOut {
             sink: &mut placed,
             warnings: &mut self.scene.warnings,

@@ -2,8 +2,10 @@
 //! the statement loop and by the `v` block alike.
 
 /// The statements (entity keywords) of the format, ours included.
-pub(super) const STATEMENTS: [&str; 14] = [
+pub(super) const STATEMENTS: [&str; 28] = [
     "v", "b", "l", "dl", "al", "am", "f", "c", "s", "p", "pp", "pl", "aabb", "mesh",
+    // BART's AFF.
+    "a", "k", "x", "xs", "}", "la", "fm", "tt", "ttp", "tpp", "tpa", "m", "i", "d",
 ];
 
 /// The keyword `word` is most probably a misspelling of, if any: of three letters or more,

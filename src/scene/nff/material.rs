@@ -55,6 +55,11 @@ impl Parser<'_> {
         self.palette.id(&mut self.scene.materials, m)
     }
 
+    /// Makes `m` the current material.
+    pub(super) fn set_material(&mut self, m: Material) {
+        self.material = Some(self.intern(m));
+    }
+
     pub(super) fn fill(&mut self, tok: &Token) -> Result<()> {
         let color = self.lx.vec3("material colour")?;
         let color = self.hold3(tok, "material colour", color, 1.0);
@@ -84,7 +89,7 @@ impl Parser<'_> {
             emission: Vec3::ZERO,
             texture: None,
         };
-        self.material = Some(self.intern(m));
+        self.set_material(m);
         Ok(())
     }
 }

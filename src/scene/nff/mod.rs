@@ -6,11 +6,14 @@
 //! block (`view`), the `mesh` include (`include`) and the materials with the ranges
 //! colours are held to (`material`) are beside it.
 
+mod aff;
+mod blocks;
 mod include;
 mod keywords;
 mod material;
 mod view;
 
+use std::collections::HashSet;
 use std::path::Path;
 
 use glam::Vec3;
@@ -61,6 +64,9 @@ pub fn read(lx: Lexer, base: &Path, sink: &mut dyn Sink, opts: &ReadOptions) -> 
         verts: Vec::new(),
         normals: Vec::new(),
         tris: Vec::new(),
+        blocks: blocks::Blocks::default(),
+        depth_floor: 0,
+        warned: HashSet::new(),
     };
     p.run()?;
     Ok(p.scene)
@@ -95,10 +101,27 @@ struct Parser<'a> {
     verts: Vec<Vec3>,
     normals: Vec<Vec3>,
     tris: Vec<[u32; 3]>,
+    /// The open transform blocks and the animation being read (AFF).
+    blocks: blocks::Blocks,
+    /// How many blocks were open when this file began: it closes only its own.
+    depth_floor: usize,
+    /// Warnings given once per scene, not at every statement they concern.
+    warned: HashSet<String>,
 }
 
 impl Parser<'_> {
     fn run(&mut self) -> Result<()> {
+        self.statements()?;
+        if !self.have_view {
+            return Err(self.lx.error_here(
+                "expected a view ('v' with from/at/up/angle), found none in the file",
+            ));
+        }
+        self.finish_animation()
+    }
+
+    /// The statements of one file (the scene's, or one it includes).
+    fn statements(&mut self) -> Result<()> {
         let mut first = true;
         while let Some(tok) = self.lx.next_token()? {
             let is_first = std::mem::replace(&mut first, false);
@@ -113,7 +136,7 @@ impl Parser<'_> {
                     let position = self.lx.vec3("light position")?;
                     let color = self.optional_colour("light colour")?;
                     let color = color.map(|c| self.hold3(&tok, "light colour", c, MAX_LIGHT));
-                    self.scene.lights.push(Light::Point { position, color });
+                    self.put_light(Light::Point { position, color });
                 }
                 b"dl" => {
                     let direction = self.lx.vec3("light direction")?;
@@ -124,7 +147,7 @@ impl Parser<'_> {
                     }
                     let color = self.optional_colour("light colour")?;
                     let color = color.map(|c| self.hold3(&tok, "light colour", c, MAX_LIGHT));
-                    self.scene.lights.push(Light::Directional {
+                    self.put_light(Light::Directional {
                         direction: direction.normalize(),
                         color,
                     });
@@ -144,7 +167,7 @@ impl Parser<'_> {
                         self.warn(&tok, "sphere of radius 0 dropped");
                     } else {
                         self.room(&tok, 1)?;
-                        self.sink.sphere(Sphere {
+                        self.route().sphere(Sphere {
                             center,
                             radius: radius.abs(),
                             material,
@@ -156,6 +179,20 @@ impl Parser<'_> {
                 b"pl" => self.plane(&tok)?,
                 b"aabb" => self.aabb(&tok)?,
                 b"mesh" => self.mesh(&tok)?,
+                // BART's AFF (`aff`).
+                b"a" => self.time_range(&tok)?,
+                b"k" => self.keyframes(&tok)?,
+                b"x" => self.open_moving(&tok)?,
+                b"xs" => self.open_fixed(&tok)?,
+                b"}" => self.close_block(&tok)?,
+                b"la" => self.moving_light(&tok)?,
+                b"fm" => self.fill_material(&tok)?,
+                b"tt" => self.textured_triangle(&tok, false)?,
+                b"ttp" | b"tpp" => self.textured_triangle(&tok, true)?,
+                b"tpa" => self.animated_triangle(&tok)?,
+                b"m" => self.indexed_mesh(&tok)?,
+                b"i" => self.include(&tok)?,
+                b"d" => self.detail_level()?,
                 b"nff" if is_first => {
                     return Err(self.lx.error_at(
                         &tok,
@@ -197,17 +234,19 @@ impl Parser<'_> {
                 }
             }
         }
-        if !self.have_view {
-            return Err(self.lx.error_here(
-                "expected a view ('v' with from/at/up/angle), found none in the file",
-            ));
-        }
-        Ok(())
+        self.check_closed()
     }
 
     fn warn(&mut self, tok: &Token, msg: &str) {
         let w = format!("{}:{}:{}: {msg}", self.lx.name(), tok.line, tok.col);
         self.scene.warnings.push(w);
+    }
+
+    /// `warn`, the first time only: for what applies to every statement of a kind.
+    fn warn_once(&mut self, tok: &Token, msg: &str) {
+        if self.warned.insert(msg.to_string()) {
+            self.warn(tok, msg);
+        }
     }
 
     /// `--lenient`: an unknown keyword and what follows it up to the next keyword are
@@ -234,7 +273,7 @@ impl Parser<'_> {
 
     /// Refuses a statement that would take the scene past `MAX_PRIMITIVES`.
     fn room(&self, tok: &Token, more: usize) -> Result<()> {
-        if self.sink.count() + more > MAX_PRIMITIVES {
+        if self.sink.count() + self.blocks.moving() + more > MAX_PRIMITIVES {
             return Err(self.lx.error_at(
                 tok,
                 format!("the scene has more than {MAX_PRIMITIVES} bounded primitives (the limit)"),
@@ -258,7 +297,7 @@ impl Parser<'_> {
         let apex_radius = self.lx.number("cone apex radius")?;
         let material = self.current_material();
         self.room(tok, 1)?;
-        self.sink.cone(Cone {
+        self.route().cone(Cone {
             base,
             base_radius: base_radius.abs(),
             apex,
@@ -330,11 +369,12 @@ impl Parser<'_> {
         }
         let smooth = patch && zero.is_none();
         self.room(tok, self.tris.len())?;
+        let mut out = blocks::Route::new(&mut *self.sink, &mut self.blocks);
         for &[a, b, c] in &self.tris {
             let (a, b, c) = (a as usize, b as usize, c as usize);
             let n = smooth.then(|| [self.normals[a], self.normals[b], self.normals[c]]);
             let v = [self.verts[a], self.verts[b], self.verts[c]];
-            self.sink.triangle(v, n, None, material);
+            out.triangle(v, n, None, material);
         }
         Ok(())
     }
@@ -350,7 +390,7 @@ impl Parser<'_> {
                 .error_at(tok, "degenerate plane: its three points are collinear"));
         }
         let material = self.current_material();
-        self.scene.planes.push(Plane {
+        self.put_plane(Plane {
             point: a,
             normal: n.normalize(),
             material,
@@ -374,7 +414,7 @@ impl Parser<'_> {
         }
         let material = self.current_material();
         self.room(tok, 1)?;
-        self.sink.cuboid(BoxPrim {
+        self.route().cuboid(BoxPrim {
             min: Vec3::from(lo),
             max: Vec3::from(hi),
             material,
@@ -405,7 +445,7 @@ impl Parser<'_> {
                 .lx
                 .error_at(tok, "degenerate area light: its edges are parallel or zero"));
         }
-        self.scene.lights.push(Light::Area {
+        self.put_light(Light::Area {
             corner,
             u,
             v,

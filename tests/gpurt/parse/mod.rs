@@ -4,8 +4,9 @@
 //! subject: `shared` (the SPD and P3D files), `statements` and `view` (NFF as it is read),
 //! `errors` (positions, limits, mutations), `mesh` (STL, OBJ, `mesh`, bare meshes), `ply`, `gltf`,
 //! `sniff` (formats told by their first bytes), `gzip`, `stream` (reading through a buffer
-//! of fixed size), `materials` (OBJ `.mtl`, `--lenient`).
+//! of fixed size), `materials` (OBJ `.mtl`, `--lenient`), `aff` (BART's animated NFF).
 
+mod aff;
 mod errors;
 mod gltf;
 mod gzip;

@@ -1,0 +1,734 @@
+//! What BART's Animated File Format (AFF) adds to NFF: transform blocks (`xs` fixed, `x`
+//! animated by name) and the keyframes that animate them (`k`), the time range (`a`),
+//! moving lights (`la`), the extended material (`fm`), textured triangles (`tt`, `ttp`),
+//! indexed meshes (`m`), includes with detail levels (`i`, `d`). The format is BART's
+//! `parse.c`; `docs/scene-format.md` says what gpurt renders of it. The blocks' state and
+//! where they send what is read are `blocks`'.
+
+use std::path::Path;
+
+use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
+
+use super::Parser;
+use super::blocks::{Open, Route, Target};
+use crate::scene::animation::{Animation, Group, Link, MovingLight, TimeRange, Track};
+use crate::scene::io;
+use crate::scene::lex::{Lexer, Token};
+use crate::scene::model::{Light, Material, Plane, Scene, nff_default_camera, unit};
+use crate::scene::place::Placement;
+use crate::scene::sink::Sink;
+use crate::scene::spline::{
+    MIN_KEYS, PositionKey, PositionSpline, RotationKey, RotationSpline, Tcb, VisibilityKey,
+};
+use crate::util::error::{Error, Result, escape};
+use crate::util::limits::{MAX_LIGHT, MAX_MESH_VERTICES, MAX_SHINE};
+
+/// Includes nested deeper than this are refused (a file that includes itself).
+const MAX_INCLUDE_DEPTH: u32 = 32;
+
+/// A keyframe's time as read, and its token (for the message if it is out of order).
+struct Timed {
+    time: f64,
+    tok: Token,
+}
+
+impl Parser<'_> {
+    pub(super) fn route(&mut self) -> Route<'_> {
+        Route::new(&mut *self.sink, &mut self.blocks)
+    }
+
+    /// A plane, through the open blocks.
+    pub(super) fn put_plane(&mut self, p: Plane) {
+        match self.blocks.target() {
+            None => self.scene.planes.push(p),
+            Some(Target::Fixed(_, place)) => self.scene.planes.extend(place.plane(p)),
+            Some(Target::Group(g)) => self.blocks.groups[g].planes.push(p),
+        }
+    }
+
+    /// A light, through the open blocks.
+    pub(super) fn put_light(&mut self, l: Light) {
+        match self.blocks.target() {
+            None => self.scene.lights.push(l),
+            Some(Target::Fixed(_, place)) => self.scene.lights.push(place.light(l)),
+            Some(Target::Group(g)) => self.blocks.groups[g].lights.push(l),
+        }
+    }
+
+    /// `a start end frames`.
+    pub(super) fn time_range(&mut self, tok: &Token) -> Result<()> {
+        let start = f64::from(self.lx.number("animation start time")?);
+        let end = f64::from(self.lx.number("animation end time")?);
+        let (frames, ftok) = self.lx.count("animation frame count")?;
+        if frames == 0 {
+            return Err(self
+                .lx
+                .error_at(&ftok, "an animation needs at least one frame"));
+        }
+        if end < start {
+            return Err(self.lx.error_at(
+                tok,
+                format!("animation ends (at {end}) before it starts (at {start})"),
+            ));
+        }
+        if self.blocks.range.is_some() {
+            self.warn(tok, "second 'a' replaces the first");
+        }
+        self.blocks.range = Some(TimeRange { start, end, frames });
+        Ok(())
+    }
+
+    fn expect_open_brace(&mut self, what: &str) -> Result<()> {
+        let t = self.lx.expect_token(&format!("'{{' opening the {what}"))?;
+        if self.lx.text(&t) != b"{" {
+            return Err(self.lx.error_at(
+                &t,
+                format!(
+                    "expected '{{' opening the {what}, found {}",
+                    self.lx.show(&t)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A transform's name: one word.
+    fn name(&mut self, what: &str) -> Result<(String, Token)> {
+        let t = self.lx.expect_token(what)?;
+        let name = String::from_utf8_lossy(self.lx.text(&t)).into_owned();
+        if name == "{" || name == "}" {
+            return Err(self
+                .lx
+                .error_at(&t, format!("expected {what}, found {}", self.lx.show(&t))));
+        }
+        Ok((name, t))
+    }
+
+    /// `xs sx sy sz  rx ry rz degrees  tx ty tz {`.
+    pub(super) fn open_fixed(&mut self, tok: &Token) -> Result<()> {
+        let s = self.lx.vec3("transform scale")?.as_dvec3();
+        let axis = self.lx.vec3("transform rotation axis")?.as_dvec3();
+        let deg = f64::from(self.lx.number("transform rotation in degrees")?);
+        let t = self.lx.vec3("transform translation")?.as_dvec3();
+        let rotation = self.rotation(tok, axis, deg)?;
+        if s.cmpeq(DVec3::ZERO).any() {
+            return Err(self.lx.error_at(tok, "transform scale must not be zero"));
+        }
+        self.expect_open_brace("transform block")?;
+        let a = DAffine3::from_scale_rotation_translation(s, rotation, t);
+        let target = match self.blocks.target() {
+            None => self.fixed(tok, a)?,
+            Some(Target::Fixed(outer, _)) => self.fixed(tok, outer * a)?,
+            Some(Target::Group(g)) => {
+                let mut chain = self.blocks.groups[g].chain.clone();
+                chain.push(Link::Fixed(a));
+                self.group(chain)
+            }
+        };
+        self.blocks.stack.push(Open { tok: *tok, target });
+        Ok(())
+    }
+
+    fn fixed(&self, tok: &Token, a: DAffine3) -> Result<Target> {
+        match Placement::new(a) {
+            Some(p) => Ok(Target::Fixed(a, p)),
+            None => Err(self.lx.error_at(
+                tok,
+                "the transforms of this block flatten space (a zero scale)",
+            )),
+        }
+    }
+
+    fn group(&mut self, chain: Vec<Link>) -> Target {
+        self.blocks.groups.push(Group {
+            chain,
+            ..Group::default()
+        });
+        Target::Group(self.blocks.groups.len() - 1)
+    }
+
+    /// A rotation of `deg` degrees about `axis`, which need not be of unit length.
+    fn rotation(&self, tok: &Token, axis: DVec3, deg: f64) -> Result<DQuat> {
+        if deg == 0.0 {
+            return Ok(DQuat::IDENTITY);
+        }
+        match axis.try_normalize() {
+            Some(axis) => Ok(DQuat::from_axis_angle(axis, deg.to_radians())),
+            None => Err(self.lx.error_at(
+                tok,
+                format!("a rotation of {deg} degrees about a zero axis"),
+            )),
+        }
+    }
+
+    /// `x name {`.
+    pub(super) fn open_moving(&mut self, tok: &Token) -> Result<()> {
+        let (name, ntok) = self.name("transform name")?;
+        let used = (self.lx.name().to_string(), ntok.line, ntok.col);
+        let track = self.blocks.name(&name, Some(used));
+        self.expect_open_brace("animated transform block")?;
+        let chain = match self.blocks.target() {
+            None => vec![Link::Moving(track)],
+            Some(Target::Fixed(outer, _)) => vec![Link::Fixed(outer), Link::Moving(track)],
+            Some(Target::Group(g)) => {
+                let mut chain = self.blocks.groups[g].chain.clone();
+                chain.push(Link::Moving(track));
+                chain
+            }
+        };
+        let target = self.group(chain);
+        self.blocks.stack.push(Open { tok: *tok, target });
+        Ok(())
+    }
+
+    /// `}`.
+    pub(super) fn close_block(&mut self, tok: &Token) -> Result<()> {
+        if self.blocks.stack.len() <= self.depth_floor {
+            return Err(self.lx.error_at(tok, "'}' closes no block"));
+        }
+        self.blocks.stack.pop();
+        Ok(())
+    }
+
+    /// At the end of a file: every block it opened is closed.
+    pub(super) fn check_closed(&self) -> Result<()> {
+        match self.blocks.stack.get(self.depth_floor) {
+            Some(open) => Err(self.lx.error_at(
+                &open.tok,
+                "this block is never closed (a '}' is missing before the end of the file)",
+            )),
+            None => Ok(()),
+        }
+    }
+
+    /// `k name { transl N ... rot N ... scale N ... visibility N ... }`.
+    pub(super) fn keyframes(&mut self, tok: &Token) -> Result<()> {
+        let (name, _) = self.name("name of the transform the keyframes animate")?;
+        let i = self.blocks.name(&name, None);
+        if self.blocks.names[i].track.is_some() {
+            return Err(self.lx.error_at(
+                tok,
+                format!("a second 'k {name}': its keyframes are given once"),
+            ));
+        }
+        self.expect_open_brace("keyframes")?;
+        let mut track = Track {
+            name,
+            ..Track::default()
+        };
+        loop {
+            let t = self
+                .lx
+                .expect_token("keyframes ('transl', 'rot', 'scale', 'visibility') or '}'")?;
+            let kind = String::from_utf8_lossy(self.lx.text(&t)).into_owned();
+            let twice = match kind.as_str() {
+                "}" => break,
+                "transl" => track.translation.is_some(),
+                "rot" => track.rotation.is_some(),
+                "scale" => track.scale.is_some(),
+                "visibility" => !track.visibility.is_empty(),
+                _ => {
+                    return Err(self.lx.error_at(
+                        &t,
+                        format!(
+                            "expected keyframes ('transl', 'rot', 'scale' or 'visibility') or '}}', found {}",
+                            self.lx.show(&t)
+                        ),
+                    ));
+                }
+            };
+            if twice {
+                return Err(self
+                    .lx
+                    .error_at(&t, format!("a second '{kind}' in one 'k' block")));
+            }
+            let (n, ntok) = self.lx.count(&format!("number of {kind} keys"))?;
+            let least = if kind == "visibility" {
+                1
+            } else {
+                MIN_KEYS as u32
+            };
+            if n < least {
+                let why = if least > 1 {
+                    " (the first and the last only shape the curve)"
+                } else {
+                    ""
+                };
+                return Err(self.lx.error_at(
+                    &ntok,
+                    format!("'{kind}' needs at least {least} keys{why}, found {n}"),
+                ));
+            }
+            self.check_count(&ntok, n, if kind == "rot" { 16 } else { 8 })?;
+            match kind.as_str() {
+                "transl" => {
+                    let keys = self.position_keys(n, "translation")?;
+                    track.translation = Some(PositionSpline::new(&keys));
+                }
+                "scale" => {
+                    let keys = self.position_keys(n, "scale")?;
+                    track.scale = Some(PositionSpline::new(&keys));
+                }
+                "rot" => {
+                    let keys = self.rotation_keys(n)?;
+                    track.rotation = Some(RotationSpline::new(&keys));
+                }
+                _ => track.visibility = self.visibility_keys(n)?,
+            }
+        }
+        self.blocks.names[i].track = Some(track);
+        Ok(())
+    }
+
+    /// Refuses a count of rows the rest of the file is too short to hold (each of at
+    /// least `min_bytes`), before anything is allocated for them.
+    fn check_count(&self, ntok: &Token, n: u32, min_bytes: u64) -> Result<()> {
+        if let Some(rest) = self
+            .lx
+            .remaining()
+            .filter(|&r| u64::from(n) * min_bytes > r + 1)
+        {
+            return Err(self.lx.error_at(
+                ntok,
+                format!("{n} rows, but the file has only {rest} bytes left: too few to hold them (is the count right?)"),
+            ));
+        }
+        if n as usize > MAX_MESH_VERTICES {
+            return Err(self.lx.error_at(
+                ntok,
+                format!("{n} is above the limit of {MAX_MESH_VERTICES}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// A key's time, not before the key before it.
+    fn key_time(&mut self, last: Option<&Timed>) -> Result<Timed> {
+        let tok = self.lx.peek()?;
+        let time = f64::from(self.lx.number("keyframe time")?);
+        let tok = tok.expect("a number was read");
+        if let Some(last) = last
+            && time < last.time
+        {
+            return Err(self.lx.error_at(
+                &tok,
+                format!(
+                    "keyframe time {time} is before the previous key's {} (line {}): keys go in order of time",
+                    last.time, last.tok.line
+                ),
+            ));
+        }
+        Ok(Timed { time, tok })
+    }
+
+    fn tcb(&mut self) -> Result<Tcb> {
+        Ok(Tcb {
+            tension: f64::from(self.lx.number("keyframe tension")?),
+            continuity: f64::from(self.lx.number("keyframe continuity")?),
+            bias: f64::from(self.lx.number("keyframe bias")?),
+        })
+    }
+
+    fn position_keys(&mut self, n: u32, what: &str) -> Result<Vec<PositionKey>> {
+        let mut keys = Vec::with_capacity(n as usize);
+        let mut last = None;
+        for _ in 0..n {
+            let timed = self.key_time(last.as_ref())?;
+            let value = self.lx.vec3(&format!("{what} key"))?.as_dvec3();
+            keys.push(PositionKey {
+                time: timed.time,
+                value,
+                tcb: self.tcb()?,
+            });
+            last = Some(timed);
+        }
+        Ok(keys)
+    }
+
+    fn rotation_keys(&mut self, n: u32) -> Result<Vec<RotationKey>> {
+        let mut keys = Vec::with_capacity(n as usize);
+        let mut last = None;
+        for _ in 0..n {
+            let timed = self.key_time(last.as_ref())?;
+            let axis = self.lx.vec3("rotation key axis")?.as_dvec3();
+            let deg = f64::from(self.lx.number("rotation key angle in degrees")?);
+            // A zero angle turns about any axis (BART writes `0 0 0 0` for none).
+            let axis = match axis.try_normalize() {
+                Some(a) => a,
+                None if deg == 0.0 => DVec3::X,
+                None => {
+                    return Err(self.lx.error_at(
+                        &timed.tok,
+                        format!("a rotation key of {deg} degrees about a zero axis"),
+                    ));
+                }
+            };
+            keys.push(RotationKey {
+                time: timed.time,
+                axis,
+                angle: deg.to_radians(),
+                tcb: self.tcb()?,
+            });
+            last = Some(timed);
+        }
+        Ok(keys)
+    }
+
+    fn visibility_keys(&mut self, n: u32) -> Result<Vec<VisibilityKey>> {
+        let mut keys = Vec::with_capacity(n as usize);
+        let mut last = None;
+        for _ in 0..n {
+            let timed = self.key_time(last.as_ref())?;
+            let (flag, ftok) = self.lx.count("visibility flag (0 or 1)")?;
+            if flag > 1 {
+                return Err(self.lx.error_at(
+                    &ftok,
+                    format!("expected a visibility flag of 0 or 1, found {flag}"),
+                ));
+            }
+            keys.push(VisibilityKey {
+                time: timed.time,
+                visible: flag == 1,
+            });
+            last = Some(timed);
+        }
+        Ok(keys)
+    }
+
+    /// `la name x y z [r g b]`: a point light that the track `name` moves.
+    pub(super) fn moving_light(&mut self, _tok: &Token) -> Result<()> {
+        let (name, ntok) = self.name("light name")?;
+        let used = (self.lx.name().to_string(), ntok.line, ntok.col);
+        let position = self.lx.vec3("light position")?;
+        let color = self.optional_colour("light colour")?;
+        let color = color.map(|c| self.hold3(&ntok, "light colour", c, MAX_LIGHT));
+        let track = self.blocks.name(&name, Some(used));
+        self.blocks.lights.push(MovingLight {
+            track,
+            light: Light::Point { position, color },
+        });
+        Ok(())
+    }
+
+    /// `fm ambient(rgb) diffuse(rgb) specular(rgb) shine T ior`: the material's colour is
+    /// the diffuse colour; the specular colour's largest part is the specular weight (the
+    /// model's highlights are white); the ambient colour is not read (the model's
+    /// ambient term takes the diffuse colour), with a warning where it would differ.
+    pub(super) fn fill_material(&mut self, tok: &Token) -> Result<()> {
+        let ambient = self.lx.vec3("ambient colour")?;
+        let diffuse = self.lx.vec3("diffuse colour")?;
+        let specular = self.lx.vec3("specular colour")?;
+        let diffuse = self.hold3(tok, "diffuse colour", diffuse, 1.0);
+        let specular = self.hold3(tok, "specular colour", specular, 1.0);
+        let shine = self.lx.number("Shine")?;
+        let shine = self.hold(tok, "Shine", shine, MAX_SHINE);
+        let t = self.lx.number("T")?;
+        let t = self.hold(tok, "T", t, 1.0);
+        let ior = self.lx.number("index of refraction")?;
+        if t > 0.0 && ior <= 0.0 {
+            return Err(self.lx.error_at(
+                tok,
+                format!("a transmitting material (T = {t}) needs a positive index of refraction, found {ior}"),
+            ));
+        }
+        if specular.max_element() - specular.min_element() > 1e-3 {
+            self.warn(
+                tok,
+                "a coloured specular colour is read as white highlights of its largest part",
+            );
+        }
+        if ambient != Vec3::ZERO && ambient != diffuse {
+            self.warn_once(
+                tok,
+                "'fm' ambient colours are not read: the ambient term takes the diffuse colour",
+            );
+        }
+        self.set_material(Material {
+            color: diffuse,
+            kd: 1.0,
+            ks: specular.max_element(),
+            shine,
+            t,
+            ior: if t > 0.0 { ior } else { 1.0 },
+            emission: Vec3::ZERO,
+            texture: None,
+        });
+        Ok(())
+    }
+
+    /// `tt texture` and three rows of `x y z u v`, or `ttp texture` (also written `tpp`)
+    /// and three rows of `x y z nx ny nz u v`.
+    pub(super) fn textured_triangle(&mut self, tok: &Token, patch: bool) -> Result<()> {
+        let (texture, _) = self.name("texture name")?;
+        let mut v = [Vec3::ZERO; 3];
+        let mut n = [Vec3::ZERO; 3];
+        let mut uv = [Vec2::ZERO; 3];
+        for i in 0..3 {
+            v[i] = self.lx.vec3("triangle vertex")?;
+            if patch {
+                n[i] = self.lx.vec3("triangle vertex normal")?;
+            }
+            uv[i] = Vec2::new(
+                self.lx.number("texture coordinate u")?,
+                self.lx.number("texture coordinate v")?,
+            );
+        }
+        self.no_texture(tok, &texture);
+        let normals = if patch {
+            let units = [unit(n[0]), unit(n[1]), unit(n[2])];
+            match units {
+                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                _ => None,
+            }
+        } else {
+            None
+        };
+        let material = self.current_material();
+        self.room(tok, 1)?;
+        self.route().triangle(v, normals, Some(uv), material);
+        Ok(())
+    }
+
+    /// A texture named by the scene, which gpurt does not yet read for AFF: said once.
+    fn no_texture(&mut self, tok: &Token, name: &str) {
+        let msg = format!(
+            "texture '{}' is not applied (AFF textures are not read yet); the surfaces keep their material's colour",
+            escape(name.as_bytes())
+        );
+        self.warn_once(tok, &msg);
+    }
+
+    /// `tpa N` and N samples of `time` and three rows of `x y z nx ny nz`: a triangle
+    /// that moves by its own keys. Read and left out, with a warning.
+    pub(super) fn animated_triangle(&mut self, tok: &Token) -> Result<()> {
+        let (n, ntok) = self.lx.count("number of animated triangle samples")?;
+        self.check_count(&ntok, n, 38)?;
+        for _ in 0..n {
+            self.lx.number("animated triangle sample time")?;
+            for _ in 0..6 {
+                self.lx.vec3("animated triangle vertex")?;
+            }
+        }
+        self.warn_once(
+            tok,
+            "animated triangles ('tpa') are not rendered yet; left out",
+        );
+        Ok(())
+    }
+
+    /// `m vertices N ... [normals N ...] [texturecoords N texture ...] triangles N ...`:
+    /// an indexed mesh; each triangle is its three vertex indices, then its three normal
+    /// indices and its three texture coordinate indices where the mesh has them.
+    pub(super) fn indexed_mesh(&mut self, tok: &Token) -> Result<()> {
+        let mut section = self.lx.expect_token("'vertices'")?;
+        if self.lx.text(&section) != b"vertices" {
+            return Err(self.lx.error_at(
+                &section,
+                format!(
+                    "expected 'vertices' after 'm', found {}",
+                    self.lx.show(&section)
+                ),
+            ));
+        }
+        let verts = self.vectors("mesh vertex")?;
+        let mut normals = Vec::new();
+        let mut uvs = Vec::new();
+        section = self
+            .lx
+            .expect_token("'normals', 'texturecoords' or 'triangles'")?;
+        if self.lx.text(&section) == b"normals" {
+            normals = self.vectors("mesh normal")?;
+            section = self.lx.expect_token("'texturecoords' or 'triangles'")?;
+        }
+        if self.lx.text(&section) == b"texturecoords" {
+            let (n, ntok) = self.lx.count("number of texture coordinates")?;
+            let (texture, _) = self.name("texture name")?;
+            self.check_count(&ntok, n, 4)?;
+            for _ in 0..n {
+                uvs.push(Vec2::new(
+                    self.lx.number("texture coordinate u")?,
+                    self.lx.number("texture coordinate v")?,
+                ));
+            }
+            self.no_texture(tok, &texture);
+            section = self.lx.expect_token("'triangles'")?;
+        }
+        if self.lx.text(&section) != b"triangles" {
+            return Err(self.lx.error_at(
+                &section,
+                format!(
+                    "expected 'triangles' in the mesh, found {}",
+                    self.lx.show(&section)
+                ),
+            ));
+        }
+        let (n, ntok) = self.lx.count("number of mesh triangles")?;
+        self.check_count(&ntok, n, 6)?;
+        self.room(tok, n as usize)?;
+        let material = self.current_material();
+        for _ in 0..n {
+            let v = self.indices(&verts, "vertex")?;
+            let nm = if normals.is_empty() {
+                None
+            } else {
+                let [a, b, c] = self.indices(&normals, "normal")?;
+                match [unit(a), unit(b), unit(c)] {
+                    [Some(a), Some(b), Some(c)] => Some([a, b, c]),
+                    _ => None,
+                }
+            };
+            let uv = if uvs.is_empty() {
+                None
+            } else {
+                Some(self.indices(&uvs, "texture coordinate")?)
+            };
+            self.route().triangle(v, nm, uv, material);
+        }
+        Ok(())
+    }
+
+    /// `N` and N vectors.
+    fn vectors(&mut self, what: &str) -> Result<Vec<Vec3>> {
+        let (n, ntok) = self.lx.count(&format!("number of {what}s"))?;
+        self.check_count(&ntok, n, 6)?;
+        (0..n).map(|_| self.lx.vec3(what)).collect()
+    }
+
+    /// Three indices into `of`, and what they index.
+    fn indices<T: Copy>(&mut self, of: &[T], what: &str) -> Result<[T; 3]> {
+        let mut out = [of[0]; 3];
+        for o in &mut out {
+            let (i, itok) = self.lx.count(&format!("mesh {what} index"))?;
+            *o = *of.get(i as usize).ok_or_else(|| {
+                self.lx.error_at(
+                    &itok,
+                    format!("mesh {what} index {i} is past the last ({})", of.len() - 1),
+                )
+            })?;
+        }
+        Ok(out)
+    }
+
+    /// `d level`: includes of a higher detail level are skipped from here on.
+    pub(super) fn detail_level(&mut self) -> Result<()> {
+        let (level, _) = self.lx.count("detail level")?;
+        self.blocks.detail = level;
+        Ok(())
+    }
+
+    /// `i level file`: another AFF (or NFF) file read here, inside the open blocks, with
+    /// the current material; skipped when its level is above the detail level (`d`).
+    pub(super) fn include(&mut self, _tok: &Token) -> Result<()> {
+        let (level, _) = self.lx.count("include detail level")?;
+        let ptok = self.lx.expect_token("included file name")?;
+        if level > self.blocks.detail {
+            return Ok(());
+        }
+        let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
+        let path = self.base.join(raw.trim_matches('"'));
+        if self.blocks.depth >= MAX_INCLUDE_DEPTH {
+            return Err(self.lx.error_at(
+                &ptok,
+                format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
+            ));
+        }
+        let input = io::open(&path).map_err(|e| {
+            self.lx.error_at(
+                &ptok,
+                format!(
+                    "cannot read included file '{}': {}",
+                    escape(path.as_os_str().as_encoded_bytes()),
+                    match e {
+                        Error::Io { source, .. } => source.to_string(),
+                        other => other.to_string(),
+                    }
+                ),
+            )
+        })?;
+        let name = path.display().to_string();
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let blank = || Scene::new(String::new(), nff_default_camera());
+        let mut child = Parser {
+            lx: Lexer::through(input, &name, self.window),
+            base: dir,
+            sink: &mut *self.sink,
+            lenient: self.lenient,
+            window: self.window,
+            scene: std::mem::replace(&mut self.scene, blank()),
+            have_view: self.have_view,
+            material: self.material,
+            palette: std::mem::take(&mut self.palette),
+            verts: Vec::new(),
+            normals: Vec::new(),
+            tris: Vec::new(),
+            blocks: std::mem::take(&mut self.blocks),
+            depth_floor: 0,
+            warned: std::mem::take(&mut self.warned),
+        };
+        child.blocks.depth += 1;
+        child.depth_floor = child.blocks.stack.len();
+        let read = child.statements();
+        self.scene = child.scene;
+        self.have_view = child.have_view;
+        self.material = child.material;
+        self.palette = child.palette;
+        self.blocks = child.blocks;
+        self.blocks.depth -= 1;
+        self.warned = child.warned;
+        read
+    }
+
+    /// At the end of the scene: every animated transform has its keyframes, and what
+    /// moves is handed to the scene.
+    pub(super) fn finish_animation(&mut self) -> Result<()> {
+        let blocks = std::mem::take(&mut self.blocks);
+        let mut tracks = Vec::with_capacity(blocks.names.len());
+        let mut camera = None;
+        for (i, n) in blocks.names.into_iter().enumerate() {
+            match (n.track, n.used) {
+                (None, Some((file, line, col))) => {
+                    return Err(Error::Parse {
+                        file,
+                        line,
+                        col,
+                        msg: format!(
+                            "transform '{}' has no keyframes (no 'k {}' block in the scene)",
+                            escape(n.name.as_bytes()),
+                            escape(n.name.as_bytes())
+                        ),
+                        excerpt: None,
+                    });
+                }
+                (None, None) => tracks.push(Track::default()),
+                (Some(track), used) => {
+                    if track.name == "camera" {
+                        camera = Some(i);
+                    } else if used.is_none() {
+                        let name = escape(track.name.as_bytes());
+                        self.scene.warnings.push(format!(
+                            "{}: keyframes for '{name}', which no 'x {name}' block or 'la {name}' light uses",
+                            self.lx.name()
+                        ));
+                    }
+                    tracks.push(track);
+                }
+            }
+        }
+        let groups: Vec<Group> = blocks
+            .groups
+            .into_iter()
+            .filter(|g| g.prims.count() > 0 || !g.planes.is_empty() || !g.lights.is_empty())
+            .collect();
+        let animation = Animation {
+            range: blocks.range,
+            tracks,
+            groups,
+            lights: blocks.lights,
+            camera,
+        };
+        if animation.range.is_some() || !animation.is_still() {
+            self.scene.animation = Some(Box::new(animation));
+        }
+        Ok(())
+    }
+}

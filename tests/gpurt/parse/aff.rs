@@ -1,0 +1,253 @@
+//! BART's animated NFF (AFF): objects placed where the keyframe splines put them, checked
+//! against Kochanek-Bartels' formula written out here; fixed and animated blocks nested;
+//! visibility, the camera and lights; the statements gpurt reads but does not render
+//! warned of; and bad input refused at its line and column.
+
+use glam::Vec3;
+use gpurt::Error;
+use gpurt::scene::Scene;
+
+use crate::common::inputs::{VIEW, assert_error, parse_nff, parse_ok};
+
+/// Kochanek-Bartels through `keys` (time, value, tension, continuity, bias) at time `t`
+/// in the segment from key `i` to key `i + 1`, as the textbook writes it: Hermite between
+/// the two keys, the outgoing tangent of key `i` and the incoming tangent of key `i + 1`
+/// each a weighted sum of the chords either side, scaled for the keys' spacing in time.
+fn kochanek_bartels(keys: &[(f64, f64, f64, f64, f64)], i: usize, t: f64) -> f64 {
+    let p = |k: usize| keys[k].1;
+    let time = |k: usize| keys[k].0;
+    let (_, _, tn, c, b) = keys[i];
+    let outgoing = 2.0 * (time(i + 1) - time(i)) / (time(i + 1) - time(i - 1))
+        * ((1.0 - tn) * (1.0 + c) * (1.0 + b) / 2.0 * (p(i) - p(i - 1))
+            + (1.0 - tn) * (1.0 - c) * (1.0 - b) / 2.0 * (p(i + 1) - p(i)));
+    let (_, _, tn, c, b) = keys[i + 1];
+    let incoming = 2.0 * (time(i + 1) - time(i)) / (time(i + 2) - time(i))
+        * ((1.0 - tn) * (1.0 - c) * (1.0 + b) / 2.0 * (p(i + 1) - p(i))
+            + (1.0 - tn) * (1.0 + c) * (1.0 - b) / 2.0 * (p(i + 2) - p(i + 1)));
+    let s = (t - time(i)) / (time(i + 1) - time(i));
+    let (h00, h10) = (
+        2.0 * s.powi(3) - 3.0 * s * s + 1.0,
+        s.powi(3) - 2.0 * s * s + s,
+    );
+    let (h01, h11) = (-2.0 * s.powi(3) + 3.0 * s * s, s.powi(3) - s * s);
+    h00 * p(i) + h10 * outgoing + h01 * p(i + 1) + h11 * incoming
+}
+
+/// Keys unevenly spaced in time, with tension, continuity and bias of every sign.
+const KEYS: [(f64, f64, f64, f64, f64); 5] = [
+    (-0.5, 2.0, 0.0, 0.0, 0.0),
+    (0.0, 0.0, 0.3, -0.2, 0.4),
+    (0.4, 3.0, -0.1, 0.5, -0.3),
+    (1.5, -1.0, 0.2, 0.1, 0.0),
+    (2.0, 4.0, 0.0, 0.0, 0.0),
+];
+
+fn key_rows(angle: bool) -> String {
+    KEYS.iter()
+        .map(|(t, v, tn, c, b)| match angle {
+            // A turn of v * 30 degrees about z.
+            true => format!("{t} 0 0 1 {}  {tn} {c} {b}\n", v * 30.0),
+            // A move along x, the others still.
+            false => format!("{t} {v} 5 -2  {tn} {c} {b}\n"),
+        })
+        .collect()
+}
+
+fn ball_at(scene: &Scene) -> Vec3 {
+    assert_eq!(scene.spheres.len(), 1, "one ball");
+    scene.spheres[0].center
+}
+
+#[test]
+fn a_translation_follows_the_kochanek_bartels_spline() {
+    let src = format!(
+        "{VIEW}a 0 1.5 10\nx ball {{\n s 0 0 0 0.5\n}}\nk ball {{\n transl 5\n{}}}\n",
+        key_rows(false)
+    );
+    let scene = parse_ok(&src);
+    assert!(
+        scene.spheres.is_empty(),
+        "the ball moves: not among the still primitives"
+    );
+    for t in [0.0, 0.1, 0.25, 0.4, 0.7, 1.0, 1.3, 1.5] {
+        let i = if t < 0.4 { 1 } else { 2 };
+        let want = kochanek_bartels(&KEYS, i, t);
+        let at = ball_at(&scene.clone().at(t));
+        assert!(
+            (f64::from(at.x) - want).abs() < 1e-5,
+            "t = {t}: x = {} against the formula's {want}",
+            at.x
+        );
+        assert_eq!((at.y, at.z), (5.0, -2.0), "t = {t}");
+    }
+    // Outside the keys that the curve spans, it holds still at their ends.
+    assert_eq!(ball_at(&scene.clone().at(-3.0)), Vec3::new(0.0, 5.0, -2.0));
+    assert_eq!(ball_at(&scene.clone().at(9.0)), Vec3::new(-1.0, 5.0, -2.0));
+}
+
+#[test]
+fn a_rotation_about_one_axis_follows_the_spline_of_its_angles() {
+    // Squad about one axis is the Hermite curve of the angles (BART's quaternion keys
+    // reduce to its position formula there).
+    let src = format!(
+        "{VIEW}x arm {{\n s 1 0 0 0.1\n}}\nk arm {{\n rot 5\n{}}}\n",
+        key_rows(true)
+    );
+    let scene = parse_ok(&src);
+    for t in [0.0, 0.2, 0.4, 0.9, 1.5] {
+        let i = if t < 0.4 { 1 } else { 2 };
+        let want = kochanek_bartels(&KEYS, i, t) * 30.0;
+        let c = ball_at(&scene.clone().at(t));
+        let got = f64::from(c.y.atan2(c.x).to_degrees());
+        let diff = (got - want).rem_euclid(360.0);
+        assert!(
+            diff.min(360.0 - diff) < 1e-3,
+            "t = {t}: {got} degrees against {want}"
+        );
+        assert!((c.length() - 1.0).abs() < 1e-5);
+    }
+}
+
+#[test]
+fn blocks_nest_fixed_and_animated_transforms_in_order() {
+    // Scale 2 then move by (10, 0, 0), around a block moving by the track, around a
+    // sphere at (1, 0, 0): T_fixed * T_track(t) * p.
+    let src = format!(
+        "{VIEW}xs 2 2 2  0 0 1 0  10 0 0 {{\n x slide {{\n  s 1 0 0 0.25\n }}\n p 3\n 0 0 0\n 1 0 0\n 0 1 0\n}}\n\
+         k slide {{\n transl 4\n 0 0 0 0 0 0 0\n 1 0 0 0 0 0 0\n 2 0 3 0 0 0 0\n 3 0 3 0 0 0 0\n}}\n"
+    );
+    let scene = parse_ok(&src);
+    // The still triangle is placed once, as it is read.
+    assert_eq!(scene.triangles[0].v[1], Vec3::new(12.0, 0.0, 0.0));
+    let at = |t| scene.clone().at(t);
+    assert_eq!(ball_at(&at(1.0)), Vec3::new(12.0, 0.0, 0.0));
+    assert_eq!(at(1.0).spheres[0].radius, 0.5);
+    let end = ball_at(&at(2.0));
+    assert!((end - Vec3::new(12.0, 6.0, 0.0)).length() < 1e-5, "{end}");
+}
+
+#[test]
+fn visibility_keys_hide_and_show_and_the_camera_and_lights_move() {
+    let src = format!(
+        "{VIEW}la lamp 0 0 1\nx blink {{\n s 0 0 0 1\n}}\n\
+         k blink {{\n visibility 2\n 1 0\n 2 1\n}}\n\
+         k lamp {{\n transl 4\n 0 0 0 0 0 0 0\n 1 0 0 0 0 0 0\n 2 4 0 0 0 0 0\n 3 4 0 0 0 0 0\n}}\n\
+         k camera {{\n transl 4\n 0 0 -5 0 0 0 0\n 1 0 -5 0 0 0 0\n 2 0 -9 0 0 0 0\n 3 0 -9 0 0 0 0\n\
+         rot 4\n 0 1 0 0 90 0 0 0\n 1 1 0 0 90 0 0 0\n 2 1 0 0 90 0 0 0\n 3 1 0 0 90 0 0 0\n}}\n"
+    );
+    let scene = parse_ok(&src);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(
+        scene.clone().at(0.5).spheres.len(),
+        1,
+        "shown before the first key"
+    );
+    assert!(scene.clone().at(1.5).spheres.is_empty(), "hidden from 1");
+    assert_eq!(scene.clone().at(2.0).spheres.len(), 1, "shown again from 2");
+    let later = scene.clone().at(2.0);
+    let gpurt::scene::Light::Point { position, .. } = later.lights[0] else {
+        panic!("a point light")
+    };
+    assert_eq!(position, Vec3::new(4.0, 0.0, 1.0));
+    // The camera moved to the track's translation, looking down its local -z turned 90
+    // degrees about x: along +y, with its local y (now +z) up.
+    let cam = &later.camera;
+    assert_eq!(cam.from, Vec3::new(0.0, -9.0, 0.0));
+    let dir = (cam.at - cam.from).normalize();
+    assert!((dir - Vec3::Y).length() < 1e-5, "{dir}");
+    assert!((cam.up - Vec3::Z).length() < 1e-5, "{}", cam.up);
+}
+
+#[test]
+fn aff_meshes_materials_and_includes_are_read() {
+    let d = crate::common::workdir("aff-include");
+    std::fs::write(
+        d.join("part.aff"),
+        "m vertices 4\n0 0 0\n1 0 0\n1 1 0\n0 1 0\ntriangles 2\n0 1 2\n0 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("fine.aff"), "s 0 0 0 1\n").unwrap();
+    let src = format!(
+        "{VIEW}fm 0 0 0  0.5 0.25 0.1  0.6 0.6 0.6  30 0 1\nd 1\nxs 1 1 1 0 0 1 0 0 0 5 {{\n i 1 part.aff\n}}\ni 2 fine.aff\n"
+    );
+    let scene = gpurt::scene::nff::parse(src.as_bytes(), "t.aff", &d).unwrap();
+    assert_eq!(scene.triangles.len(), 2, "the mesh, placed by its block");
+    assert_eq!(scene.triangles[1].v[2], Vec3::new(0.0, 1.0, 5.0));
+    assert!(
+        scene.spheres.is_empty(),
+        "level 2 is above the detail level 1"
+    );
+    let m = scene.materials[scene.triangles[0].material.0 as usize];
+    assert_eq!(
+        (m.color, m.kd, m.ks, m.shine),
+        (Vec3::new(0.5, 0.25, 0.1), 1.0, 0.6, 30.0)
+    );
+}
+
+#[test]
+fn what_gpurt_does_not_render_is_warned_of_at_its_place() {
+    let src = format!(
+        "{VIEW}tt wood.ppm\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\ntpa 1\n0\n{}",
+        "0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n"
+    );
+    let scene = parse_ok(&src);
+    assert_eq!(scene.triangles.len(), 1);
+    assert!(scene.triangles[0].uv.is_some(), "texture coordinates kept");
+    let w = scene.warnings.join("\n");
+    assert!(
+        w.contains("t.nff:6:1: texture 'wood.ppm' is not applied"),
+        "{w}"
+    );
+    assert!(
+        w.contains("t.nff:10:1: animated triangles ('tpa') are not rendered"),
+        "{w}"
+    );
+}
+
+#[test]
+fn bad_animation_input_is_refused_where_it_is() {
+    let track = |rows: &str| format!("{VIEW}x b {{\n s 0 0 0 1\n}}\nk b {{\n{rows}}}\n");
+    // Keys out of order: at the time that goes back.
+    assert_error(
+        &track("transl 4\n0 0 0 0 0 0 0\n1 0 0 0 0 0 0\n0.5 0 0 0 0 0 0\n2 0 0 0 0 0 0\n"),
+        13,
+        1,
+        &["keyframe time 0.5 is before", "line 12"],
+    );
+    // A spline of one key.
+    assert_error(
+        &track("rot 1\n0 0 0 1 0 0 0 0\n"),
+        10,
+        5,
+        &["'rot' needs at least 4 keys", "found 1"],
+    );
+    assert_error(&track("spin 4\n"), 10, 1, &["expected keyframes", "'spin'"]);
+    assert_error(
+        &format!("{VIEW}xs 1 1 1 0 0 1 0 0 0 0 {{\n s 0 0 0 1\n"),
+        6,
+        1,
+        &["never closed"],
+    );
+    assert_error(&format!("{VIEW}}}\n"), 6, 1, &["closes no block"]);
+    assert_error(&format!("{VIEW}a 0 1 0\n"), 6, 7, &["at least one frame"]);
+    assert_error(
+        &format!("{VIEW}xs 1 0 1 0 0 1 0 0 0 0 {{\n}}\n"),
+        6,
+        1,
+        &["scale"],
+    );
+    // A transform whose name no keyframes define: at the name, in the file it is used.
+    match parse_nff(&format!("{VIEW}s 0 0 0 1\nx ghost {{\n s 0 0 0 1\n}}\n")) {
+        Err(Error::Parse {
+            file,
+            line,
+            col,
+            msg,
+            ..
+        }) => {
+            assert_eq!((file.as_str(), line, col), ("t.nff", 7, 3));
+            assert!(msg.contains("'ghost' has no keyframes"), "{msg}");
+        }
+        other => panic!("expected an error naming the transform, got {other:?}"),
+    }
+}
