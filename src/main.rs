@@ -12,7 +12,7 @@ use gpurt::Error;
 use gpurt::scene::ReadOptions;
 
 use cli::args::{Cli, Command};
-use cli::{farm, render, shell, tools};
+use cli::{farm, render, sequence, shell, tools};
 
 fn main() -> ExitCode {
     let launch = Instant::now();
@@ -57,6 +57,7 @@ fn main() -> ExitCode {
         Some(Command::View(view)) => tools::view(view, launch),
         Some(Command::Merge { dir, output }) => farm::merge(&dir, &output),
         None => match (&args.render.out_dir, args.render.shard) {
+            _ if args.render.frames.is_some() => sequence::sequence(&args.render),
             (Some(dir), _) => farm::batch(&args.render, dir),
             (None, Some(shard)) => farm::shard(&args.render, shard),
             (None, None) => render::render(args.render),

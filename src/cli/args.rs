@@ -171,6 +171,20 @@ pub struct RenderArgs {
     /// shard then stores one image per sample, spp/N of them).
     #[arg(long, value_enum, default_value_t = ShardBy::Tiles, requires = "shard")]
     pub shard_by: ShardBy,
+    /// Render these frames of an animated (AFF) scene: `A..B` (both included, counted
+    /// from 0), `N`, or `all`; -o names each with a printf-style frame number
+    /// (`out/frame-%04d.png`). With --shard I/N, every N-th frame from the I-th.
+    #[arg(long, value_name = "A..B", value_parser = gpurt::commands::sequence::Frames::parse,
+          conflicts_with_all = ["out_dir", "time", "overlay"])]
+    pub frames: Option<gpurt::commands::sequence::Frames>,
+    /// With --frames: leave out the frames whose image exists already (a farm task
+    /// restarted after some were written; each image is written whole or not at all).
+    #[arg(long, requires = "frames")]
+    pub resume: bool,
+    /// Render an animated (AFF) scene as it is at this time, in the animation's units
+    /// (default: the start of its range).
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub time: Option<f64>,
     /// Image format of the images --out-dir writes.
     #[arg(long, value_enum, default_value_t = ImageFormat::Png, requires = "out_dir")]
     pub format: ImageFormat,

@@ -124,7 +124,8 @@ pub fn shard(args: &RenderArgs, shard: Shard) -> gpurt::Result<ExitCode> {
     let Prepared {
         buffers, warnings, ..
     } = {
-        let read = run::read(scene, args.view.as_deref(), &args.read_options())?;
+        let read =
+            run::read(scene, args.view.as_deref(), &args.read_options())?.still(args.time)?;
         let samples = args.options(read.camera()).samples() / u64::from(shard.count);
         run::pack(read, samples)?
     };
@@ -206,7 +207,7 @@ pub fn merge(dir: &Path, output: &Path) -> gpurt::Result<ExitCode> {
 
 /// Batches and shards render on one backend and draw no wireframe; says so and returns
 /// false when asked otherwise.
-fn one_backend_no_wireframe(args: &RenderArgs, what: &str) -> bool {
+pub(super) fn one_backend_no_wireframe(args: &RenderArgs, what: &str) -> bool {
     let ok = args.backend != Backend::Both && args.overlay.is_none() && args.aov != Aov::Wireframe;
     if !ok {
         eprintln!(

@@ -1,12 +1,13 @@
 //! The `gpurt` command line, one module per group of commands: `args` (what every
 //! command accepts), `render` (one scene), `farm` (many scenes, shards of one image, and
-//! their merge), `tools` (info, diff, view, bench). Each calls the library and prints;
+//! their merge), `sequence` (the frames of an animated scene), `tools` (info, diff, view, bench). Each calls the library and prints;
 //! what they share (signals, the note about the backend, the readers' warnings) is here.
 
 pub mod args;
 pub mod farm;
 pub mod render;
 pub mod report;
+pub mod sequence;
 pub mod shell;
 pub mod tools;
 

@@ -57,7 +57,8 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         parse_time,
         mut build_time,
     } = {
-        let read = run::read(scene_path, args.view.as_deref(), &args.read_options())?;
+        let read =
+            run::read(scene_path, args.view.as_deref(), &args.read_options())?.still(args.time)?;
         let samples = args.options(read.camera()).samples();
         run::pack(read, samples)?
     };

@@ -71,7 +71,8 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     let Prepared {
         buffers, warnings, ..
     } = {
-        let read = run::read(&args.scene, args.view.as_deref(), &args.read_options())?;
+        let read =
+            run::read(&args.scene, args.view.as_deref(), &args.read_options())?.still(None)?;
         // Quick to the first image: the build that suits one frame at the window's size.
         let camera = read.camera();
         let (w, h) = (

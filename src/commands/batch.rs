@@ -112,7 +112,7 @@ fn render_one(
 ) -> Result<(u64, Vec<String>)> {
     let options =
         |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(&opts.overrides);
-    let read = run::read(scene, opts.view.as_deref(), &opts.read)?;
+    let read = run::read(scene, opts.view.as_deref(), &opts.read)?.still(None)?;
     let samples = options(read.camera()).samples();
     let prepared = run::pack(read, samples)?;
     let mut buffers = prepared.buffers;

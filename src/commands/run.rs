@@ -10,22 +10,75 @@ use crate::cpu::RayCounts;
 use crate::film::{Accumulator, Film};
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
+use crate::scene::animation::Animation;
 use crate::scene::flat::FlatScene;
 use crate::scene::{self, Camera, ReadOptions};
 use crate::session::Renderer;
-use crate::util::error::Result;
+use crate::util::error::{Error, Result};
 
 /// A scene read into the renderers' records, not yet packed: its camera says what a
 /// frame of it traces, and so the samples that choose its tree's build (`pack`).
+#[derive(Clone)]
 pub struct Read {
     flat: FlatScene,
     parse_time: Duration,
+    /// What moves, in an AFF scene: placed by `at`.
+    animation: Option<Box<Animation>>,
+    /// Whether the camera was given (`--view`), which the animation then leaves alone.
+    view_given: bool,
 }
 
 impl Read {
     /// The scene's camera (the view's, when one was given).
     pub fn camera(&self) -> &Camera {
         &self.flat.scene.camera
+    }
+
+    /// What the reader warned of.
+    pub fn warnings(&self) -> &[String] {
+        &self.flat.scene.warnings
+    }
+
+    /// What moves in the scene, if anything does.
+    pub fn animation(&self) -> Option<&Animation> {
+        self.animation.as_deref()
+    }
+
+    /// The scene at time `t`, its moving parts placed (an AFF scene's; a still scene
+    /// stays as it is), ready to pack; the time placing took is added to the parse time.
+    pub fn at(&self, t: f64) -> Read {
+        let start = Instant::now();
+        let mut flat = self.flat.clone();
+        if let Some(anim) = &self.animation {
+            anim.place(&mut flat.prims, &mut flat.scene, t);
+            if !self.view_given {
+                flat.scene.camera = anim.camera_at(&flat.scene.camera, t);
+            }
+        }
+        Read {
+            flat,
+            parse_time: start.elapsed(),
+            animation: None,
+            view_given: self.view_given,
+        }
+    }
+
+    /// The scene for a still image: an AFF scene at time `time`, else at the start of
+    /// its time range (or 0); a still scene as it is (`time` must then be `None`).
+    pub fn still(self, time: Option<f64>) -> Result<Read> {
+        match (&self.animation, time) {
+            (None, None) => Ok(self),
+            (None, Some(_)) => Err(Error::Scene {
+                file: self.flat.scene.name.clone(),
+                msg: "--time is for scenes that move (AFF), and nothing moves in this one".into(),
+            }),
+            (Some(anim), t) => {
+                let t = t.unwrap_or_else(|| anim.default_time());
+                let mut placed = self.at(t);
+                placed.parse_time += self.parse_time;
+                Ok(placed)
+            }
+        }
     }
 }
 
@@ -44,12 +97,15 @@ pub struct Prepared {
 pub fn read(path: &Path, view: Option<&Path>, read: &ReadOptions) -> Result<Read> {
     let t0 = Instant::now();
     let mut flat = scene::load_flat_with(path, read)?;
+    let animation = flat.scene.animation.take();
     if let Some(view) = view {
         flat.scene.camera = scene::summary(view)?.scene.camera;
     }
     Ok(Read {
         flat,
         parse_time: t0.elapsed(),
+        animation,
+        view_given: view.is_some(),
     })
 }
 
@@ -59,6 +115,7 @@ pub fn pack(read: Read, samples: u64) -> Result<Prepared> {
     let Read {
         mut flat,
         parse_time,
+        ..
     } = read;
     let t1 = Instant::now();
     let warnings = std::mem::take(&mut flat.scene.warnings);

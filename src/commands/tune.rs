@@ -229,7 +229,7 @@ pub fn run(config: &TuneConfig) -> Result<()> {
     for path in &config.scenes {
         let opts =
             |c: &crate::scene::Camera| RenderOptions::for_camera(c).with_overrides(&overrides);
-        let read = run::read(path, None, &config.read)?;
+        let read = run::read(path, None, &config.read)?.still(None)?;
         let samples = opts(read.camera()).samples();
         let prepared = run::pack(read, samples)?;
         let buffers = &prepared.buffers;

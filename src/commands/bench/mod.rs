@@ -178,7 +178,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
                 let prepared = match builds.iter().position(wanted) {
                     Some(i) => &builds[i],
                     None => {
-                        let read = run::read(path, None, &config.read)?;
+                        let read = run::read(path, None, &config.read)?.still(None)?;
                         let samples = with_camera(read.camera()).samples();
                         let b = run::pack(read, samples)?;
                         eprintln!(
