@@ -205,12 +205,6 @@ impl Parser<'_> {
     pub(super) fn keyframes(&mut self, tok: &Token) -> Result<()> {
         let (name, _) = self.name("name of the transform the keyframes animate")?;
         let i = self.blocks.name(&name, None);
-        if self.blocks.names[i].track.is_some() {
-            return Err(self.lx.error_at(
-                tok,
-                format!("a second 'k {name}': its keyframes are given once"),
-            ));
-        }
         self.expect_open_brace("keyframes")?;
         let mut track = Track {
             name,
@@ -276,7 +270,19 @@ impl Parser<'_> {
                 _ => track.visibility = self.visibility_keys(n)?,
             }
         }
-        self.blocks.names[i].track = Some(track);
+        // A second `k` for a name (a file included twice holds its keyframes twice): the
+        // first is used, as BART's `FindAnimation` does, and other keys are warned of.
+        match &self.blocks.names[i].track {
+            None => self.blocks.names[i].track = Some(track),
+            Some(first) if *first == track => {}
+            Some(_) => {
+                let msg = format!(
+                    "a second 'k {}' with other keys; the first is used",
+                    escape(track.name.as_bytes())
+                );
+                self.warn(tok, &msg);
+            }
+        }
         Ok(())
     }
 
@@ -432,7 +438,7 @@ impl Parser<'_> {
             ));
         }
         if specular.max_element() - specular.min_element() > 1e-3 {
-            self.warn(
+            self.warn_once(
                 tok,
                 "a coloured specular colour is read as white highlights of its largest part",
             );

@@ -251,3 +251,27 @@ fn bad_animation_input_is_refused_where_it_is() {
         other => panic!("expected an error naming the transform, got {other:?}"),
     }
 }
+
+#[test]
+fn a_second_k_for_a_name_keeps_the_first_and_warns_only_where_keys_differ() {
+    let keys = |x: f32| {
+        format!(
+            "k b {{\n transl 4\n 0 {x} 0 0 0 0 0\n 1 {x} 0 0 0 0 0\n 2 {x} 0 0 0 0 0\n 3 {x} 0 0 0 0 0\n}}\n"
+        )
+    };
+    let src = format!("{VIEW}x b {{\n s 0 0 0 1\n}}\n{}{}", keys(1.0), keys(1.0));
+    let scene = parse_ok(&src);
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let src = format!("{VIEW}x b {{\n s 0 0 0 1\n}}\n{}{}", keys(1.0), keys(5.0));
+    let scene = parse_ok(&src);
+    assert_eq!(
+        scene.clone().at(1.5).spheres[0].center.x,
+        1.0,
+        "the first keys"
+    );
+    assert!(
+        scene.warnings[0].contains("t.nff:16:1: a second 'k b' with other keys"),
+        "{:?}",
+        scene.warnings
+    );
+}
