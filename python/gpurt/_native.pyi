@@ -66,8 +66,16 @@ class Scene:
         backend: _Backend = "auto",
         shading: _Shading = None,
         aov: _Aov = None,
+        time: Optional[float] = None,
     ) -> Image:
         """Renders the scene from its own camera: see `gpurt.render`."""
+    @property
+    def time_range(self) -> Optional[Tuple[float, float, int]]:
+        """`(start, end, frames)` of a scene that moves (AFF); None otherwise."""
+    def frame_time(self, frame: int) -> float:
+        """The time of frame `frame` (from 0) of the animation."""
+    def at(self, time: float) -> "Scene":
+        """The scene as it is at `time`: still, for `gpurt.Renderer`."""
 
 @final
 class Renderer:
@@ -127,6 +135,7 @@ def render(
     backend: _Backend = "auto",
     shading: _Shading = None,
     aov: _Aov = None,
+    time: Optional[float] = None,
 ) -> Image:
     """Renders a scene into a float32 (height, width, 3) array of linear values."""
 

@@ -152,7 +152,7 @@ impl Scene {
 
     /// Renders the scene from its own camera: see `gpurt.render`.
     #[pyo3(signature = (*, width=None, height=None, spp=None, depth=None, ambient=None,
-                        backend="auto", shading=None, aov=None))]
+                        backend="auto", shading=None, aov=None, time=None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -165,6 +165,7 @@ impl Scene {
         backend: &str,
         shading: Option<&str>,
         aov: Option<&str>,
+        time: Option<f64>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let frame = Frame {
             width,
@@ -175,7 +176,37 @@ impl Scene {
             aov,
             shading,
         };
-        render_scene(py, self.scene.clone(), &frame, backend)
+        let scene = at_time(self.scene.clone(), time)?;
+        render_scene(py, scene, &frame, backend)
+    }
+
+    /// The animation's time range and frame count, `(start, end, frames)`, for a scene
+    /// that moves (AFF with an `a` statement); None otherwise.
+    #[getter]
+    fn time_range(&self) -> Option<(f64, f64, u32)> {
+        let range = self.scene.animation.as_ref()?.range?;
+        Some((range.start, range.end, range.frames))
+    }
+
+    /// The time of frame `frame` (counted from 0) of the animation.
+    fn frame_time(&self, frame: u32) -> PyResult<f64> {
+        match self.scene.animation.as_ref().and_then(|a| a.range) {
+            Some(r) if frame < r.frames => Ok(r.time(frame)),
+            Some(r) => Err(PyValueError::new_err(format!(
+                "frame {frame} is outside the animation, whose {} frames are 0..{}",
+                r.frames,
+                r.frames - 1
+            ))),
+            None => Err(not_animated(&self.scene)),
+        }
+    }
+
+    /// The scene as it is at `time`: a still scene (what moves placed, the camera
+    /// moved), for `gpurt.Renderer` to render many views of one moment.
+    fn at(&self, time: f64) -> PyResult<Scene> {
+        Ok(Scene {
+            scene: at_time(self.scene.clone(), Some(time))?,
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -199,11 +230,12 @@ impl Scene {
 /// defaults (1 sample per pixel, depth 5, the scene's ambient). `backend` is "auto" (the
 /// GPU when there is a hardware one, else the CPU), "gpu" or "cpu"; `aov` is None,
 /// "normal", "depth", "cost" or "uv"; `shading` is None (Phong), "phong" or "blinn-phong", the
-/// highlight's model as `--shading` takes it. The GIL is released while
+/// highlight's model as `--shading` takes it; `time` renders a scene that moves (AFF) as
+/// it is at that time (default: the start of its range). The GIL is released while
 /// rendering, and Ctrl-C stops the render with KeyboardInterrupt.
 #[pyfunction]
 #[pyo3(signature = (scene, *, width=None, height=None, spp=None, depth=None, ambient=None,
-                    backend="auto", shading=None, aov=None))]
+                    backend="auto", shading=None, aov=None, time=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -216,6 +248,7 @@ pub fn render<'py>(
     backend: &str,
     shading: Option<&str>,
     aov: Option<&str>,
+    time: Option<f64>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let frame = Frame {
         width,
@@ -229,8 +262,30 @@ pub fn render<'py>(
     // Checked before the scene is read, so that a bad argument costs nothing.
     frame.overrides()?;
     options::backend(backend)?;
-    let scene = scene.load(py)?;
+    let scene = at_time(scene.load(py)?, time)?;
     render_scene(py, scene, &frame, backend)
+}
+
+/// The ValueError for a time given for a scene where nothing moves.
+fn not_animated(scene: &scene::Scene) -> PyErr {
+    PyValueError::new_err(format!(
+        "{}: time is for scenes that move (AFF), and nothing moves in this one",
+        scene.name
+    ))
+}
+
+/// `scene` at `time` where one is given (an error for a scene that does not move, or a
+/// time that is not finite); as it is otherwise (packing places a moving scene at its
+/// start).
+fn at_time(scene: scene::Scene, time: Option<f64>) -> PyResult<scene::Scene> {
+    match time {
+        None => Ok(scene),
+        Some(t) if !t.is_finite() => Err(PyValueError::new_err(format!(
+            "time must be a finite number, got {t}"
+        ))),
+        Some(_) if scene.animation.is_none() => Err(not_animated(&scene)),
+        Some(t) => Ok(scene.at(t)),
+    }
 }
 
 /// `Scene.open(path).info()`: the dict `gpurt info --json` prints for the file.
