@@ -5,6 +5,7 @@ use glam::Vec3;
 use serde_json::{Value, json};
 
 use crate::pack::EMITTER_SAMPLES;
+use crate::scene::animation::Animation;
 use crate::scene::{FlatScene, Light, MaterialId, Wrap};
 use crate::util::limits::DEFAULT_AMBIENT;
 
@@ -157,7 +158,30 @@ pub fn to_json(f: &FlatScene) -> Value {
         }))).collect::<Vec<_>>(),
         "materials": materials,
         "textures": textures,
+        "animation": s.animation.as_deref().map(animation_json),
         "warnings": s.warnings,
+    })
+}
+
+/// The primitives the animation's groups hold, by kind (sphere, triangle, cone, box).
+fn moving(a: &Animation) -> [usize; 4] {
+    a.groups.iter().fold([0; 4], |mut n, g| {
+        for (n, c) in n.iter_mut().zip(g.prims.counts()) {
+            *n += c;
+        }
+        n
+    })
+}
+
+fn animation_json(a: &Animation) -> Value {
+    let [spheres, triangles, cones, boxes] = moving(a);
+    json!({
+        "range": a.range.map(|r| json!({ "start": r.start, "end": r.end, "frames": r.frames })),
+        "tracks": a.tracks.iter().map(|t| t.name.as_str()).filter(|n| !n.is_empty()).collect::<Vec<_>>(),
+        "groups": a.groups.len(),
+        "moving": { "spheres": spheres, "triangles": triangles, "cones": cones, "boxes": boxes },
+        "moving_lights": a.lights.len(),
+        "camera_moves": a.camera.is_some(),
     })
 }
 
@@ -208,6 +232,20 @@ pub fn to_text(f: &FlatScene) -> String {
         "primitives  {spheres} spheres, {triangles} triangles, {} planes, {cones} cones, {boxes} boxes",
         s.planes.len(),
     );
+    if let Some(a) = s.animation.as_deref() {
+        let [spheres, triangles, cones, boxes] = moving(a);
+        let range = match a.range {
+            Some(r) => format!("from {} to {} in {} frames", r.start, r.end, r.frames),
+            None => "no time range ('a')".to_string(),
+        };
+        let _ = writeln!(
+            o,
+            "animation   {range}; {} groups move {spheres} spheres, {triangles} triangles, {cones} cones, {boxes} boxes (not counted above); {} moving lights; the camera {}",
+            a.groups.len(),
+            a.lights.len(),
+            if a.camera.is_some() { "moves" } else { "stays" }
+        );
+    }
     let emitters: Vec<Emitter> = emitters(f).collect();
     let _ = writeln!(o, "lights      {}", s.lights.len() + emitters.len());
     for l in &s.lights {

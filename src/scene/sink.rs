@@ -90,6 +90,16 @@ impl Collect {
         scene.boxes = self.boxes;
     }
 
+    /// How many of each kind: spheres, triangles, cones, boxes.
+    pub fn counts(&self) -> [usize; 4] {
+        [
+            self.spheres.len(),
+            self.triangles.len(),
+            self.cones.len(),
+            self.boxes.len(),
+        ]
+    }
+
     /// Adds the primitives to those `scene` holds.
     pub fn append_to(self, scene: &mut Scene) {
         scene.spheres.extend(self.spheres);

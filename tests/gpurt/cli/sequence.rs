@@ -168,3 +168,33 @@ fn bad_ranges_and_names_are_refused_before_anything_renders() {
     );
     assert!(!d.join("f-0.png").exists());
 }
+
+#[test]
+fn info_says_what_moves() {
+    let d = workdir("sequence-info");
+    let orbit = own_scenes().join("orbit.aff");
+    let o = gpurt(
+        &[&["info", orbit.to_str().unwrap(), "--json"][..]].concat(),
+        &d,
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let a = &v["animation"];
+    assert_eq!(
+        a["range"],
+        serde_json::json!({"start": 0.0, "end": 2.0, "frames": 48})
+    );
+    assert_eq!(
+        a["moving"]["spheres"], 1,
+        "the ball; the mirror sphere is still"
+    );
+    assert_eq!(v["spheres"], 1);
+    assert_eq!(
+        (a["camera_moves"].as_bool(), a["moving_lights"].as_u64()),
+        (Some(true), Some(1))
+    );
+    let still = own_scenes().join("spheres.nff");
+    let o = gpurt(&["info", still.to_str().unwrap(), "--json"], &d);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["animation"].is_null());
+}
