@@ -254,17 +254,35 @@ impl Parser<'_> {
                 ));
             }
             self.check_count(&ntok, n, if kind == "rot" { 16 } else { 8 })?;
+            // Keys left out (`key_time`) may leave too few for a curve.
+            let few = |p: &Self, kept: usize| {
+                p.lx.error_at(
+                    &ntok,
+                    format!("'{kind}' keeps {kept} keys in order of time, fewer than the {least} it needs"),
+                )
+            };
             match kind.as_str() {
-                "transl" => {
-                    let keys = self.position_keys(n, "translation")?;
-                    track.translation = Some(PositionSpline::new(&keys));
-                }
-                "scale" => {
-                    let keys = self.position_keys(n, "scale")?;
-                    track.scale = Some(PositionSpline::new(&keys));
+                "transl" | "scale" => {
+                    let what = if kind == "transl" {
+                        "translation"
+                    } else {
+                        "scale"
+                    };
+                    let keys = self.position_keys(n, what)?;
+                    if keys.len() < MIN_KEYS {
+                        return Err(few(self, keys.len()));
+                    }
+                    let spline = Some(PositionSpline::new(&keys));
+                    match kind.as_str() {
+                        "transl" => track.translation = spline,
+                        _ => track.scale = spline,
+                    }
                 }
                 "rot" => {
                     let keys = self.rotation_keys(n)?;
+                    if keys.len() < MIN_KEYS {
+                        return Err(few(self, keys.len()));
+                    }
                     track.rotation = Some(RotationSpline::new(&keys));
                 }
                 _ => track.visibility = self.visibility_keys(n)?,
@@ -308,23 +326,29 @@ impl Parser<'_> {
         Ok(())
     }
 
-    /// A key's time, not before the key before it.
-    fn key_time(&mut self, last: Option<&Timed>) -> Result<Timed> {
+    /// A key's time, and whether the key is kept: a key before the last one kept is an
+    /// error, or with `--lenient` left out with a warning (BART's robots have keys that
+    /// go back in time, which its previewer never reaches).
+    fn key_time(&mut self, last: Option<&Timed>) -> Result<(Timed, bool)> {
         let tok = self.lx.peek()?;
         let time = f64::from(self.lx.number("keyframe time")?);
         let tok = tok.expect("a number was read");
-        if let Some(last) = last
-            && time < last.time
-        {
-            return Err(self.lx.error_at(
-                &tok,
-                format!(
-                    "keyframe time {time} is before the previous key's {} (line {}): keys go in order of time",
-                    last.time, last.tok.line
-                ),
-            ));
+        let timed = Timed { time, tok };
+        let Some(last) = last.filter(|last| time < last.time) else {
+            return Ok((timed, true));
+        };
+        let msg = format!(
+            "keyframe time {time} is before the previous key's {} (line {}): keys go in order of time",
+            last.time, last.tok.line
+        );
+        if !self.lenient {
+            return Err(self.lx.error_at(&tok, msg));
         }
-        Ok(Timed { time, tok })
+        self.warn(
+            &tok,
+            &format!("{msg}; left out, with the keys after it that go back"),
+        );
+        Ok((timed, false))
     }
 
     fn tcb(&mut self) -> Result<Tcb> {
@@ -339,14 +363,17 @@ impl Parser<'_> {
         let mut keys = Vec::with_capacity(n as usize);
         let mut last = None;
         for _ in 0..n {
-            let timed = self.key_time(last.as_ref())?;
+            let (timed, keep) = self.key_time(last.as_ref())?;
             let value = self.lx.vec3(&format!("{what} key"))?.as_dvec3();
-            keys.push(PositionKey {
-                time: timed.time,
-                value,
-                tcb: self.tcb()?,
-            });
-            last = Some(timed);
+            let tcb = self.tcb()?;
+            if keep {
+                keys.push(PositionKey {
+                    time: timed.time,
+                    value,
+                    tcb,
+                });
+                last = Some(timed);
+            }
         }
         Ok(keys)
     }
@@ -355,7 +382,7 @@ impl Parser<'_> {
         let mut keys = Vec::with_capacity(n as usize);
         let mut last = None;
         for _ in 0..n {
-            let timed = self.key_time(last.as_ref())?;
+            let (timed, keep) = self.key_time(last.as_ref())?;
             let axis = self.lx.vec3("rotation key axis")?.as_dvec3();
             let deg = f64::from(self.lx.number("rotation key angle in degrees")?);
             // A zero angle turns about any axis (BART writes `0 0 0 0` for none).
@@ -369,13 +396,16 @@ impl Parser<'_> {
                     ));
                 }
             };
-            keys.push(RotationKey {
-                time: timed.time,
-                axis,
-                angle: deg.to_radians(),
-                tcb: self.tcb()?,
-            });
-            last = Some(timed);
+            let tcb = self.tcb()?;
+            if keep {
+                keys.push(RotationKey {
+                    time: timed.time,
+                    axis,
+                    angle: deg.to_radians(),
+                    tcb,
+                });
+                last = Some(timed);
+            }
         }
         Ok(keys)
     }
@@ -384,7 +414,7 @@ impl Parser<'_> {
         let mut keys = Vec::with_capacity(n as usize);
         let mut last = None;
         for _ in 0..n {
-            let timed = self.key_time(last.as_ref())?;
+            let (timed, keep) = self.key_time(last.as_ref())?;
             let (flag, ftok) = self.lx.count("visibility flag (0 or 1)")?;
             if flag > 1 {
                 return Err(self.lx.error_at(
@@ -392,11 +422,13 @@ impl Parser<'_> {
                     format!("expected a visibility flag of 0 or 1, found {flag}"),
                 ));
             }
-            keys.push(VisibilityKey {
-                time: timed.time,
-                visible: flag == 1,
-            });
-            last = Some(timed);
+            if keep {
+                keys.push(VisibilityKey {
+                    time: timed.time,
+                    visible: flag == 1,
+                });
+                last = Some(timed);
+            }
         }
         Ok(keys)
     }
@@ -430,12 +462,15 @@ impl Parser<'_> {
         let shine = self.hold(tok, "Shine", shine, MAX_SHINE);
         let t = self.lx.number("T")?;
         let t = self.hold(tok, "T", t, 1.0);
-        let ior = self.lx.number("index of refraction")?;
+        let mut ior = self.lx.number("index of refraction")?;
         if t > 0.0 && ior <= 0.0 {
-            return Err(self.lx.error_at(
+            // BART's robots have such materials (T 0.04, ior 0): read as glass that does
+            // not bend light, where NFF's `f` refuses it.
+            self.warn_once(
                 tok,
-                format!("a transmitting material (T = {t}) needs a positive index of refraction, found {ior}"),
-            ));
+                &format!("a transmitting material (T = {t}) with an index of refraction of {ior}: read as 1 (no bending)"),
+            );
+            ior = 1.0;
         }
         if specular.max_element() - specular.min_element() > 1e-3 {
             self.warn_once(
@@ -693,16 +728,26 @@ impl Parser<'_> {
         for (i, n) in blocks.names.into_iter().enumerate() {
             match (n.track, n.used) {
                 (None, Some((file, line, col))) => {
-                    return Err(Error::Parse {
-                        file,
-                        line,
-                        col,
-                        msg: format!(
-                            "transform '{}' has no keyframes (no 'k {}' block in the scene)",
-                            escape(n.name.as_bytes()),
-                            escape(n.name.as_bytes())
-                        ),
-                        excerpt: None,
+                    let name = escape(n.name.as_bytes());
+                    let msg = format!(
+                        "transform '{name}' has no keyframes (no 'k {name}' block in the scene)"
+                    );
+                    if !self.lenient {
+                        return Err(Error::Parse {
+                            file,
+                            line,
+                            col,
+                            msg,
+                            excerpt: None,
+                        });
+                    }
+                    // BART's previewer takes a transform without keys as the identity
+                    // (one of its robots has one).
+                    let msg = format!("{file}:{line}:{col}: {msg}; it stays still (--lenient)");
+                    self.scene.warnings.push(msg);
+                    tracks.push(Track {
+                        name: n.name,
+                        ..Track::default()
                     });
                 }
                 (None, None) => tracks.push(Track::default()),

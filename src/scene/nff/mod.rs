@@ -125,6 +125,11 @@ impl Parser<'_> {
         let mut first = true;
         while let Some(tok) = self.lx.next_token()? {
             let is_first = std::mem::replace(&mut first, false);
+            // BART's AFF also starts a comment with `%` where a statement may start.
+            if self.lx.text(&tok).starts_with(b"%") {
+                self.lx.skip_line(tok.line)?;
+                continue;
+            }
             let (word, len) = keyword(self.lx.text(&tok));
             match &word[..len] {
                 b"v" => self.view(&tok)?,

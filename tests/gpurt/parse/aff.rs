@@ -275,3 +275,34 @@ fn a_second_k_for_a_name_keeps_the_first_and_warns_only_where_keys_differ() {
         scene.warnings
     );
 }
+
+/// What BART's own scenes hold that the format's rules refuse, read under `--lenient` as
+/// BART's previewer reads it: keys that go back in time left out, a transform without
+/// keys still; and `%` comments, which AFF has beside `#`.
+#[test]
+fn lenient_reads_what_barts_scenes_hold() {
+    use gpurt::scene::{ReadOptions, nff};
+    let lenient = ReadOptions {
+        lenient: true,
+        ..ReadOptions::default()
+    };
+    let src = format!(
+        "{VIEW}% a comment in AFF's way\n%another-one 1 2 3\nx b {{\n s 0 0 0 1\n}}\nx still {{\n s 5 0 0 1\n}}\n\
+         k b {{\n transl 6\n 0 0 0 0 0 0 0\n 1 1 0 0 0 0 0\n 2 2 0 0 0 0 0\n 3 3 0 0 0 0 0\n 1.5 9 9 9 0 0 0\n 4 4 0 0 0 0 0\n}}\n"
+    );
+    assert!(parse_nff(&src).is_err(), "refused by default");
+    let scene =
+        nff::parse_with(src.as_bytes(), "t.nff", std::path::Path::new("."), &lenient).unwrap();
+    let w = scene.warnings.join("\n");
+    assert!(
+        w.contains("t.nff:20:2: keyframe time 1.5 is before the previous key's 3"),
+        "{w}"
+    );
+    assert!(
+        w.contains("t.nff:11:3: transform 'still' has no keyframes"),
+        "{w}"
+    );
+    let at = scene.clone().at(2.0);
+    let xs: Vec<f32> = at.spheres.iter().map(|s| s.center.x).collect();
+    assert!(xs.contains(&2.0) && xs.contains(&5.0), "{xs:?}");
+}
