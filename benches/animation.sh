@@ -3,8 +3,8 @@
 # backend and size, the frames a second of the whole sequence and, per frame on average,
 # the time placing the moving parts and building the tree took against the time tracing
 # took (`--stats`). Each frame's tree is rebuilt, so how build time grows with the
-# moving geometry's size is the point of the generated scenes: an SPD mountain of 8 to
-# 520 thousand triangles (mount-5 to mount-8) turning about z, all of it moving.
+# moving geometry's size is the point of the generated scenes: an SPD mountain of 2 to
+# 131 thousand triangles (mount-5, 7 and 8) turning about z, all of it moving.
 # BART's own scenes are rendered too (with --lenient, which its robots need) where
 # BART=DIR names a copy of them (DIR holding scene_kitchen/aff/kitchen.aff and
 # scene_robot/aff/Robot.aff).

@@ -41,6 +41,12 @@ pub trait Renderer {
         *globals
     }
 
+    /// Moves the renderer to another scene (a batch's next, an animation's next frame):
+    /// the GPU uploads it with the next frame and keeps its compiled pipelines, so scenes
+    /// of one kind compile once (unless the scene is too large for the renderer's way of
+    /// reading it: `GpuRenderer::suits`).
+    fn set_scene(&mut self, scene: Arc<SceneBuffers>);
+
     /// Gets ready to render frames like `globals`: the GPU compiles the pipeline such
     /// frames need (once per kind of frame); the CPU has nothing to do. Returns the time
     /// spent compiling, so that callers can report it apart from the frame.
@@ -118,6 +124,10 @@ impl Renderer for CpuRenderer {
         format!("CPU, {} threads, {packets}", rayon::current_num_threads())
     }
 
+    fn set_scene(&mut self, scene: Arc<SceneBuffers>) {
+        self.scene = scene;
+    }
+
     fn prepare(&mut self, _: &GpuGlobals) -> Result<Duration> {
         Ok(Duration::ZERO)
     }
@@ -186,14 +196,6 @@ impl GpuSession {
         })
     }
 
-    /// Moves the session to another scene (a batch): the next frame uploads it; the
-    /// compiled pipelines stay, so scenes of one kind compile once (unless the scene is
-    /// too large for the renderer's way of reading it: `GpuRenderer::suits`).
-    pub fn set_scene(&mut self, scene: Arc<SceneBuffers>) {
-        self.uploaded = None;
-        self.scene = scene;
-    }
-
     /// How many times a scene's arrays have been uploaded: once per scene, for any number
     /// of frames.
     pub fn scene_uploads(&self) -> u32 {
@@ -217,6 +219,11 @@ impl Renderer for GpuSession {
 
     fn frame(&self, globals: &GpuGlobals) -> GpuGlobals {
         self.renderer.frame(&self.scene, globals)
+    }
+
+    fn set_scene(&mut self, scene: Arc<SceneBuffers>) {
+        self.uploaded = None;
+        self.scene = scene;
     }
 
     /// Uploads the scene (the first time) or moves it to this frame, compiling the frame's

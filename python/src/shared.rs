@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use gpurt::film::Film;
 use gpurt::gpu_types::GpuGlobals;
 use gpurt::pack::SceneBuffers;
-use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing};
+use gpurt::session::{self, Backend, CpuRenderer, GpuSession, Missing, Renderer};
 use pyo3::prelude::*;
 
 use crate::frames::{lock_detached, trace, warn_note};

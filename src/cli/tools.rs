@@ -11,6 +11,7 @@ use gpurt::commands::run::{self, Prepared};
 use gpurt::commands::tune::{self, TuneConfig};
 use gpurt::compare::{self, Thresholds};
 use gpurt::scene::ReadOptions;
+use gpurt::view::playback::Playback;
 use gpurt::view::window::{self, ViewOptions};
 use gpurt::{atomic, film, out, outln};
 
@@ -68,19 +69,24 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
         .as_deref()
         .map(gpurt::view::script::load)
         .transpose()?;
+    let read = run::read(&args.scene, args.view.as_deref(), &args.read_options())?;
+    // Quick to the first image: the build that suits one frame at the window's size.
+    let camera = read.camera();
+    let samples = u64::from(args.width.unwrap_or(camera.width))
+        * u64::from(args.height.unwrap_or(camera.height));
+    // An animated scene plays from its first frame, which is the still image's.
+    let playback = read
+        .animation()
+        .is_some()
+        .then(|| read.clone())
+        .and_then(|r| {
+            let move_camera = !r.view_given();
+            let (still, animation) = r.into_parts();
+            Playback::new(still, *animation?, move_camera, samples)
+        });
     let Prepared {
         buffers, warnings, ..
-    } = {
-        let read =
-            run::read(&args.scene, args.view.as_deref(), &args.read_options())?.still(None)?;
-        // Quick to the first image: the build that suits one frame at the window's size.
-        let camera = read.camera();
-        let (w, h) = (
-            args.width.unwrap_or(camera.width),
-            args.height.unwrap_or(camera.height),
-        );
-        run::pack(read, u64::from(w) * u64::from(h))?
-    };
+    } = run::pack(read.still(None)?, samples)?;
     print_warnings(&warnings);
     print_threads(args.stats);
     window::run(
@@ -101,6 +107,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
             stats: args.stats,
             launch,
         },
+        playback,
     )?;
     Ok(ExitCode::SUCCESS)
 }

@@ -34,6 +34,17 @@ impl Read {
         &self.flat.scene.camera
     }
 
+    /// The scene's still part and what moves in it, apart (the viewer plays them).
+    pub fn into_parts(self) -> (FlatScene, Option<Box<Animation>>) {
+        (self.flat, self.animation)
+    }
+
+    /// Whether the camera was given apart (`--view`), which the animation then leaves
+    /// alone.
+    pub fn view_given(&self) -> bool {
+        self.view_given
+    }
+
     /// What the reader warned of.
     pub fn warnings(&self) -> &[String] {
         &self.flat.scene.warnings
@@ -48,13 +59,10 @@ impl Read {
     /// stays as it is), ready to pack; the time placing took is added to the parse time.
     pub fn at(&self, t: f64) -> Read {
         let start = Instant::now();
-        let mut flat = self.flat.clone();
-        if let Some(anim) = &self.animation {
-            anim.place(&mut flat.prims, &mut flat.scene, t);
-            if !self.view_given {
-                flat.scene.camera = anim.camera_at(&flat.scene.camera, t);
-            }
-        }
+        let flat = match &self.animation {
+            Some(anim) => anim.flat_at(&self.flat, t, !self.view_given),
+            None => self.flat.clone(),
+        };
         Read {
             flat,
             parse_time: start.elapsed(),

@@ -11,6 +11,7 @@
 
 use glam::{DAffine3, DVec3};
 
+use super::flat::FlatScene;
 pub use super::model::{Animation, Group, Link, MovingLight, TimeRange, Track};
 use super::model::{Camera, Scene};
 use super::place::{Placed, Placement};
@@ -48,6 +49,17 @@ impl Animation {
                 scene.lights.push(p.light(l.light));
             }
         }
+    }
+
+    /// `still` (a scene's still part, as read) with what moves placed at time `t`, and
+    /// its camera moved where `move_camera` (else the camera stays: one given apart).
+    pub fn flat_at(&self, still: &FlatScene, t: f64, move_camera: bool) -> FlatScene {
+        let mut flat = still.clone();
+        self.place(&mut flat.prims, &mut flat.scene, t);
+        if move_camera {
+            flat.scene.camera = self.camera_at(&flat.scene.camera, t);
+        }
+        flat
     }
 
     /// The transform a chain makes at time `t`; `None` while a track of it is hidden.

@@ -72,6 +72,27 @@ pub struct OrbitCamera {
 }
 
 impl OrbitCamera {
+    /// Takes `camera` (an animated scene's at a new frame) as the scene's camera, and
+    /// moves the view there too unless it had been moved away from the old one. The view
+    /// keeps its size.
+    pub fn follow(&mut self, camera: Camera) {
+        let sized = |c: &Camera| Camera {
+            width: 0,
+            height: 0,
+            ..c.clone()
+        };
+        let at_home = sized(&self.camera) == sized(&self.home);
+        let (w, h) = (self.camera.width, self.camera.height);
+        self.home = camera.clone();
+        if at_home {
+            self.camera = Camera {
+                width: w,
+                height: h,
+                ..camera
+            };
+        }
+    }
+
     /// Starts at the scene's camera, orbiting its `at`. An `up` not perpendicular to the
     /// view is kept as the world up axis, as NFF intends.
     pub fn new(camera: Camera) -> Self {

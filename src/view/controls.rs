@@ -50,12 +50,16 @@ pub enum Action {
     PrintView,
     /// Writes the ray-traced image of the current view as a PNG.
     SavePng,
+    /// Plays or pauses an animated scene.
+    Play,
+    /// Steps an animated scene by this many frames.
+    Step(i8),
     Quit,
 }
 
 /// The keys, by the name a script uses (the character the key types, or `escape`), with
 /// what they do; `gpurt view --help` prints this table.
-pub const KEYS: [(&str, Action, &str); 15] = [
+pub const KEYS: [(&str, Action, &str); 18] = [
     ("w", Action::Camera(Input::Key(Key::Forward)), "fly forward"),
     ("s", Action::Camera(Input::Key(Key::Back)), "fly back"),
     ("a", Action::Camera(Input::Key(Key::Left)), "fly left"),
@@ -85,6 +89,9 @@ pub const KEYS: [(&str, Action, &str); 15] = [
     ("m", Action::NextMode, "ray traced / wireframe / overlay"),
     ("c", Action::PrintView, "print the camera as an NFF v block"),
     ("p", Action::SavePng, "write the ray-traced view as a PNG"),
+    ("space", Action::Play, "play or pause an animated scene"),
+    (".", Action::Step(1), "an animated scene's next frame"),
+    (",", Action::Step(-1), "an animated scene's previous frame"),
     ("escape", Action::Quit, "quit"),
     ("x", Action::Quit, "quit"),
 ];

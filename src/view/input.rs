@@ -49,6 +49,7 @@ impl Pointer {
                 let name = match &event.logical_key {
                     WinitKey::Character(c) => Some(c.as_str()),
                     WinitKey::Named(NamedKey::Escape) => Some("escape"),
+                    WinitKey::Named(NamedKey::Space) => Some("space"),
                     _ => None,
                 };
                 return name.and_then(key_action);

@@ -1,7 +1,7 @@
 //! The interactive viewer, `gpurt view`. Everything but the window's edge knows nothing of
 //! winit, so it is tested without one: the orbit camera (`camera`), the keys and modes
 //! (`controls`), input scripts (`script`), progressive accumulation on a worker thread
-//! (`progressive`), the wireframe that shares the ray tracer's camera (`wireframe`) and
+//! (`progressive`), an animated scene's frames (`playback`), the wireframe that shares the ray tracer's camera (`wireframe`) and
 //! the `--stats` figures (`stats`). At the edge, `window` runs the winit window and its
 //! events, `input` turns winit's input into `controls::Action`s, and `surface` draws
 //! frames into the window's wgpu surface (`readback` reads one back for a screenshot).
@@ -14,6 +14,8 @@ pub mod camera;
 pub mod controls;
 #[cfg(feature = "native")]
 pub mod input;
+#[cfg(feature = "native")]
+pub mod playback;
 #[cfg(feature = "native")]
 pub mod progressive;
 #[cfg(feature = "native")]

@@ -15,6 +15,7 @@ use image::RgbImage;
 
 use crate::film::Accumulator;
 use crate::gpu_types::GpuGlobals;
+use crate::pack::SceneBuffers;
 use crate::session::Renderer;
 use crate::util::error::{Error, Result};
 
@@ -92,6 +93,8 @@ pub struct Pass {
 
 enum Message {
     Trace(Job),
+    /// Another scene for the views that follow (an animation's next frame).
+    Scene(Arc<SceneBuffers>),
     Pause,
     Stop,
 }
@@ -127,6 +130,11 @@ impl Tracer {
     /// Traces `job` from no samples, abandoning the view in progress.
     pub fn trace(&self, job: Job) {
         self.send(Message::Trace(job));
+    }
+
+    /// Traces another scene from the next `trace` on.
+    pub fn set_scene(&self, scene: Arc<SceneBuffers>) {
+        self.send(Message::Scene(scene));
     }
 
     /// Stops tracing until the next `trace`.
@@ -190,11 +198,23 @@ fn work(
             }
         };
         if message.is_some() {
-            // Only the newest message matters; the flag is cleared before looking, so a
-            // message sent from here on cancels the next pass.
+            // Only the newest message matters, but for scenes, each taken in turn; the
+            // flag is cleared before looking, so a message sent from here on cancels the
+            // next pass.
             cancel.store(false, Ordering::Relaxed);
-            while let Ok(m) = rx.try_recv() {
-                message = Some(m);
+            let mut newest = message.take();
+            loop {
+                match newest {
+                    Some(Message::Scene(scene)) => {
+                        renderer.set_scene(scene);
+                        newest = None;
+                    }
+                    other => message = other.or(message),
+                }
+                match rx.try_recv() {
+                    Ok(m) => newest = Some(m),
+                    Err(_) => break,
+                }
             }
         }
         match message {
@@ -211,7 +231,8 @@ fn work(
             }
             Some(Message::Pause) => current = None,
             Some(Message::Stop) => return,
-            None => {}
+            // Scenes were taken in turn above.
+            Some(Message::Scene(_)) | None => {}
         }
         let Some(cur) = current.as_mut() else {
             continue;

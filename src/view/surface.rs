@@ -114,6 +114,12 @@ impl Surface {
         })
     }
 
+    /// Draws the wireframe of another scene from now on (an animation's next frame).
+    pub fn set_scene(&mut self, buffers: &SceneBuffers) -> Result<()> {
+        self.wireframe = Wireframe::new(&self.ctx.device, buffers, self.view_format)?;
+        Ok(())
+    }
+
     /// The adapter that draws the window.
     pub fn describe(&self) -> String {
         self.ctx.describe()

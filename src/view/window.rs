@@ -18,6 +18,7 @@ use winit::window::{Window, WindowId};
 use super::camera::OrbitCamera;
 use super::controls::{Action, Mode};
 use super::input::Pointer;
+use super::playback::Playback;
 use super::progressive::{Job, Pass, Tracer};
 use super::script::Event;
 use super::stats::Stats;
@@ -60,11 +61,14 @@ pub struct ViewOptions {
 }
 
 /// Opens the window and runs until it is closed (or the script's screenshot is written).
-pub fn run(buffers: SceneBuffers, opts: ViewOptions) -> Result<()> {
+/// `buffers` is the scene shown first; an animated scene's `playback` steps and plays
+/// through its frames from there (`buffers` being its first).
+pub fn run(buffers: SceneBuffers, opts: ViewOptions, playback: Option<Playback>) -> Result<()> {
     let event_loop = EventLoop::<Result<Pass>>::with_user_event()
         .build()
         .map_err(no_display)?;
     let mut app = App::new(buffers, opts, event_loop.create_proxy());
+    app.playback = playback;
     event_loop.run_app(&mut app).map_err(no_display)?;
     if app.opts.stats {
         let c = &app.camera.camera;
@@ -100,6 +104,8 @@ struct Live {
 
 struct App {
     buffers: Arc<SceneBuffers>,
+    /// An animated scene's frames, the one shown being `buffers`.
+    playback: Option<Playback>,
     opts: ViewOptions,
     proxy: EventLoopProxy<Result<Pass>>,
     live: Option<Live>,
@@ -138,6 +144,7 @@ impl App {
         let script = opts.script.clone().unwrap_or_default().into();
         App {
             buffers: Arc::new(buffers),
+            playback: None,
             proxy,
             live: None,
             camera,
@@ -281,8 +288,43 @@ impl App {
                 self.save_pending = true;
                 self.save_if_ready();
             }
+            Action::Play => {
+                if let Some(p) = &mut self.playback {
+                    p.playing = !p.playing;
+                    // Playing moves on from a frame once it has a pass.
+                    if p.playing && self.latest.is_some() {
+                        self.step(1, event_loop);
+                    } else if let Some(live) = &self.live {
+                        live.window.request_redraw();
+                    }
+                }
+            }
+            Action::Step(by) => self.step(by.into(), event_loop),
             Action::Quit => event_loop.exit(),
         }
+    }
+
+    /// Shows the frame `by` frames on of an animated scene (nothing for a still one): its
+    /// scene packed and handed to the tracer and the wireframe, the view following its
+    /// camera unless the view was moved away from it.
+    fn step(&mut self, by: i64, event_loop: &ActiveEventLoop) {
+        let Some(playback) = &mut self.playback else {
+            return;
+        };
+        playback.step(by);
+        let buffers = match playback.buffers() {
+            Ok(b) => Arc::new(b),
+            Err(e) => return self.fail(e, event_loop),
+        };
+        self.camera.follow(buffers.camera.clone());
+        if let Some(live) = &mut self.live {
+            if let Err(e) = live.surface.set_scene(&buffers) {
+                return self.fail(e, event_loop);
+            }
+            live.tracer.set_scene(buffers.clone());
+        }
+        self.buffers = buffers;
+        self.restart();
     }
 
     /// Writes the image `P` asked for: with `--spp N` once the view has its N samples,
@@ -382,6 +424,9 @@ impl App {
             let mrays = p.rays as f64 / p.trace_time.as_secs_f64().max(1e-9) / 1e6;
             t.push_str(&format!(" - {} spp - {mrays:.1} Mrays/s", p.samples));
         }
+        if let Some(p) = &self.playback {
+            t.push_str(&format!(" - {}", p.describe()));
+        }
         if let Some(live) = &self.live {
             t.push_str(&format!(" - {}", live.tracing_on));
         }
@@ -416,6 +461,10 @@ impl ApplicationHandler<Result<Pass>> for App {
                 self.save_if_ready();
                 if let Some(live) = &self.live {
                     live.window.request_redraw();
+                }
+                // Playing: this frame has been shown; on to the next.
+                if self.playback.as_ref().is_some_and(|p| p.playing) {
+                    self.step(1, event_loop);
                 }
             }
             // A pass of a view that has since moved on.

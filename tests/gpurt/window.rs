@@ -327,3 +327,55 @@ fn a_bad_script_is_refused_with_its_line_and_column_before_any_window_opens() {
     );
     assert!(!dir.join("s.png").exists());
 }
+
+/// An animated scene steps through its frames: three steps on show frame 3, the offline
+/// render of that frame's time, with the camera the animation moved; the image of
+/// another frame does not pass for it.
+#[test]
+fn stepping_through_an_animation_shows_the_offline_render_of_the_frame() {
+    let dir = workdir("window-animation");
+    std::fs::write(dir.join("steps.txt"), "key .\nkey .\nkey .\nkey c\n").unwrap();
+    let scene = own_scenes().join("orbit.aff").display().to_string();
+    let size = ["--width", "160", "--height", "120", "--spp", "1"];
+    let args = [
+        &[scene.as_str()][..],
+        &size,
+        &["--script", "steps.txt", "--screenshot", "shot.png"],
+    ]
+    .concat();
+    let Some(out) = view_in_xvfb(&args, &dir) else {
+        return;
+    };
+    let o = gpurt(
+        &[
+            &[scene.as_str()][..],
+            &size,
+            &["--frames", "3", "-o", "f3.png"],
+        ]
+        .concat(),
+        &dir,
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let shot = load(&dir.join("shot.png"));
+    agree(&load(&dir.join("f3.png")), &shot).unwrap_or_else(|why| panic!("frame 3: {why}"));
+    let o = gpurt(
+        &[
+            &[scene.as_str()][..],
+            &size,
+            &["--frames", "20", "-o", "f20.png"],
+        ]
+        .concat(),
+        &dir,
+    );
+    assert!(o.status.success());
+    assert!(
+        agree(&load(&dir.join("f20.png")), &shot).is_err(),
+        "another frame passes"
+    );
+    // The camera printed is the animation's at frame 3 (it moves along x).
+    let view = printed_view(&out.stdout);
+    assert!(
+        !view.contains("from -1.5 -9 3.5"),
+        "the first frame's camera: {view}"
+    );
+}
