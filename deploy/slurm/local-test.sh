@@ -2,7 +2,8 @@
 # Checks submit.sh on a real single-node Slurm started here (Debian's slurm-wlm and munge,
 # as root, no systemd): renders a bundled scene as 4 shards on a job array, merges them in
 # a job that depends on the array, and compares the result with a single-process render,
-# byte for byte. Stops the daemons it started. Not run by CI.
+# byte for byte; then renders an animated scene's 48 frames on a 4-task array and compares
+# them with the frames one process writes. Stops the daemons it started. Not run by CI.
 #
 #   deploy/slurm/local-test.sh          (needs a release build: cargo build --release)
 set -euo pipefail
@@ -71,3 +72,24 @@ else
     echo "FAILED: the merged image differs" >&2
     exit 1
 fi
+
+# An animated scene's frames shared out by an array job: 4 tasks, each every 4th of the
+# 48 frames of scenes/orbit.aff (I from SLURM_ARRAY_TASK_ID), against the frames one
+# process writes.
+ANIM="$ROOT/scenes/orbit.aff"
+FOPTS=(--width 80 --height 60 --backend cpu)
+sbatch --array=0-3 --wrap "'$GPURT' '$ANIM' --frames all --shard /4 --resume ${FOPTS[*]} -o '$WORK/frames/f-%04d.png'" >/dev/null
+echo "a 4-task array over the 48 frames of orbit.aff submitted"
+for _ in $(seq 120); do
+    [ -z "$(squeue -h)" ] && break
+    sleep 1
+done
+squeue -h | grep -q . && { echo "jobs still queued after 2 minutes" >&2; squeue; exit 1; }
+"$GPURT" "$ANIM" --frames all "${FOPTS[@]}" -o "$WORK/single-frames/f-%04d.png"
+if [ "$(ls "$WORK/frames" | wc -l)" = 48 ] && diff -r "$WORK/frames" "$WORK/single-frames"; then
+    echo "OK: the array's 48 frames are the single-process sequence, byte for byte"
+else
+    echo "FAILED: the array's frames differ" >&2
+    exit 1
+fi
+
