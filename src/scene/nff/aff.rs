@@ -12,16 +12,18 @@ use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
 use super::Parser;
 use super::blocks::{Open, Route, Target};
 use crate::scene::animation::{Animation, Group, Link, MovingLight, TimeRange, Track};
-use crate::scene::io;
 use crate::scene::lex::{Lexer, Token};
-use crate::scene::model::{Light, Material, Plane, Scene, nff_default_camera, unit};
+use crate::scene::model::{
+    Light, Material, MaterialId, Plane, Scene, Wrap, nff_default_camera, unit,
+};
 use crate::scene::place::Placement;
 use crate::scene::sink::Sink;
 use crate::scene::spline::{
     MIN_KEYS, PositionKey, PositionSpline, RotationKey, RotationSpline, Tcb, VisibilityKey,
 };
+use crate::scene::{images, io};
 use crate::util::error::{Error, Result, escape};
-use crate::util::limits::{MAX_LIGHT, MAX_MESH_VERTICES, MAX_SHINE};
+use crate::util::limits::{MAX_IMAGE_BYTES, MAX_LIGHT, MAX_MESH_VERTICES, MAX_SHINE};
 
 /// Includes nested deeper than this are refused (a file that includes itself).
 const MAX_INCLUDE_DEPTH: u32 = 32;
@@ -514,7 +516,7 @@ impl Parser<'_> {
                 self.lx.number("texture coordinate v")?,
             );
         }
-        self.no_texture(tok, &texture);
+        let material = self.textured_material(tok, &texture);
         let normals = if patch {
             let units = [unit(n[0]), unit(n[1]), unit(n[2])];
             match units {
@@ -524,19 +526,57 @@ impl Parser<'_> {
         } else {
             None
         };
-        let material = self.current_material();
         self.room(tok, 1)?;
         self.route().triangle(v, normals, Some(uv), material);
         Ok(())
     }
 
-    /// A texture named by the scene, which gpurt does not yet read for AFF: said once.
-    fn no_texture(&mut self, tok: &Token, name: &str) {
-        let msg = format!(
-            "texture '{}' is not applied (AFF textures are not read yet); the surfaces keep their material's colour",
-            escape(name.as_bytes())
-        );
-        self.warn_once(tok, &msg);
+    /// The material of surfaces textured with the image `name`: the current material
+    /// with that texture (repeating, as BART's textures do), or where the image cannot be
+    /// had, the current material, with a warning (once an image).
+    fn textured_material(&mut self, tok: &Token, name: &str) -> MaterialId {
+        let material = self.current_material();
+        match self.aff_texture(name) {
+            Ok(t) => {
+                let mut m = self.scene.materials[material.0 as usize];
+                m.texture = Some(t);
+                self.intern(m)
+            }
+            Err(why) => {
+                let msg = format!(
+                    "texture '{}' not applied: {why}; the surfaces keep their material's colour",
+                    escape(name.as_bytes())
+                );
+                self.warn_once(tok, &msg);
+                material
+            }
+        }
+    }
+
+    /// The texture of the image file `name`, read the first time a surface names it: in
+    /// the folder of the file naming it, else in a `TextureFiles` folder beside that
+    /// folder (how BART's scenes lay their images out).
+    fn aff_texture(&mut self, name: &str) -> std::result::Result<u32, String> {
+        let wrap = [Wrap::Repeat; 2];
+        let beside = self.base.join("..").join("TextureFiles");
+        let dirs = [self.base.to_path_buf(), beside];
+        for dir in dirs {
+            let full = dir.join(name);
+            let shown = full.display().to_string();
+            if let Some(i) = images::find(&self.scene.textures, &shown, wrap) {
+                return Ok(i);
+            }
+            if full.is_file() {
+                let bytes = io::read_inside(&dir, name, MAX_IMAGE_BYTES)?;
+                let texture = images::decode(&bytes, &shown, wrap)?;
+                return Ok(images::add(
+                    &mut self.scene.textures,
+                    texture,
+                    &mut self.scene.warnings,
+                ));
+            }
+        }
+        Err("no such file in the folder of the file naming it, nor in a TextureFiles folder beside that folder".into())
     }
 
     /// `tpa N` and N samples of `time` and three rows of `x y z nx ny nz`: a triangle
@@ -574,6 +614,7 @@ impl Parser<'_> {
         let verts = self.vectors("mesh vertex")?;
         let mut normals = Vec::new();
         let mut uvs = Vec::new();
+        let mut material = None;
         section = self
             .lx
             .expect_token("'normals', 'texturecoords' or 'triangles'")?;
@@ -591,7 +632,7 @@ impl Parser<'_> {
                     self.lx.number("texture coordinate v")?,
                 ));
             }
-            self.no_texture(tok, &texture);
+            material = Some(self.textured_material(tok, &texture));
             section = self.lx.expect_token("'triangles'")?;
         }
         if self.lx.text(&section) != b"triangles" {
@@ -606,7 +647,7 @@ impl Parser<'_> {
         let (n, ntok) = self.lx.count("number of mesh triangles")?;
         self.check_count(&ntok, n, 6)?;
         self.room(tok, n as usize)?;
-        let material = self.current_material();
+        let material = material.unwrap_or_else(|| self.current_material());
         for _ in 0..n {
             let v = self.indices(&verts, "vertex")?;
             let nm = if normals.is_empty() {

@@ -51,7 +51,7 @@ impl Parser<'_> {
         }
     }
 
-    fn intern(&mut self, m: Material) -> MaterialId {
+    pub(super) fn intern(&mut self, m: Material) -> MaterialId {
         self.palette.id(&mut self.scene.materials, m)
     }
 

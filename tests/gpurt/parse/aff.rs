@@ -185,6 +185,36 @@ fn aff_meshes_materials_and_includes_are_read() {
 }
 
 #[test]
+fn textures_are_found_beside_the_file_or_in_texture_files_beside_its_folder() {
+    let d = crate::common::workdir("aff-textures");
+    std::fs::create_dir_all(d.join("aff")).unwrap();
+    std::fs::create_dir_all(d.join("TextureFiles")).unwrap();
+    // A 2 x 1 PPM (P3), red and blue, as BART's textures are (binary there).
+    std::fs::write(
+        d.join("TextureFiles/wood.ppm"),
+        "P3\n2 1\n255\n255 0 0  0 0 255\n",
+    )
+    .unwrap();
+    let src = format!(
+        "{VIEW}f 1 1 1 1 0 1 0 1\ntt wood.ppm\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n\
+         m vertices 3\n0 0 1\n1 0 1\n0 1 1\ntexturecoords 3 wood.ppm\n0 0\n1 0\n0 1\n\
+         triangles 1\n0 1 2 0 1 2\ns 0 0 5 1\n"
+    );
+    let scene = gpurt::scene::nff::parse(src.as_bytes(), "t.aff", &d.join("aff")).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert_eq!(scene.textures.len(), 1, "read once for both");
+    assert_eq!((scene.textures[0].width, scene.textures[0].height), (2, 1));
+    let texture_of = |m: gpurt::scene::MaterialId| scene.materials[m.0 as usize].texture;
+    assert_eq!(texture_of(scene.triangles[0].material), Some(0));
+    assert_eq!(texture_of(scene.triangles[1].material), Some(0));
+    assert_eq!(
+        texture_of(scene.spheres[0].material),
+        None,
+        "the current material stays"
+    );
+}
+
+#[test]
 fn what_gpurt_does_not_render_is_warned_of_at_its_place() {
     let src = format!(
         "{VIEW}tt wood.ppm\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\ntpa 1\n0\n{}",
@@ -195,7 +225,7 @@ fn what_gpurt_does_not_render_is_warned_of_at_its_place() {
     assert!(scene.triangles[0].uv.is_some(), "texture coordinates kept");
     let w = scene.warnings.join("\n");
     assert!(
-        w.contains("t.nff:6:1: texture 'wood.ppm' is not applied"),
+        w.contains("t.nff:6:1: texture 'wood.ppm' not applied: no such file"),
         "{w}"
     );
     assert!(
