@@ -86,13 +86,17 @@ fn generated() -> &'static (PathBuf, [(&'static str, f64); 3]) {
 
 /// Each generated scene's peak on the CPU backend (MiB) with `fault` met where given, and
 /// its primitives: the terrain, the spheres, the one sphere. Images go to `out` (one name
-/// a test: the tests run at once).
+/// a test: the tests run at once). Each peak is the lower of two runs: one run in three or
+/// so, while other tests load the machine, peaks 16 bytes a primitive higher (the two
+/// threads' allocations overlapping differently), which is timing, not the drift the
+/// guards look for (that shows in every run).
 fn peaks(fault: Option<&str>, out: &str) -> [(&'static str, f64, f64); 3] {
     let (dir, scenes) = generated();
     scenes.map(|(file, prims)| {
         let args = [file, "--backend", "cpu", "--width", "64", "--height", "64"];
         let args = [&args[..], &["-o", out, "--stats"]].concat();
-        (file, prims, reported_peak_mib_with(&args, dir, fault).0)
+        let peak = || reported_peak_mib_with(&args, dir, fault).0;
+        (file, prims, peak().min(peak()))
     })
 }
 
