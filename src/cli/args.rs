@@ -153,7 +153,8 @@ pub enum Overlay {
 
 #[derive(clap::Args)]
 pub struct RenderArgs {
-    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions), .stl, .obj, .ply, .gltf or .glb, optionally .gz.
+    /// Scene to render: .nff (Haines NFF, IST P3D, gpurt extensions; .aff, BART's animated NFF,
+    /// too), .stl, .obj, .ply, .gltf or .glb, optionally .gz.
     /// One at a time, or any number with --out-dir.
     #[arg(value_name = "SCENE")]
     pub scenes: Vec<PathBuf>,
