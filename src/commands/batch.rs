@@ -12,7 +12,7 @@ use crate::film::Format;
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
 use crate::scene::{Camera, ReadOptions};
-use crate::session::{CpuRenderer, GpuSession, Renderer};
+use crate::session::GpuSession;
 use crate::util::error::{Error, Result};
 
 /// The name an image of `scene` gets: its file name without `.gz` and the scene's own
@@ -122,18 +122,8 @@ fn render_one(
     }
     let buffers = Arc::new(buffers);
     let frame = frame::globals(&buffers, &options);
-    let mut cpu;
-    let renderer: &mut dyn Renderer = match (gpu, session.as_mut()) {
-        (Some(_), Some(s)) => {
-            s.set_scene(buffers);
-            s
-        }
-        (Some(ctx), None) => session.insert(GpuSession::new(ctx.clone(), buffers)?),
-        (None, _) => {
-            cpu = CpuRenderer::new(buffers);
-            &mut cpu
-        }
-    };
+    let mut cpu = None;
+    let renderer = run::next_renderer(gpu, session, &mut cpu, buffers)?;
     let rendered = run::render_frame(renderer, &frame, &|_| {}, cancel)?;
     rendered.film.save_aov(out, options.aov)?;
     Ok((rendered.rays, prepared.warnings))

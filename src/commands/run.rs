@@ -3,17 +3,19 @@
 //! on both backends.
 
 use std::path::Path;
+use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 use crate::cpu::RayCounts;
 use crate::film::{Accumulator, Film};
+use crate::gpu::GpuContext;
 use crate::gpu_types::GpuGlobals;
 use crate::pack::{self, SceneBuffers};
 use crate::scene::animation::Animation;
 use crate::scene::flat::FlatScene;
 use crate::scene::{self, Camera, ReadOptions};
-use crate::session::Renderer;
+use crate::session::{CpuRenderer, GpuSession, Renderer};
 use crate::util::error::{Error, Result};
 
 /// A scene read into the renderers' records, not yet packed: its camera says what a
@@ -175,6 +177,29 @@ pub fn render_frame(
         compile,
         trace,
     })
+}
+
+/// The renderer for the next of many scenes traced in turn (a batch's scenes, a
+/// sequence's frames): on `gpu`'s device, the one `session` kept from scene to scene (its
+/// pipelines compiled once), opened the first time; without a device, a CPU renderer of
+/// this scene, held in `cpu`.
+pub fn next_renderer<'a>(
+    gpu: Option<&GpuContext>,
+    session: &'a mut Option<GpuSession>,
+    cpu: &'a mut Option<CpuRenderer>,
+    scene: Arc<SceneBuffers>,
+) -> Result<&'a mut dyn Renderer> {
+    let Some(ctx) = gpu else {
+        return Ok(cpu.insert(CpuRenderer::new(scene)));
+    };
+    let s = match session.take() {
+        Some(mut s) => {
+            s.set_scene(scene);
+            s
+        }
+        None => GpuSession::new(ctx.clone(), scene)?,
+    };
+    Ok(session.insert(s))
 }
 
 /// Peak resident memory of this process in bytes (Linux; `None` elsewhere).

@@ -16,7 +16,7 @@ use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
 use crate::scene::Camera;
 use crate::scene::animation::TimeRange;
-use crate::session::{CpuRenderer, GpuSession, Renderer};
+use crate::session::GpuSession;
 use crate::util::error::{Error, Result};
 
 /// The frames asked for: all of the animation's, or an inclusive range of them (counted
@@ -192,18 +192,8 @@ pub fn render(
         let buffers = Arc::new(buffers);
         let globals = frame::globals(&buffers, &options);
         let build = start.elapsed();
-        let mut cpu;
-        let renderer: &mut dyn Renderer = match (&gpu, session.as_mut()) {
-            (Some(_), Some(s)) => {
-                s.set_scene(buffers);
-                s
-            }
-            (Some(ctx), None) => session.insert(GpuSession::new(ctx.clone(), buffers)?),
-            (None, _) => {
-                cpu = CpuRenderer::new(buffers);
-                &mut cpu
-            }
-        };
+        let mut cpu = None;
+        let renderer = run::next_renderer(gpu.as_ref(), &mut session, &mut cpu, buffers)?;
         let rendered = run::render_frame(renderer, &globals, &|_| {}, cancel)?;
         let written = Instant::now();
         rendered.film.save_aov(out, options.aov)?;
