@@ -54,16 +54,23 @@ slurmd
 for _ in $(seq 30); do sinfo -h -o %T 2>/dev/null | grep -q idle && break; sleep 1; done
 sinfo
 
+# Waits until no job is queued, at most 2 minutes.
+wait_for_queue() {
+    for _ in $(seq 120); do
+        [ -z "$(squeue -h)" ] && return
+        sleep 1
+    done
+    echo "jobs still queued after 2 minutes" >&2
+    squeue
+    exit 1
+}
+
 cd "$WORK"
 SCENE="$ROOT/scenes/glass.nff"
 OPTS=(--width 160 --height 120 --spp 4 --backend cpu)
 merge_job=$(GPURT="$GPURT" "$ROOT/deploy/slurm/submit.sh" "$SCENE" "$WORK/merged.png" 4 "${OPTS[@]}")
 echo "merge job $merge_job submitted after a 4-task array"
-for _ in $(seq 120); do
-    [ -z "$(squeue -h)" ] && break
-    sleep 1
-done
-squeue -h | grep -q . && { echo "jobs still queued after 2 minutes" >&2; squeue; exit 1; }
+wait_for_queue
 ls "$WORK/merged.shards"
 "$GPURT" "$SCENE" "${OPTS[@]}" -o "$WORK/single.png"
 if cmp "$WORK/merged.png" "$WORK/single.png"; then
@@ -80,11 +87,7 @@ ANIM="$ROOT/scenes/orbit.aff"
 FOPTS=(--width 80 --height 60 --backend cpu)
 sbatch --array=0-3 --wrap "'$GPURT' '$ANIM' --frames all --shard /4 --resume ${FOPTS[*]} -o '$WORK/frames/f-%04d.png'" >/dev/null
 echo "a 4-task array over the 48 frames of orbit.aff submitted"
-for _ in $(seq 120); do
-    [ -z "$(squeue -h)" ] && break
-    sleep 1
-done
-squeue -h | grep -q . && { echo "jobs still queued after 2 minutes" >&2; squeue; exit 1; }
+wait_for_queue
 "$GPURT" "$ANIM" --frames all "${FOPTS[@]}" -o "$WORK/single-frames/f-%04d.png"
 if [ "$(ls "$WORK/frames" | wc -l)" = 48 ] && diff -r "$WORK/frames" "$WORK/single-frames"; then
     echo "OK: the array's 48 frames are the single-process sequence, byte for byte"
