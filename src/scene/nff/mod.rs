@@ -9,6 +9,7 @@
 mod aff;
 mod blocks;
 mod include;
+mod keys;
 mod keywords;
 mod material;
 mod view;
