@@ -15,6 +15,7 @@
 pub mod blocks;
 pub mod cwide;
 pub mod qwide;
+pub mod refit;
 pub mod wide;
 
 use glam::{Vec3, Vec3A};

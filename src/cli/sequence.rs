@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 
 use gpurt::commands::run;
 use gpurt::commands::sequence::{self, FrameReport};
+use gpurt::pack::frames::FrameTree;
 use gpurt::session::{self, Missing};
 use gpurt::{Error, atomic, film};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -100,6 +101,33 @@ pub fn sequence(args: &RenderArgs) -> gpurt::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// How the frames' trees were made: `3 whole`, or `2 rebuilt, 6 refitted (worn to at
+/// most 1.12)` (the moving part's; the still part's is built once).
+fn describe_trees(reports: &[FrameReport]) -> String {
+    let (mut whole, mut rebuilt, mut refitted, mut worn) = (0, 0, 0, 1.0f64);
+    for r in reports {
+        match r.tree {
+            FrameTree::Whole => whole += 1,
+            FrameTree::Rebuilt => rebuilt += 1,
+            FrameTree::Refitted(w) => {
+                refitted += 1;
+                worn = worn.max(w);
+            }
+        }
+    }
+    let mut parts = Vec::new();
+    if whole > 0 {
+        parts.push(format!("{whole} whole"));
+    }
+    if rebuilt > 0 {
+        parts.push(format!("{rebuilt} rebuilt"));
+    }
+    if refitted > 0 {
+        parts.push(format!("{refitted} refitted (worn to at most {worn:.2})"));
+    }
+    parts.join(", ")
+}
+
 /// Per frame, on average: building against tracing; and frames a second overall.
 fn print_stats(reports: &[FrameReport], total: Duration) {
     let n = reports.len().max(1) as f64;
@@ -122,6 +150,7 @@ fn print_stats(reports: &[FrameReport], total: Duration) {
         reports.len() as f64 / total.as_secs_f64().max(1e-9),
         rays as f64 / trace.max(1e-9) / 1e6
     );
+    eprintln!("trees       {}", describe_trees(reports));
     if let Some(m) = run::peak_memory() {
         eprintln!("peak memory {:.1} MiB", m as f64 / (1 << 20) as f64);
     }

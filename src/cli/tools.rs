@@ -75,15 +75,11 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     let samples = u64::from(args.width.unwrap_or(camera.width))
         * u64::from(args.height.unwrap_or(camera.height));
     // An animated scene plays from its first frame, which is the still image's.
-    let playback = read
+    let frames = read
         .animation()
-        .is_some()
-        .then(|| read.clone())
-        .and_then(|r| {
-            let move_camera = !r.view_given();
-            let (still, animation) = r.into_parts();
-            Playback::new(still, *animation?, move_camera, samples)
-        });
+        .and_then(|a| a.range)
+        .map_or(1, |r| r.frames);
+    let playback = read.frames(samples, frames.into())?.and_then(Playback::new);
     let Prepared {
         buffers, warnings, ..
     } = run::pack(read.still(None)?, samples)?;

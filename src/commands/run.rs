@@ -11,6 +11,7 @@ use crate::cpu::RayCounts;
 use crate::film::{Accumulator, Film};
 use crate::gpu::GpuContext;
 use crate::gpu_types::GpuGlobals;
+use crate::pack::frames::{FramePacker, TreeMode};
 use crate::pack::{self, SceneBuffers};
 use crate::scene::animation::Animation;
 use crate::scene::flat::FlatScene;
@@ -34,17 +35,6 @@ impl Read {
     /// The scene's camera (the view's, when one was given).
     pub fn camera(&self) -> &Camera {
         &self.flat.scene.camera
-    }
-
-    /// The scene's still part and what moves in it, apart (the viewer plays them).
-    pub fn into_parts(self) -> (FlatScene, Option<Box<Animation>>) {
-        (self.flat, self.animation)
-    }
-
-    /// Whether the camera was given apart (`--view`), which the animation then leaves
-    /// alone.
-    pub fn view_given(&self) -> bool {
-        self.view_given
     }
 
     /// What the reader warned of.
@@ -71,6 +61,17 @@ impl Read {
             animation: None,
             view_given: self.view_given,
         }
+    }
+
+    /// A packer of the animation's frames (`pack::frames`), each tracing `samples`
+    /// camera samples, `frames` of them; `None` for a still scene.
+    pub fn frames(&self, samples: u64, frames: u64) -> Result<Option<FramePacker>> {
+        let Some(anim) = &self.animation else {
+            return Ok(None);
+        };
+        let mode = TreeMode::from_env().map_err(Error::Render)?;
+        let (still, anim) = (self.flat.clone(), anim.as_ref().clone());
+        FramePacker::new(still, anim, !self.view_given, samples, frames, mode).map(Some)
     }
 
     /// The scene for a still image: an AFF scene at time `time`, else at the start of

@@ -1,9 +1,9 @@
 //! An animated scene rendered frame by frame (`gpurt SCENE.aff --frames A..B -o
-//! out/frame-%04d.png`): the scene parsed once, each frame's moving parts placed and its
-//! tree built anew, every frame on one renderer (one device, its pipelines compiled
-//! once), each image written atomically as soon as it is traced. Which frames, and the
-//! file each goes to, are settled before anything renders, so that a bad range or a
-//! pattern that would write one file twice fails at once.
+//! out/frame-%04d.png`): the scene parsed once, each frame's moving parts placed and
+//! their tree refitted or built anew (`pack::frames`), every frame on one renderer (one
+//! device, its pipelines compiled once), each image written atomically as soon as it is
+//! traced. Which frames, and the file each goes to, are settled before anything renders,
+//! so that a bad range or a pattern that would write one file twice fails at once.
 
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
@@ -14,6 +14,7 @@ use std::time::{Duration, Instant};
 use crate::commands::run::{self, Read};
 use crate::frame::{self, Overrides, RenderOptions};
 use crate::gpu::GpuContext;
+use crate::pack::frames::FrameTree;
 use crate::scene::Camera;
 use crate::scene::animation::TimeRange;
 use crate::session::GpuSession;
@@ -157,6 +158,8 @@ pub struct FrameReport {
     pub trace: Duration,
     pub write: Duration,
     pub rays: u64,
+    /// How the frame's tree was made.
+    pub tree: FrameTree,
 }
 
 /// Renders `frames` (each with the file it goes to) of the animated scene `read`, on
@@ -176,15 +179,17 @@ pub fn render(
         .and_then(|a| a.range)
         .ok_or_else(|| Error::Render("the scene has no animation time range ('a')".into()))?;
     let options = |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(overrides);
+    let samples = options(read.camera()).samples();
+    let mut packer = read
+        .frames(samples, frames.len() as u64)?
+        .ok_or_else(|| Error::Render("nothing moves in the scene".into()))?;
     // One session for the whole sequence: its pipelines outlive each frame's scene.
     let mut session: Option<GpuSession> = None;
     let mut reports = Vec::with_capacity(frames.len());
     for (frame, out) in frames {
         let time = range.time(*frame);
         let start = Instant::now();
-        let placed = read.at(time);
-        let samples = options(placed.camera()).samples();
-        let mut buffers = run::pack(placed, samples)?.buffers;
+        let (mut buffers, tree) = packer.pack(time)?;
         let options = options(&buffers.camera);
         if gpu.is_none() {
             buffers.for_cpu_alone(options.aov);
@@ -204,6 +209,7 @@ pub fn render(
             trace: rendered.trace,
             write: written.elapsed(),
             rays: rendered.rays,
+            tree,
         };
         done(&report);
         reports.push(report);

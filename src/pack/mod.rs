@@ -18,6 +18,7 @@ use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH, MAX_TEXELS};
 
 mod check;
 mod emitters;
+pub mod frames;
 
 pub use emitters::EMITTER_SAMPLES;
 
@@ -117,6 +118,80 @@ pub fn pack_for(scene: Scene, samples: u64) -> Result<SceneBuffers> {
 /// group (`bvh::build_chunk`).
 pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let FlatScene { scene, prims } = flat;
+    check_surfaces(&scene, prims.normals(), prims.uvs())?;
+    let bounds = prims.bounds();
+    let (mut records, tri_normals, tri_uvs) = prims.into_records();
+    let emitters = emitters::emitters(&records, &scene.materials);
+    let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
+    let mut tree = build_tree(&records, quality);
+    permute(&mut records, std::mem::take(&mut tree.order));
+    assemble(
+        scene,
+        Packed {
+            records,
+            tri_normals,
+            tri_uvs,
+            emitters,
+            tree,
+            quality,
+            bounds,
+        },
+    )
+}
+
+/// A tree over `records` (triangles by their corners), their bounds worked out a group at
+/// a time as the build needs them.
+fn build_tree(records: &[GpuPrim], quality: bvh::Quality) -> FlatBvh {
+    let mut tree = bvh::build_with(
+        records.len(),
+        |i| bvh::aabb(flat::record_bounds(&records[i as usize])),
+        quality,
+    );
+    tree.nodes.shrink_to_fit();
+    tree
+}
+
+/// A scene's bounded primitives and their tree, as `assemble` takes them.
+struct Packed {
+    /// In the tree's leaf order, triangles still by their corners.
+    records: Vec<GpuPrim>,
+    tri_normals: Vec<GpuTriNormals>,
+    tri_uvs: Vec<GpuTriUvs>,
+    /// `emitters::emitters` of the records.
+    emitters: (Vec<GpuLight>, Vec<GpuLight>),
+    /// Its `order` already applied to `records`.
+    tree: FlatBvh,
+    quality: bvh::Quality,
+    bounds: Bounds,
+}
+
+/// Refuses a scene whose normals and texture coordinates (`normals`, `uvs` triangles'
+/// worth) would not fit the records' slots.
+fn check_surfaces(scene: &Scene, normals: usize, uvs: usize) -> Result<()> {
+    if normals + uvs > 1 << 24 {
+        return Err(Error::Scene {
+            file: scene.name.clone(),
+            msg: format!(
+                "{normals} triangles with shading normals and {uvs} with texture coordinates exceed the limit of 2^24 together"
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// The buffers of `scene` (its primitives taken out) and its primitives `packed` with
+/// their tree: materials, planes, lights and textures in the layout's form, the
+/// triangles turned into edges.
+fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
+    let Packed {
+        mut records,
+        tri_normals,
+        tri_uvs,
+        emitters: (mut emitters, emitter_triangles),
+        tree,
+        quality,
+        bounds,
+    } = packed;
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
         msg,
@@ -128,17 +203,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             PRIM_MATERIAL_MASK
         )));
     }
-    if prims.normals() + prims.uvs() > 1 << 24 {
-        return Err(too_big(format!(
-            "{} triangles with shading normals and {} with texture coordinates exceed the limit of 2^24 together",
-            prims.normals(),
-            prims.uvs()
-        )));
-    }
-    let bounds = prims.bounds();
     let epsilon = epsilon(bounds, &scene.camera);
-    let (mut records, tri_normals, tri_uvs) = prims.into_records();
-    let (mut emitters, emitter_triangles) = emitters::emitters(&records, &scene.materials);
     let planes = scene
         .planes
         .iter()
@@ -167,20 +232,8 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let mut lights = pack_lights(&scene.lights);
     lights.append(&mut emitters);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
-    let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
     let gpu_collapse = wide::Collapse::for_gpu().map_err(Error::Render)?;
-    let FlatBvh {
-        nodes,
-        order,
-        depth,
-    } = bvh::build_with(
-        records.len(),
-        |i| bvh::aabb(flat::record_bounds(&records[i as usize])),
-        quality,
-    );
-    let mut nodes = nodes;
-    nodes.shrink_to_fit();
-    permute(&mut records, order);
+    let FlatBvh { nodes, depth, .. } = tree;
     flat::to_edges(&mut records);
     Ok(SceneBuffers {
         node_count: nodes.len(),

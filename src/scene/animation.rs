@@ -31,10 +31,14 @@ impl Animation {
 
     /// The primitives that move, in their place at time `t`, into `prims`, and the planes
     /// and lights they hold into `scene`; what is hidden at `t` is left out. The camera
-    /// is `camera_at`'s.
-    pub fn place(&self, prims: &mut dyn Sink, scene: &mut Scene, t: f64) {
+    /// is `camera_at`'s. Returns which groups were placed (the same ones in two frames
+    /// place the same primitives in the same order, which a refit relies on).
+    pub fn place(&self, prims: &mut dyn Sink, scene: &mut Scene, t: f64) -> Vec<bool> {
+        let mut shown = Vec::with_capacity(self.groups.len());
         for g in &self.groups {
-            let Some(p) = self.chain(&g.chain, t).and_then(Placement::new) else {
+            let p = self.chain(&g.chain, t).and_then(Placement::new);
+            shown.push(p.is_some());
+            let Some(p) = p else {
                 continue;
             };
             g.prims.emit(&mut Placed::new(prims, Some(p)));
@@ -49,6 +53,7 @@ impl Animation {
                 scene.lights.push(p.light(l.light));
             }
         }
+        shown
     }
 
     /// `still` (a scene's still part, as read) with what moves placed at time `t`, and

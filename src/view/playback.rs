@@ -2,39 +2,28 @@
 //! playing through them, and each frame's scene packed for the renderers. Playing shows
 //! each frame as soon as its first pass is traced, then moves to the next, looping.
 
-use crate::pack::{self, SceneBuffers};
-use crate::scene::FlatScene;
-use crate::scene::animation::{Animation, TimeRange};
+use crate::pack::SceneBuffers;
+use crate::pack::frames::{FramePacker, FrameTree};
+use crate::scene::animation::TimeRange;
 use crate::util::error::Result;
 
 pub struct Playback {
-    still: FlatScene,
-    animation: Animation,
+    /// Packs each frame, the still part's tree made once (`pack::frames`).
+    packer: FramePacker,
     range: TimeRange,
-    /// Whether the animation's camera moves the view (not when one was given apart).
-    move_camera: bool,
-    /// Camera samples a frame is built for (`bvh::Quality::chosen`).
-    samples: u64,
     frame: u32,
     pub playing: bool,
 }
 
 impl Playback {
-    /// Frames of `animation` over the scene's still part; `None` where nothing moves or
-    /// there is no time range to step through.
-    pub fn new(
-        still: FlatScene,
-        animation: Animation,
-        move_camera: bool,
-        samples: u64,
-    ) -> Option<Playback> {
+    /// The frames `packer` packs; `None` where nothing moves or there is no time range
+    /// to step through.
+    pub fn new(packer: FramePacker) -> Option<Playback> {
+        let animation = packer.animation();
         let range = animation.range.filter(|_| !animation.is_still())?;
         Some(Playback {
-            still,
-            animation,
+            packer,
             range,
-            move_camera,
-            samples,
             frame: 0,
             playing: false,
         })
@@ -54,12 +43,10 @@ impl Playback {
         self.frame = (i64::from(self.frame) + by).rem_euclid(n) as u32;
     }
 
-    /// The current frame's scene, packed.
-    pub fn buffers(&self) -> Result<SceneBuffers> {
-        let flat = self
-            .animation
-            .flat_at(&self.still, self.time(), self.move_camera);
-        pack::pack_flat(flat, self.samples)
+    /// The current frame's scene, packed, and how its tree was made.
+    pub fn buffers(&mut self) -> Result<(SceneBuffers, FrameTree)> {
+        let t = self.time();
+        self.packer.pack(t)
     }
 
     /// For the title: `frame 12/48, t 0.511, playing`.
@@ -77,6 +64,7 @@ impl Playback {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pack::frames::TreeMode;
     use crate::scene::{FlatScene, nff};
 
     fn orbit() -> Playback {
@@ -84,7 +72,9 @@ mod tests {
                    k b {\n transl 4\n 0 0 0 0 0 0 0\n 1 0 0 0 0 0 0\n 2 2 0 0 0 0 0\n 3 2 0 0 0 0 0\n}\n";
         let mut scene = nff::parse(src.as_bytes(), "t.aff", std::path::Path::new(".")).unwrap();
         let anim = *scene.animation.take().unwrap();
-        Playback::new(FlatScene::from_scene(scene), anim, true, 1).unwrap()
+        let still = FlatScene::from_scene(scene);
+        let packer = FramePacker::new(still, anim, true, 1, 5, TreeMode::Auto).unwrap();
+        Playback::new(packer).unwrap()
     }
 
     #[test]
@@ -96,7 +86,7 @@ mod tests {
         p.step(2);
         assert_eq!((p.frame(), p.time()), (1, 0.5));
         p.step(3);
-        let b = p.buffers().unwrap();
+        let (b, _) = p.buffers().unwrap();
         assert_eq!(b.prims.len(), 1);
         assert!(p.describe().starts_with("frame 4/5, t 2.000, paused"));
     }

@@ -198,3 +198,51 @@ fn info_says_what_moves() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["animation"].is_null());
 }
+
+/// Each frame's tree made four ways (`GPURT_FRAME_TREE`): the whole scene's built anew,
+/// the moving part's built anew, refitted however worn, or chosen by the wear. The trees
+/// differ, the images do not, on the CPU and on the GPU; `--stats` says which were made.
+#[test]
+fn refitted_rebuilt_and_whole_trees_give_the_same_frames() {
+    let d = workdir("sequence-trees");
+    let scene = own_scenes().join("orbit.aff");
+    let scene = scene.to_str().unwrap();
+    let mut backends = vec!["cpu"];
+    if crate::common::gpu_context().is_some() {
+        backends.push("gpu");
+    }
+    for backend in backends {
+        // The GPU renders fewer frames: lavapipe compiles and traces slowly.
+        let range = if backend == "cpu" { "all" } else { "20..27" };
+        let mut first: Option<Vec<(String, Vec<u8>)>> = None;
+        for mode in ["whole", "rebuild", "refit", "auto"] {
+            let dir = format!("{backend}-{mode}");
+            let o = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+                .args([scene, "--frames", range, "-o", &format!("{dir}/f-%02d.png")])
+                .args(["--width", "40", "--height", "30", "--backend", backend])
+                .args(["--stats"])
+                .current_dir(&d)
+                .env("GPURT_CACHE_DIR", "")
+                .env("GPURT_FRAME_TREE", mode)
+                .output()
+                .unwrap();
+            let err = stderr(&o);
+            assert!(o.status.success(), "{backend} {mode}: {err}");
+            let trees = err.lines().find(|l| l.starts_with("trees")).unwrap_or("");
+            let expected = match mode {
+                "whole" => "whole",
+                "rebuild" => "rebuilt",
+                _ => "refitted",
+            };
+            assert!(trees.contains(expected), "{backend} {mode}: {trees}");
+            let images = frames(&d.join(&dir));
+            match &first {
+                None => first = Some(images),
+                Some(f) => assert!(
+                    f == &images,
+                    "{backend}: the frames with {mode} trees differ from the whole scene's"
+                ),
+            }
+        }
+    }
+}
