@@ -180,9 +180,12 @@ pub fn render(
         .ok_or_else(|| Error::Render("the scene has no animation time range ('a')".into()))?;
     let options = |camera: &Camera| RenderOptions::for_camera(camera).with_overrides(overrides);
     let samples = options(read.camera()).samples();
+    let setup = Instant::now();
     let mut packer = read
         .frames(samples, frames.len() as u64)?
         .ok_or_else(|| Error::Render("nothing moves in the scene".into()))?;
+    // The still part's tree, built once, is the first frame's to pay for.
+    let mut setup = Some(setup.elapsed());
     // One session for the whole sequence: its pipelines outlive each frame's scene.
     let mut session: Option<GpuSession> = None;
     let mut reports = Vec::with_capacity(frames.len());
@@ -196,7 +199,7 @@ pub fn render(
         }
         let buffers = Arc::new(buffers);
         let globals = frame::globals(&buffers, &options);
-        let build = start.elapsed();
+        let build = start.elapsed() + setup.take().unwrap_or_default();
         let mut cpu = None;
         let renderer = run::next_renderer(gpu.as_ref(), &mut session, &mut cpu, buffers)?;
         let rendered = run::render_frame(renderer, &globals, &|_| {}, cancel)?;

@@ -18,7 +18,8 @@ use crate::scene::{Bounds, Sink};
 use crate::util::error::{Error, Result};
 
 use super::{
-    Packed, SceneBuffers, assemble, build_tree, check_surfaces, emitters, pack_flat, permute,
+    Packed, SceneBuffers, Textures, assemble, build_tree, check_surfaces, emitters, pack_flat,
+    pack_textures, permute,
 };
 
 /// How each frame's tree is made (`GPURT_FRAME_TREE`; `Auto` where unset).
@@ -88,8 +89,10 @@ struct Moving {
 
 /// Packs the frames of one animated scene.
 pub struct FramePacker {
-    /// The scene without its bounded primitives (`Whole`: with them).
+    /// The scene without its bounded primitives and textures (`Whole`: with them).
     still_scene: FlatScene,
+    /// The scene's textures, packed once (`Whole`: each frame).
+    textures: Textures,
     /// `None` under `TreeMode::Whole`.
     still: Option<Still>,
     moving: Option<Moving>,
@@ -112,10 +115,16 @@ impl FramePacker {
         frames: u64,
         mode: TreeMode,
     ) -> Result<FramePacker> {
-        let (still_scene, still) = if mode == TreeMode::Whole {
-            (still, None)
+        let (still_scene, still, textures) = if mode == TreeMode::Whole {
+            (still, None, Textures::default())
         } else {
-            let FlatScene { scene, prims } = still;
+            let FlatScene { mut scene, prims } = still;
+            let textures = pack_textures(&std::mem::take(&mut scene.textures)).map_err(|msg| {
+                Error::Scene {
+                    file: scene.name.clone(),
+                    msg,
+                }
+            })?;
             let bounds = prims.bounds();
             let (mut records, normals, uvs) = prims.into_records();
             let quality = Quality::chosen(records.len(), samples.saturating_mul(frames))
@@ -134,10 +143,11 @@ impl FramePacker {
                 scene,
                 prims: Flat::new(),
             };
-            (scene, Some(still))
+            (scene, Some(still), textures)
         };
         Ok(FramePacker {
             still_scene,
+            textures,
             still,
             moving: None,
             animation,
@@ -200,6 +210,7 @@ impl FramePacker {
             tree,
             quality,
             bounds,
+            textures: Some(self.textures.clone()),
         };
         Ok((assemble(scene, packed)?, how))
     }

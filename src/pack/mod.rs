@@ -2,7 +2,7 @@
 //! binding), with the camera, background and ambient the frames of `frame` start from.
 
 use std::borrow::Cow;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use glam::Vec3;
 
@@ -46,7 +46,8 @@ pub struct SceneBuffers {
     /// The textures' headers and their texels (linear RGB, each a texel), which the shader
     /// reads after `tri_uvs`: a header's `first` counts from the first header.
     pub textures: Vec<GpuTexture>,
-    pub texels: Vec<glam::Vec4>,
+    /// Shared: a sequence's frames all hold the one copy (`pack::frames`).
+    pub texels: Arc<[glam::Vec4]>,
     pub planes: Vec<GpuPlane>,
     pub materials: Vec<GpuMaterial>,
     /// The scene's lights, then one `LIGHT_EMITTER` per emissive material
@@ -135,6 +136,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             tree,
             quality,
             bounds,
+            textures: None,
         },
     )
 }
@@ -163,7 +165,13 @@ struct Packed {
     tree: FlatBvh,
     quality: bvh::Quality,
     bounds: Bounds,
+    /// The textures packed already (a sequence packs them once for all its frames);
+    /// `None`: packed from the scene's.
+    textures: Option<Textures>,
 }
+
+/// Textures' headers and texels, as `SceneBuffers` holds them.
+type Textures = (Vec<GpuTexture>, Arc<[glam::Vec4]>);
 
 /// Refuses a scene whose normals and texture coordinates (`normals`, `uvs` triangles'
 /// worth) would not fit the records' slots.
@@ -191,6 +199,7 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
         tree,
         quality,
         bounds,
+        textures,
     } = packed;
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
@@ -228,7 +237,10 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
             texture: m.texture.unwrap_or(NO_TEXTURE),
         })
         .collect();
-    let (textures, texels) = pack_textures(&scene.textures).map_err(too_big)?;
+    let (textures, texels) = match textures {
+        Some(t) => t,
+        None => pack_textures(&scene.textures).map_err(too_big)?,
+    };
     let mut lights = pack_lights(&scene.lights);
     lights.append(&mut emitters);
     let (camera, background, ambient) = (scene.camera, scene.background, scene.ambient);
@@ -307,7 +319,7 @@ impl SceneBuffers {
             bytemuck::cast_slice(&self.tri_normals),
             bytemuck::cast_slice(&self.tri_uvs),
             bytemuck::cast_slice(&self.textures),
-            bytemuck::cast_slice(&self.texels),
+            bytemuck::cast_slice(&self.texels[..]),
         ];
         if parts[1..].iter().all(|p| p.is_empty()) {
             Cow::Borrowed(parts[0])
@@ -493,9 +505,7 @@ pub fn epsilon(b: Bounds, camera: &Camera) -> f32 {
 
 /// The textures' headers and texels (`SceneBuffers::textures`), or why they cannot be
 /// held: more texels than `MAX_TEXELS`.
-fn pack_textures(
-    textures: &[Texture],
-) -> std::result::Result<(Vec<GpuTexture>, Vec<glam::Vec4>), String> {
+fn pack_textures(textures: &[Texture]) -> std::result::Result<Textures, String> {
     let total: u64 = textures.iter().map(|t| t.texels.len() as u64).sum();
     if total > MAX_TEXELS {
         return Err(format!(
@@ -520,7 +530,7 @@ fn pack_textures(
         texels.extend(t.texels.iter().map(|c| c.extend(1.0)));
         first += t.texels.len() as u32;
     }
-    Ok((headers, texels))
+    Ok((headers, texels.into()))
 }
 
 /// Uncoloured lights get SPD's intensity `1/sqrt(number of lights)`.
