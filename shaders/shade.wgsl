@@ -82,7 +82,7 @@ fn light_samples(light: Light) -> u32 {
 // What surface `s` of material m gives before any light sample: the ambient term, and
 // its own light where the ray meets its front (an emitter's).
 fn unlit(s: Surface, m: Material) -> vec3<f32> {
-    var c = globals.ambient * m.kd * m.color;
+    var c = globals.ambient * m.ambient;
     if (EMITTERS && s.entering) {
         c += m.emission;
     }

@@ -87,11 +87,14 @@ fn texture_sample(i: u32, uv: vec2<f32>) -> vec3<f32> {
     return mix(top, bottom, fy);
 }
 
-// Material m where `hit` meets it: its colour times its texture's there.
+// Material m where `hit` meets it: its colour and its ambient colour times its
+// texture's there.
 fn textured(m: Material, hit: Hit) -> Material {
     var t = m;
     if (TEXTURES && m.texture != NO_TEXTURE) {
-        t.color = m.color * texture_sample(m.texture, hit_uv(hit));
+        let texel = texture_sample(m.texture, hit_uv(hit));
+        t.color = m.color * texel;
+        t.ambient = m.ambient * texel;
     }
     return t;
 }

@@ -78,6 +78,8 @@ struct Material {
     ior: f32,
     emission: vec3<f32>,
     texture: u32,
+    ambient: vec3<f32>,
+    _pad: u32,
 }
 
 struct Texture {

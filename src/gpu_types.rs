@@ -101,8 +101,9 @@ pub struct GpuPlane {
     pub _pad: [u32; 3],
 }
 
-/// NFF `f r g b Kd Ks Shine T ior`, and the radiance the surface emits from its front
-/// (OBJ's `Ke`, glTF's emissive; zero for NFF's materials).
+/// NFF `f r g b Kd Ks Shine T ior`, the radiance the surface emits from its front
+/// (OBJ's `Ke`, glTF's emissive; zero for NFF's materials), and the colour the scene's
+/// ambient light is multiplied by (`Kd` times the colour, or AFF's `fm` ambient colour).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
@@ -115,6 +116,8 @@ pub struct GpuMaterial {
     pub emission: Vec3,
     /// Its texture's index (`GpuTexture`), or `NO_TEXTURE`.
     pub texture: u32,
+    pub ambient: Vec3,
+    pub _pad: u32,
 }
 
 /// `GpuMaterial::texture` of a material without one.
@@ -425,7 +428,7 @@ const _: () = {
     assert!(size_of::<GpuCwideNode>() == 80);
     assert!(size_of::<GpuQwideNode>() == 64);
     assert!(size_of::<GpuPlane>() == 32);
-    assert!(size_of::<GpuMaterial>() == 48);
+    assert!(size_of::<GpuMaterial>() == 64);
     assert!(size_of::<GpuLight>() == 64);
     assert!(size_of::<GpuGlobals>() == 160);
     assert!(size_of::<GpuTexture>() == 16);

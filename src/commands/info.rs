@@ -111,6 +111,7 @@ pub fn to_json(f: &FlatScene) -> Value {
                 "ior": num(m.ior),
                 "emission": vec3(m.emission),
                 "texture": m.texture,
+                "ambient": m.ambient.map(vec3),
             })
         })
         .collect();
@@ -296,7 +297,7 @@ pub fn to_text(f: &FlatScene) -> String {
     for (i, m) in s.materials.iter().enumerate() {
         let _ = writeln!(
             o,
-            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}{}{}",
+            "  {i}: colour {}  Kd {}  Ks {}  Shine {}  T {}  ior {}{}{}{}",
             v(m.color),
             m.kd,
             m.ks,
@@ -309,7 +310,9 @@ pub fn to_text(f: &FlatScene) -> String {
                 String::new()
             },
             m.texture
-                .map_or(String::new(), |t| format!("  texture {t}"))
+                .map_or(String::new(), |t| format!("  texture {t}")),
+            m.ambient
+                .map_or(String::new(), |a| format!("  ambient {}", v(a)))
         );
     }
     if !s.textures.is_empty() {

@@ -160,7 +160,7 @@ pub fn light_samples(light: &GpuLight) -> u32 {
 /// What surface `s` of material `m` gives before any light sample: the ambient term, and
 /// its own light where the ray meets its front (an emitter's).
 pub fn unlit(g: &GpuGlobals, s: &Surface, m: &GpuMaterial) -> Vec3 {
-    let mut c = g.ambient * m.kd * m.color;
+    let mut c = g.ambient * m.ambient;
     if s.entering {
         c += m.emission;
     }

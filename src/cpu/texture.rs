@@ -76,11 +76,14 @@ pub fn texture_sample(b: &Bindings, i: u32, uv: Vec2) -> Vec3 {
     mix(top, bottom, fy)
 }
 
-/// Material `m` where `hit` meets it: its colour times its texture's there.
+/// Material `m` where `hit` meets it: its colour and its ambient colour times its
+/// texture's there.
 pub fn textured(b: &Bindings, m: &GpuMaterial, hit: &Hit) -> GpuMaterial {
     let mut t = *m;
     if m.texture != NO_TEXTURE {
-        t.color = m.color * texture_sample(b, m.texture, hit_uv(b, hit));
+        let texel = texture_sample(b, m.texture, hit_uv(b, hit));
+        t.color = m.color * texel;
+        t.ambient = m.ambient * texel;
     }
     t
 }

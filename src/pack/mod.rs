@@ -235,6 +235,8 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
             ior: m.ior,
             emission: m.emission,
             texture: m.texture.unwrap_or(NO_TEXTURE),
+            ambient: m.ambient.unwrap_or(m.kd * m.color),
+            _pad: 0,
         })
         .collect();
     let (textures, texels) = match textures {

@@ -103,6 +103,7 @@ pub fn frame_mesh(scene: &mut Scene, b: Bounds) -> Result<()> {
         ior: 1.0,
         emission: Vec3::ZERO,
         texture: None,
+        ambient: None,
     });
     // A little below the mesh's lowest point (a thousandth of its size), so that a flat
     // mesh lying on that plane does not z-fight with the ground.

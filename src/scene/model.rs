@@ -92,6 +92,9 @@ pub struct Material {
     /// The image its colour is multiplied by where its surfaces have texture coordinates
     /// (`Scene::textures`): OBJ's `map_Kd`, glTF's `baseColorTexture`.
     pub texture: Option<u32>,
+    /// The colour the scene's ambient light is multiplied by, where the material gives
+    /// its own (AFF's `fm`); `None`: `kd` times `color`, as NFF's `f` has it.
+    pub ambient: Option<Vec3>,
 }
 
 impl Material {
@@ -110,6 +113,7 @@ impl Material {
         ior: 1.0,
         emission: Vec3::ZERO,
         texture: None,
+        ambient: None,
     };
     /// Neutral grey given to a bare mesh rendered without a scene file.
     pub const NEUTRAL_GREY: Material = Material {
@@ -121,6 +125,7 @@ impl Material {
         ior: 1.0,
         emission: Vec3::ZERO,
         texture: None,
+        ambient: None,
     };
 }
 

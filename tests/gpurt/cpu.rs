@@ -162,6 +162,48 @@ fn shiny_sphere_adds_phong_highlight_and_reflected_background() {
     check_lit_sphere("0.3 0.8 0.4 0.6 0.3 20 0 0", &[DVec3::new(4.0, -5.0, 6.0)]);
 }
 
+/// AFF's `fm` gives a material its own ambient colour: under ambient light alone every
+/// pixel of the ball is the scene's ambient times that colour, to the bit, on the CPU and
+/// on the GPU (not its diffuse colour, which NFF's `f` would use).
+#[test]
+fn an_fm_ambient_colour_is_the_ambient_term_on_both_backends() {
+    let scene = parse(
+        "b 0 0 0\n\
+         v from 0 -6 0 at 0 0 0 up 0 0 1 angle 30 hither 0.1 resolution 32 32\n\
+         am 0.5 0.5 0.5\n\
+         fm 0.2 0.1 0.05  0.9 0.9 0.9  0 0 0  1 0 1\n\
+         s 0 0 0 1\n",
+    );
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let expected = (Vec3::splat(0.5) * Vec3::new(0.2, 0.1, 0.05)).to_array();
+    let buffers = pack::pack(scene.clone()).unwrap();
+    let globals = frame::globals(&buffers, &RenderOptions::for_camera(&scene.camera));
+    let gpu = crate::common::versus::gpu();
+    let mut films = vec![(
+        "cpu",
+        crate::common::versus::render_on(&buffers, &globals, None),
+    )];
+    if let Some(g) = gpu {
+        films.push((
+            "gpu",
+            crate::common::versus::render_on(&buffers, &globals, Some(g)),
+        ));
+    }
+    for (backend, film) in films {
+        let ball: Vec<[f32; 3]> = (0..32)
+            .flat_map(|y| (0..32).map(move |x| (x, y)))
+            .map(|(x, y)| film.get(x, y))
+            .filter(|p| p != &[0.0; 3])
+            .collect();
+        assert!(ball.len() > 100, "{backend}: {} ball pixels", ball.len());
+        assert!(
+            ball.iter().all(|p| p == &expected),
+            "{backend}: {:?}",
+            &ball[..3]
+        );
+    }
+}
+
 /// A floor quad under a sphere lit from straight above: floor points whose segment to the
 /// light passes through the sphere get exactly the ambient term; the others, Lambert.
 #[test]
@@ -179,7 +221,7 @@ fn shadowed_floor_gets_exactly_the_ambient_term() {
     );
     let floor = scene.materials[0];
     // The renderer's own f32 product, so "exactly" can be checked bit for bit.
-    let ambient = Vec3::splat(DEFAULT_AMBIENT) * floor.kd * floor.color;
+    let ambient = Vec3::splat(DEFAULT_AMBIENT) * (floor.kd * floor.color);
     let kd_c = floor.kd as f64 * d(floor.color);
     let film = render(&scene);
     let cam = Camera::of(&scene);

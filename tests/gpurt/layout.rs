@@ -64,7 +64,9 @@ fn rust_layouts() -> Vec<Layout> {
         layout!(
             "Material",
             GpuMaterial,
-            [color, kd, ks, shine, t, ior, emission, texture]
+            [
+                color, kd, ks, shine, t, ior, emission, texture, ambient, _pad
+            ]
         ),
         layout!("Light", GpuLight, [pos, kind, u, nu, v, nv, color, first]),
         layout!(

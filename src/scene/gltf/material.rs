@@ -172,5 +172,6 @@ pub fn whitted(m: &gltf::Material) -> Material {
             }
         }),
         texture: None,
+        ambient: None,
     }
 }

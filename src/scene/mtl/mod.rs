@@ -93,6 +93,7 @@ impl Block {
             ior: if glass { self.ni } else { 1.0 },
             emission: self.ke,
             texture: None,
+            ambient: None,
         }
     }
 }

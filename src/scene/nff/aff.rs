@@ -232,9 +232,8 @@ impl Parser<'_> {
     }
 
     /// `fm ambient(rgb) diffuse(rgb) specular(rgb) shine T ior`: the material's colour is
-    /// the diffuse colour; the specular colour's largest part is the specular weight (the
-    /// model's highlights are white); the ambient colour is not read (the model's
-    /// ambient term takes the diffuse colour), with a warning where it would differ.
+    /// the diffuse colour, its ambient colour the ambient colour; the specular colour's
+    /// largest part is the specular weight (the model's highlights are white).
     pub(super) fn fill_material(&mut self, tok: &Token) -> Result<()> {
         let ambient = self.lx.vec3("ambient colour")?;
         let diffuse = self.lx.vec3("diffuse colour")?;
@@ -261,12 +260,7 @@ impl Parser<'_> {
                 "a coloured specular colour is read as white highlights of its largest part",
             );
         }
-        if ambient != Vec3::ZERO && ambient != diffuse {
-            self.warn_once(
-                tok,
-                "'fm' ambient colours are not read: the ambient term takes the diffuse colour",
-            );
-        }
+        let ambient = self.hold3(tok, "ambient colour", ambient, 1.0);
         self.set_material(Material {
             color: diffuse,
             kd: 1.0,
@@ -276,6 +270,7 @@ impl Parser<'_> {
             ior: if t > 0.0 { ior } else { 1.0 },
             emission: Vec3::ZERO,
             texture: None,
+            ambient: Some(ambient),
         });
         Ok(())
     }

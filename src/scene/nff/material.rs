@@ -88,6 +88,7 @@ impl Parser<'_> {
             ior: if t > 0.0 { ior } else { 1.0 },
             emission: Vec3::ZERO,
             texture: None,
+            ambient: None,
         };
         self.set_material(m);
         Ok(())

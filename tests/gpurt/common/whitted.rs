@@ -235,7 +235,8 @@ impl<'a> Whitted<'a> {
         let entering = hit.normal.dot(dir) < 0.0;
         let n = if entering { hit.normal } else { -hit.normal };
         let above = p + self.eps * n;
-        let mut colour = self.ambient * kd_c;
+        // The material's own ambient colour (AFF's `fm`), else Kd times its colour.
+        let mut colour = self.ambient * m.ambient.map_or(kd_c, d);
         // An emissive surface is seen with its radiance from its front.
         if entering {
             colour += d(m.emission);

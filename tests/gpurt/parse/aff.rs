@@ -168,7 +168,7 @@ fn aff_meshes_materials_and_includes_are_read() {
     .unwrap();
     std::fs::write(d.join("fine.aff"), "s 0 0 0 1\n").unwrap();
     let src = format!(
-        "{VIEW}fm 0 0 0  0.5 0.25 0.1  0.6 0.6 0.6  30 0 1\nd 1\nxs 1 1 1 0 0 1 0 0 0 5 {{\n i 1 part.aff\n}}\ni 2 fine.aff\n"
+        "{VIEW}fm 0.1 0.05 0  0.5 0.25 0.1  0.6 0.6 0.6  30 0 1\nd 1\nxs 1 1 1 0 0 1 0 0 0 5 {{\n i 1 part.aff\n}}\ni 2 fine.aff\n"
     );
     let scene = gpurt::scene::nff::parse(src.as_bytes(), "t.aff", &d).unwrap();
     assert_eq!(scene.triangles.len(), 2, "the mesh, placed by its block");
@@ -179,8 +179,14 @@ fn aff_meshes_materials_and_includes_are_read() {
     );
     let m = scene.materials[scene.triangles[0].material.0 as usize];
     assert_eq!(
-        (m.color, m.kd, m.ks, m.shine),
-        (Vec3::new(0.5, 0.25, 0.1), 1.0, 0.6, 30.0)
+        (m.color, m.kd, m.ks, m.shine, m.ambient),
+        (
+            Vec3::new(0.5, 0.25, 0.1),
+            1.0,
+            0.6,
+            30.0,
+            Some(Vec3::new(0.1, 0.05, 0.0))
+        )
     );
 }
 

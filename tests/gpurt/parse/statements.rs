@@ -72,6 +72,7 @@ fn materials_default_sharing_and_zero_ior() {
         ior: 1.0,
         emission: Vec3::ZERO,
         texture: None,
+        ambient: None,
     };
     assert_eq!(Material::DEFAULT, default);
     let m = |i: usize| s.materials[s.spheres[i].material.0 as usize];
@@ -88,6 +89,7 @@ fn materials_default_sharing_and_zero_ior() {
             ior: 1.0,
             emission: Vec3::ZERO,
             texture: None,
+            ambient: None,
         }
     );
     let cone_m = s.materials[s.cones[0].material.0 as usize];
