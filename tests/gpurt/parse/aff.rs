@@ -342,3 +342,86 @@ fn lenient_reads_what_barts_scenes_hold() {
     let xs: Vec<f32> = at.spheres.iter().map(|s| s.center.x).collect();
     assert!(xs.contains(&2.0) && xs.contains(&5.0), "{xs:?}");
 }
+
+/// A frame packed with the still part's tree kept and the moving part's refitted holds the
+/// same triangles as the whole scene packed anew: each with its own corners, shading
+/// normals and texture coordinates, however the two parts' slots were renumbered when
+/// joined (both parts have normals and coordinates here).
+#[test]
+fn a_frame_with_its_still_tree_kept_holds_what_a_whole_pack_holds() {
+    use gpurt::pack::SceneBuffers;
+    use gpurt::pack::frames::{FramePacker, FrameTree, TreeMode};
+    use gpurt::scene::FlatScene;
+
+    let d = crate::common::workdir("aff-frames");
+    std::fs::write(d.join("wood.ppm"), "P3\n2 1\n255\n255 0 0  0 0 255\n").unwrap();
+    // Two textured patches (corners, normals, coordinates), one still and one in a
+    // moving block, and a plain mesh with normals in each part.
+    let patch = |z: f32| {
+        format!("ttp wood.ppm\n0 0 {z} 0 0 1 0 0\n1 0 {z} 0 0.6 0.8 1 0\n0 1 {z} 0.6 0 0.8 0 1\n")
+    };
+    let mesh = |z: f32| {
+        format!(
+            "m vertices 3\n0 0 {z}\n1 0 {z}\n0 1 {z}\nnormals 3\n0 0 1\n0 1 0\n1 0 0\ntriangles 1\n0 1 2 0 1 2\n"
+        )
+    };
+    let src = format!(
+        "{VIEW}a 0 1 4\nf 1 1 1 1 0 1 0 1\n{}{}x spin {{\n{}{}}}\n\
+         k spin {{\n transl 4\n -1 0 0 0 0 0 0\n 0 0 0 0 0 0 0\n 1 2 0 0 0 0 0\n 2 2 0 0 0 0 0\n}}\n",
+        patch(0.0),
+        mesh(1.0),
+        mesh(2.0),
+        patch(3.0),
+    );
+    let mut scene = gpurt::scene::nff::parse(src.as_bytes(), "t.aff", &d).unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let animation = *scene.animation.take().unwrap();
+    let still = FlatScene::from_scene(scene);
+    // Every triangle as the bits of its corners (first vertex and edges), normals and
+    // coordinates, sorted: what a frame holds, whatever its order.
+    let triangles = |b: &SceneBuffers| {
+        let mut all: Vec<Vec<u32>> = b
+            .prims
+            .iter()
+            .map(|p| {
+                let mut v: Vec<f32> = [p.p0, p.p1, p.p2]
+                    .iter()
+                    .flat_map(|c| c.to_array())
+                    .collect();
+                if p.f1 >= 0.0 {
+                    let n = b.tri_normals[p.f1 as usize];
+                    v.extend([n.n0, n.n1, n.n2].iter().flat_map(|c| c.to_array()));
+                }
+                if p.f0 >= 0.0 {
+                    let uv = b.tri_uvs[p.f0 as usize - b.tri_normals.len()];
+                    v.extend([uv.uv0, uv.uv1, uv.uv2].iter().flat_map(|c| c.to_array()));
+                }
+                v.into_iter().map(f32::to_bits).collect()
+            })
+            .collect();
+        all.sort();
+        all
+    };
+    let packer = |mode| FramePacker::new(still.clone(), animation.clone(), true, 1, 4, mode);
+    let (mut whole, mut kept) = (
+        packer(TreeMode::Whole).unwrap(),
+        packer(TreeMode::Refit).unwrap(),
+    );
+    for (frame, t) in [0.0, 0.5, 1.0].into_iter().enumerate() {
+        let (a, how_a) = whole.pack(t).unwrap();
+        let (b, how_b) = kept.pack(t).unwrap();
+        assert_eq!(how_a, FrameTree::Whole);
+        let expected = if frame == 0 {
+            FrameTree::Rebuilt
+        } else {
+            FrameTree::Refitted(0.0)
+        };
+        assert_eq!(
+            std::mem::discriminant(&how_b),
+            std::mem::discriminant(&expected)
+        );
+        assert_eq!(a.prims.len(), 4);
+        assert_eq!(triangles(&a), triangles(&b), "t = {t}");
+        assert_eq!(a.bounds, b.bounds);
+    }
+}
