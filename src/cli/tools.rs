@@ -74,16 +74,26 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     let camera = read.camera();
     let samples = u64::from(args.width.unwrap_or(camera.width))
         * u64::from(args.height.unwrap_or(camera.height));
-    // An animated scene plays from its first frame, which is the still image's.
+    // An animated scene plays from its first frame, which is the still image's, packed
+    // by the playback's packer (which builds the still part's tree once).
     let frames = read
         .animation()
         .and_then(|a| a.range)
         .map_or(1, |r| r.frames);
-    let playback = read.frames(samples, frames.into())?.and_then(Playback::new);
-    let Prepared {
-        buffers, warnings, ..
-    } = run::pack(read.still(None)?, samples)?;
-    print_warnings(&warnings);
+    let mut playback = read.frames(samples, frames.into())?.and_then(Playback::new);
+    let buffers = match &mut playback {
+        Some(p) => {
+            print_warnings(read.warnings());
+            p.buffers()?.0
+        }
+        None => {
+            let Prepared {
+                buffers, warnings, ..
+            } = run::pack(read.still(None)?, samples)?;
+            print_warnings(&warnings);
+            buffers
+        }
+    };
     print_threads(args.stats);
     window::run(
         buffers,

@@ -184,20 +184,22 @@ impl FramePacker {
             still.uvs.len() + moving.uvs(),
         )?;
         let bounds = still.bounds.union(moving.bounds());
-        let (records, normals, uvs) = join_records(still, moving);
+        let (mut records, normals, uvs) = join_records(still, moving);
+        // Listed before the moving part is put in its tree's order, so that the emitters'
+        // order (which their samples follow) does not depend on the tree.
         let emitters = emitters::emitters(&records, &scene.materials);
-        let mut records = records;
         let n_still = still.records.len();
-        let how = self.moving_tree(&mut records[n_still..], shown)?;
+        let mut how = self.moving_tree(&mut records[n_still..], shown)?;
         let still = self.still.as_ref().expect("checked above");
         let empty = FlatBvh::default();
         let moved = self.moving.as_ref().map_or(&empty, |m| &m.tree);
         let mut tree = join(&still.tree, n_still as u32, moved);
+        // The build of the larger part, for `--stats`.
         let mut quality = match &self.moving {
             Some(m) if moved.order.len() > n_still => m.quality,
             _ => still.quality,
         };
-        let mut how = how;
+        // Each part fits the walks' stack, but one more level may not: then the whole.
         if tree.depth >= TRAVERSAL_STACK {
             quality = Quality::chosen(records.len(), self.samples).map_err(Error::Render)?;
             tree = build_tree(&records, quality);
