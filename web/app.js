@@ -1,8 +1,9 @@
 // The page: a scene from a file (dropped or opened) or from ?scene=URL, traced
 // progressively on the page's WebGPU device by the library (gpurt_web.wasm), drawn into a
-// 2D canvas from the library's 8-bit image. With ?scene=URL it renders once and puts the
-// result in <img id="gpurt-result"> (or the error in <pre id="gpurt-error">) and the camera
-// as an NFF `v` block in <pre id="gpurt-view">, for tests.
+// 2D canvas from the library's 8-bit image; an animated scene (AFF) plays or steps through
+// its frames. With ?scene=URL it renders once (&frame=N: that frame) and puts the result
+// in <img id="gpurt-result"> (or the error in <pre id="gpurt-error">) and the camera as
+// an NFF `v` block in <pre id="gpurt-view">, for tests.
 import init, { Session } from "./gpurt_web.js";
 
 const $ = (id) => document.getElementById(id);
@@ -36,6 +37,14 @@ function base64(bytes) {
 let session = null;
 let generation = 0; // bumps whenever the image starts again; a stale loop stops
 let running = false;
+// Calls on the session asked for by the page's controls. The session is busy while a
+// sample is traced (a call then is refused: "recursive use of an object"), so the run loop
+// makes them between samples (`later`).
+let pending = [];
+// An animated scene's frames and the one shown.
+let frameCount = 0;
+let shownFrame = 0;
+let playing = false; // an animation moves on a frame once each frame has a sample
 
 function draw() {
   const [w, h] = session.size();
@@ -56,12 +65,18 @@ async function run() {
   running = true;
   try {
     for (;;) {
+      for (const call of pending.splice(0)) call();
       const mine = generation;
       const more = await session.step();
       draw();
       const [done, spp] = session.samples();
       status(`${done} / ${spp} samples, ${session.rays()} rays, on ${session.adapter()}`);
-      if (mine === generation && !more) break;
+      if (playing && done >= 1) {
+        const next = (shownFrame + 1) % frameCount;
+        pending.push(() => showFrame(next));
+      } else if (mine === generation && !more && pending.length === 0) {
+        break;
+      }
       await new Promise((r) => requestAnimationFrame(r));
     }
   } catch (e) {
@@ -74,6 +89,50 @@ async function run() {
 function restart() {
   generation += 1;
   run();
+}
+
+// `call` on the session, made by the run loop before its next sample, and the image
+// started again.
+function later(call) {
+  pending.push(call);
+  restart();
+}
+
+// `call` on the session, made by the run loop before its next sample (or at once, when
+// the image is complete), the image going on as it was.
+function soon(call) {
+  pending.push(call);
+  run();
+}
+
+// Shows frame `i` of an animated scene, and the slider and the number with it (from the
+// run loop, or while nothing is traced).
+function showFrame(i) {
+  session.set_frame(i);
+  shownFrame = i;
+  generation += 1;
+  $("frame").value = String(i);
+  $("frame-number").textContent = `${i} / ${frameCount}`;
+}
+
+// The animation's controls, shown for a scene with frames (after a load, while nothing
+// is traced).
+function animationControls() {
+  frameCount = session.frames();
+  shownFrame = 0;
+  playing = false;
+  $("animation").hidden = frameCount === 0;
+  $("play").textContent = "Play (space)";
+  $("frame").max = String(Math.max(frameCount - 1, 0));
+  $("frame").value = "0";
+  $("frame-number").textContent = frameCount ? `0 / ${frameCount}` : "";
+}
+
+function togglePlay() {
+  if (frameCount === 0) return;
+  playing = !playing;
+  $("play").textContent = playing ? "Pause (space)" : "Play (space)";
+  restart();
 }
 
 // A number from the URL or a box: a whole number, or an error naming the parameter
@@ -91,17 +150,18 @@ function applyOptions(shading = $("shading").value) {
   session.set_options(n("width"), n("height"), n("spp"), n("depth"), shading);
 }
 
-async function loadBytes(name, bytes) {
+function loadBytes(name, bytes) {
   clearError();
   session.load(name, bytes);
   applyOptions();
+  animationControls();
 }
 
 async function interactive() {
   const open = async (file) => {
     try {
-      await loadBytes(file.name, new Uint8Array(await file.arrayBuffer()));
-      restart();
+      const bytes = new Uint8Array(await file.arrayBuffer());
+      later(() => loadBytes(file.name, bytes));
     } catch (e) {
       showError(e);
     }
@@ -117,7 +177,7 @@ async function interactive() {
   });
   for (const id of ["width", "height", "spp", "depth", "shading"]) {
     $(id).addEventListener("change", () => {
-      try { applyOptions(); restart(); } catch (e) { showError(e); }
+      later(applyOptions);
     });
   }
   const canvas = $("canvas");
@@ -126,29 +186,36 @@ async function interactive() {
   canvas.addEventListener("pointerup", () => { last = null; });
   canvas.addEventListener("pointermove", (e) => {
     if (!last) return;
-    session.drag(e.clientX - last[0], e.clientY - last[1], e.shiftKey);
+    const [dx, dy, pan] = [e.clientX - last[0], e.clientY - last[1], e.shiftKey];
+    later(() => session.drag(dx, dy, pan));
     last = [e.clientX, e.clientY];
-    restart();
   });
   canvas.addEventListener("wheel", (e) => {
     e.preventDefault();
-    session.dolly(-Math.sign(e.deltaY));
-    restart();
+    const notches = -Math.sign(e.deltaY);
+    later(() => session.dolly(notches));
   }, { passive: false });
-  const showView = () => { $("view").hidden = false; $("view").textContent = session.view_block(); };
+  const showView = () => soon(() => { $("view").hidden = false; $("view").textContent = session.view_block(); });
   $("camera").addEventListener("click", showView);
-  document.addEventListener("keydown", (e) => { if (e.key === "c" || e.key === "C") showView(); });
-  $("reset").addEventListener("click", () => { session.reset(); restart(); });
-  $("download").addEventListener("click", () => {
-    try {
-      const a = document.createElement("a");
-      a.href = URL.createObjectURL(new Blob([session.png()], { type: "image/png" }));
-      a.download = "gpurt.png";
-      a.click();
-    } catch (e) {
-      showError(e);
+  document.addEventListener("keydown", (e) => {
+    if (e.key === "c" || e.key === "C") showView();
+    if (e.key === " " && e.target.tagName !== "INPUT" && e.target.tagName !== "BUTTON") {
+      e.preventDefault();
+      togglePlay();
     }
   });
+  $("play").addEventListener("click", togglePlay);
+  $("frame").addEventListener("input", () => {
+    const i = $("frame").value;
+    later(() => showFrame(whole("frame", i)));
+  });
+  $("reset").addEventListener("click", () => later(() => session.reset()));
+  $("download").addEventListener("click", () => soon(() => {
+    const a = document.createElement("a");
+    a.href = URL.createObjectURL(new Blob([session.png()], { type: "image/png" }));
+    a.download = "gpurt.png";
+    a.click();
+  }));
   status(`ready on ${session.adapter()}: open a scene`);
 }
 
@@ -166,6 +233,7 @@ async function scripted(params) {
   await loadBytes(name, new Uint8Array(await response.arrayBuffer()));
   // A <select> ignores a value it has no option for: the library checks the name.
   if (params.has("shading")) applyOptions(params.get("shading"));
+  if (params.has("frame")) session.set_frame(whole("frame", params.get("frame")));
   const pair = (key) => params.get(key).split(",").map(Number);
   if (params.has("orbit")) session.drag(...pair("orbit"), false);
   if (params.has("pan")) session.drag(...pair("pan"), true);

@@ -6,10 +6,11 @@ Chromium (WebGPU on SwiftShader, driven over the DevTools protocol) through
 under the GPU-vs-CPU limits (`gpurt diff`), with ray counts; the camera's moves and the
 `v` block it prints are checked against `gpurt --view`; the interactive page is driven
 with the browser's own input events (file input, a drag and a wheel notch on the canvas,
-the Camera and Download buttons, a dropped file) and its canvas held against the CPU's
-image; a bad scene must show the command line's `FILE:LINE:COL: message`, and bad numbers,
+the Camera and Download buttons, a dropped file, an animation's slider and space to play
+and pause) and its canvas held against the CPU's image; a bad scene must show the command line's `FILE:LINE:COL: message`, and bad numbers,
 a missing scene and a browser without WebGPU their own messages. A self-test proves the
-comparison fails on a perturbed image and on Phong's image for Blinn-Phong's. Needs web/dist (web/build.sh), the command line
+comparison fails on a perturbed image, on Phong's image for Blinn-Phong's, and on an
+animation's first frame for its twentieth. Needs web/dist (web/build.sh), the command line
 (target/debug/gpurt, or GPURT_CLI) and chromium; the SPD scenes in ../shared/scenes are
 used when there (required under CI=true). Prints `N passed, M failed`; exits 1 on a failure.
 """
@@ -87,6 +88,8 @@ CASES = [
     ("gen-1.nff", generated(1, 9), 37, 23, 3, 12),
     ("gen-2.nff", generated(2, 16), 29, 31, 2, 16, {"shading": "blinn-phong"}),
     ("spheres-blinn.nff", ROOT / "scenes" / "spheres.nff", 40, 30, 1, 5, {"shading": "blinn-phong"}),
+    # An animation's frame: its moving parts placed, its camera moved.
+    ("orbit.aff", ROOT / "scenes" / "orbit.aff", 40, 30, 2, 5, {"frame": "20"}),
 ]
 
 
@@ -209,9 +212,20 @@ def url_args(params):
     return "".join(f"&{k}={v}" for k, v in params.items())
 
 
-def cpu_args(params, view=None):
+def frame_time(scene, frame):
+    """The time of frame `frame` of the AFF `scene` (its `a start end frames`), computed as
+    the renderer does, and written so that it reads back as the same double: the page's
+    frame is the command line's `--time` (which prints the ray count a sequence does not)."""
+    start, end, frames = next(line.split()[1:4] for line in Path(scene).read_text().splitlines()
+                              if line.startswith("a "))
+    start, end, frames = float(start), float(end), int(frames)
+    return repr(start + (end - start) * frame / (frames - 1)) if frames > 1 else repr(start)
+
+
+def cpu_args(params, view=None, scene=None):
     """The command line's flags for the page's URL parameters (the camera moves aside)."""
     args = ["--shading", params["shading"]] if "shading" in params else []
+    args += ["--time", frame_time(scene, int(params["frame"]))] if "frame" in params else []
     return args + (["--view", view] if view else [])
 
 
@@ -298,7 +312,7 @@ def main():
                 view = OUT / f"{name}.view.nff"
                 view.write_text(html.unescape(block.group(1)))
             ref = OUT / f"{name}.cpu.png"
-            cpu_rays = cpu_render(scene, ref, w, h, spp, depth, *cpu_args(params, view))
+            cpu_rays = cpu_render(scene, ref, w, h, spp, depth, *cpu_args(params, view, scene))
             d = cli("diff", web, ref, check=False)
             assert d.returncode == 0, f"on {adapter}, beyond the GPU-vs-CPU limits:\n{d.stdout}{d.stderr}"
             assert abs(rays - cpu_rays) <= cpu_rays // 200, f"{rays} rays in the page, {cpu_rays} on the CPU"
@@ -337,10 +351,12 @@ def main():
             against the CPU's image); a drag on the canvas orbits the camera, and the
             Camera button prints the `v` block the CPU renders the same image from; a wheel
             notch dollies; Download saves the image shown; a file dropped on the page
-            replaces the scene."""
+            replaces the scene; an animated scene's slider shows the frame it is moved to,
+            and space plays the frames and pauses them."""
             w, h, spp, depth = 40, 30, 2, 5
             opened = serve_scene("opened.nff", ROOT / "scenes" / "mirrors.nff")
             dropped = serve_scene("dropped.nff", ROOT / "scenes" / "spheres.nff")
+            animated = serve_scene("animated.aff", ROOT / "scenes" / "orbit.aff")
             target = browser.send("Target.createTarget", url=base)["targetId"]
             s = browser.send("Target.attachToTarget", targetId=target, flatten=True)["sessionId"]
 
@@ -448,6 +464,39 @@ def main():
                     browser.send("Input.dispatchDragEvent", s, type=kind, x=x, y=y, data=data)
                 wait(complete, "rendering the dropped file")
                 matches_cpu(canvas("dropped.canvas.png"), dropped, "dropped.cpu.png")
+                assert js("document.getElementById('animation').hidden"), "frame controls for a still scene"
+
+                js(forget)
+                browser.send("DOM.setFileInputFiles", s, files=[str(animated)], nodeId=node)
+                wait(complete, "rendering the animated file")
+                assert not js("document.getElementById('animation').hidden"), "no frame controls"
+                js(forget)
+                js("(() => { const f = document.getElementById('frame'); f.value = '12';"
+                   " f.dispatchEvent(new Event('input')); })()")
+                wait(complete, "rendering frame 12")
+                matches_cpu(canvas("frame12.canvas.png"), animated, "frame12.cpu.png",
+                            "--time", frame_time(animated, 12))
+
+                def key(text):
+                    for kind in ("keyDown", "keyUp"):
+                        browser.send("Input.dispatchKeyEvent", s, type=kind, key=text,
+                                     code="Space", text=text, windowsVirtualKeyCode=32)
+
+                number = "document.getElementById('frame-number').textContent"
+                # Space on a focused button presses it: the page plays on space elsewhere.
+                js("document.activeElement && document.activeElement.blur()")
+                key(" ")
+                wait(f"!{number}.startsWith('12 /') && !{number}.startsWith('13 /')", "playing")
+                key(" ")
+                try:
+                    wait("document.getElementById('play').textContent.startsWith('Play')", "pausing")
+                except AssertionError as e:
+                    play = js("document.getElementById('play').textContent")
+                    focus = js("document.activeElement.tagName")
+                    raise AssertionError(f"{e}; play {play!r}, focus {focus!r}, frame {js(number)!r}") from e
+                paused = js(number)
+                wait(complete, "finishing the paused frame")
+                assert js(number) == paused, f"paused at {paused}, then {js(number)}"
             finally:
                 browser.send("Target.closeTarget", targetId=target)
 
@@ -469,6 +518,11 @@ def main():
             cpu_render(scene, other, w, h, spp, depth, "--shading", "phong")
             diff = cli("diff", web, other, check=False)
             assert diff.returncode == 1, f"Phong passes for Blinn-Phong: gpurt diff exited {diff.returncode}:\n{diff.stdout}"
+            # A page that ignored frame=20 would show the first frame: it fails too.
+            web, scene, w, h, spp, depth = rendered["orbit.aff"]
+            cpu_render(scene, other, w, h, spp, depth, "--time", frame_time(scene, 0))
+            diff = cli("diff", web, other, check=False)
+            assert diff.returncode == 1, f"frame 0 passes for frame 20: gpurt diff exited {diff.returncode}:\n{diff.stdout}"
 
         check("self-test: a perturbed render fails the comparison", self_test)
 
@@ -513,6 +567,15 @@ def main():
             shows(f"{scene}&width=8&height=8&depth=99", "depth must be 1 to 16, got 99")
 
         check("bad numbers in the URL are errors naming the parameter", bad_numbers)
+
+        def bad_frames():
+            serve_scene("orbit.aff", ROOT / "scenes" / "orbit.aff")
+            shows("scene=scenes/orbit.aff&width=8&height=8&frame=48",
+                  "frame 48 is outside the animation, whose 48 frames are 0..47")
+            shows("scene=scenes/spheres.nff&width=8&height=8&frame=1",
+                  "nothing moves in this scene: it has no frames")
+
+        check("a frame outside the animation, or of a still scene, is an error", bad_frames)
         check("a scene the server does not have shows its HTTP status",
               lambda: shows("scene=scenes/missing.nff", "scenes/missing.nff: HTTP 404"))
         def gltf_needs_its_buffer():

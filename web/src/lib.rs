@@ -2,8 +2,10 @@
 //! `wasm32-unknown-unknown`. It reads a dropped or fetched scene with the library's
 //! readers (`scene::io::decompress`, `scene::parse`), packs it, and traces it with the
 //! WGSL renderer on the page's WebGPU device, one sample per step into an `Accumulator`
-//! (progressive, as `gpurt view`), moving the camera with the viewer's `OrbitCamera`. It
-//! adds no rendering of its own; `index.html` and `app.js` are the page.
+//! (progressive, as `gpurt view`), moving the camera with the viewer's `OrbitCamera`. An
+//! animated scene (AFF) shows any of its frames, packed as the command line's sequences
+//! pack them (`pack::frames`). It adds no rendering of its own; `index.html` and `app.js`
+//! are the page.
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -14,8 +16,10 @@ use gpurt::frame::{self, Overrides, RenderOptions, Shading};
 use gpurt::gpu::{self, GpuContext, GpuRenderer, GpuScene};
 use gpurt::gpu_types::GpuGlobals;
 use gpurt::limits::{MAX_DEPTH, MAX_FILE_BYTES, MAX_IMAGE_SIDE, MAX_SPP};
+use gpurt::pack::frames::{FramePacker, TreeMode};
 use gpurt::pack::{self, SceneBuffers};
-use gpurt::scene::{self, io::FileKind};
+use gpurt::scene::animation::{Animation, TimeRange};
+use gpurt::scene::{self, FlatScene, io::FileKind};
 use gpurt::view::camera::{DragMode, Input, Key, OrbitCamera};
 use wasm_bindgen::prelude::*;
 
@@ -40,6 +44,14 @@ struct Loaded {
     moved: bool,
     /// The scene on the device and the frame it was last made ready for.
     uploaded: Option<(GpuGlobals, GpuScene)>,
+    /// An animated scene's frames and the one shown; `None` for a still scene.
+    frames: Option<Frames>,
+}
+
+struct Frames {
+    packer: FramePacker,
+    range: TimeRange,
+    shown: u32,
 }
 
 /// The page's renderer: one WebGPU device, and the scene it shows.
@@ -95,17 +107,44 @@ impl Session {
         let path = Path::new(name);
         let bytes = scene::io::decompress(bytes, path, MAX_FILE_BYTES).map_err(js)?;
         // A page has no files around the scene: an NFF `mesh` include is an error.
-        let scene = scene::parse(&bytes, FileKind::of(path), name, Path::new("/")).map_err(js)?;
-        let orbit = OrbitCamera::new(scene.camera.clone());
+        let mut scene =
+            scene::parse(&bytes, FileKind::of(path), name, Path::new("/")).map_err(js)?;
         let samples = RenderOptions::for_camera(&scene.camera)
             .with_overrides(&self.overrides)
             .samples();
-        let buffers = pack::pack_for(scene, samples).map_err(js)?;
+        // An animation with frames to show plays from its first; any other scene (one
+        // that moves without a time range too) packs as the command line packs it.
+        let plays = |a: &Animation| !a.is_still() && a.range.is_some();
+        let (buffers, frames) = match scene.animation.take_if(|a| plays(a)) {
+            Some(animation) => {
+                let range = animation.range.expect("plays");
+                let still = FlatScene::from_scene(scene);
+                let mut packer = FramePacker::new(
+                    still,
+                    *animation,
+                    true,
+                    samples,
+                    range.frames.into(),
+                    TreeMode::Auto,
+                )
+                .map_err(js)?;
+                let (buffers, _) = packer.pack(range.time(0)).map_err(js)?;
+                let frames = Frames {
+                    packer,
+                    range,
+                    shown: 0,
+                };
+                (buffers, Some(frames))
+            }
+            None => (pack::pack_for(scene, samples).map_err(js)?, None),
+        };
+        let orbit = OrbitCamera::new(buffers.camera.clone());
         self.loaded = Some(Loaded {
             buffers,
             orbit,
             moved: false,
             uploaded: None,
+            frames,
         });
         self.restart();
         Ok(())
@@ -142,6 +181,43 @@ impl Session {
             shading: Some(shading),
             ..Overrides::default()
         };
+        self.restart();
+        Ok(())
+    }
+
+    /// The frames of an animated scene (AFF), 0 for a still one.
+    pub fn frames(&self) -> u32 {
+        let frames = self.loaded.as_ref().and_then(|l| l.frames.as_ref());
+        frames.map_or(0, |f| f.range.frames)
+    }
+
+    /// The frame of an animated scene shown (0 for a still one).
+    pub fn frame(&self) -> u32 {
+        let frames = self.loaded.as_ref().and_then(|l| l.frames.as_ref());
+        frames.map_or(0, |f| f.shown)
+    }
+
+    /// Shows frame `frame` (from 0, as BART counts them) of an animated scene: its moving
+    /// parts placed at the frame's time, and the view following the animation's camera
+    /// unless it was moved away; the image starts again.
+    pub fn set_frame(&mut self, frame: u32) -> Result<(), JsValue> {
+        let loaded = self.loaded.as_mut().ok_or_else(|| js("no scene loaded"))?;
+        let frames = loaded
+            .frames
+            .as_mut()
+            .ok_or_else(|| js("nothing moves in this scene: it has no frames"))?;
+        let n = frames.range.frames;
+        if frame >= n {
+            return Err(js(format!(
+                "frame {frame} is outside the animation, whose {n} frames are 0..{}",
+                n - 1
+            )));
+        }
+        let (buffers, _) = frames.packer.pack(frames.range.time(frame)).map_err(js)?;
+        frames.shown = frame;
+        loaded.orbit.follow(buffers.camera.clone());
+        loaded.buffers = buffers;
+        loaded.uploaded = None;
         self.restart();
         Ok(())
     }
