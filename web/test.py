@@ -7,8 +7,9 @@ under the GPU-vs-CPU limits (`gpurt diff`), with ray counts; the camera's moves 
 `v` block it prints are checked against `gpurt --view`; the interactive page is driven
 with the browser's own input events (file input, a drag and a wheel notch on the canvas,
 the Camera and Download buttons, a dropped file, an animation's slider and space to play
-and pause) and its canvas held against the CPU's image; a bad scene must show the command line's `FILE:LINE:COL: message`, and bad numbers,
-a missing scene and a browser without WebGPU their own messages. A self-test proves the
+and pause) and its canvas held against the CPU's image; a bad scene must show the command
+line's `FILE:LINE:COL: message`, and bad numbers, a missing scene and a browser without
+WebGPU their own messages. A self-test proves the
 comparison fails on a perturbed image, on Phong's image for Blinn-Phong's, and on an
 animation's first frame for its twentieth. Needs web/dist (web/build.sh), the command line
 (target/debug/gpurt, or GPURT_CLI) and chromium; the SPD scenes in ../shared/scenes are
