@@ -84,7 +84,7 @@ pub fn view(args: ViewArgs, launch: Instant) -> gpurt::Result<ExitCode> {
     let buffers = match &mut playback {
         Some(p) => {
             print_warnings(read.warnings());
-            p.buffers()?.0
+            p.buffers()?
         }
         None => {
             let Prepared {

@@ -3,7 +3,7 @@
 //! each frame as soon as its first pass is traced, then moves to the next, looping.
 
 use crate::pack::SceneBuffers;
-use crate::pack::frames::{FramePacker, FrameTree};
+use crate::pack::frames::FramePacker;
 use crate::scene::animation::TimeRange;
 use crate::util::error::Result;
 
@@ -43,10 +43,10 @@ impl Playback {
         self.frame = (i64::from(self.frame) + by).rem_euclid(n) as u32;
     }
 
-    /// The current frame's scene, packed, and how its tree was made.
-    pub fn buffers(&mut self) -> Result<(SceneBuffers, FrameTree)> {
+    /// The current frame's scene, packed.
+    pub fn buffers(&mut self) -> Result<SceneBuffers> {
         let t = self.time();
-        self.packer.pack(t)
+        Ok(self.packer.pack(t)?.0)
     }
 
     /// For the title: `frame 12/48, t 0.511, playing`.
@@ -86,7 +86,7 @@ mod tests {
         p.step(2);
         assert_eq!((p.frame(), p.time()), (1, 0.5));
         p.step(3);
-        let (b, _) = p.buffers().unwrap();
+        let b = p.buffers().unwrap();
         assert_eq!(b.prims.len(), 1);
         assert!(p.describe().starts_with("frame 4/5, t 2.000, paused"));
     }

@@ -313,7 +313,7 @@ impl App {
         };
         playback.step(by);
         let buffers = match playback.buffers() {
-            Ok((b, _)) => Arc::new(b),
+            Ok(b) => Arc::new(b),
             Err(e) => return self.fail(e, event_loop),
         };
         self.camera.follow(buffers.camera.clone());

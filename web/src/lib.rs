@@ -187,14 +187,12 @@ impl Session {
 
     /// The frames of an animated scene (AFF), 0 for a still one.
     pub fn frames(&self) -> u32 {
-        let frames = self.loaded.as_ref().and_then(|l| l.frames.as_ref());
-        frames.map_or(0, |f| f.range.frames)
+        self.animation().map_or(0, |f| f.range.frames)
     }
 
     /// The frame of an animated scene shown (0 for a still one).
     pub fn frame(&self) -> u32 {
-        let frames = self.loaded.as_ref().and_then(|l| l.frames.as_ref());
-        frames.map_or(0, |f| f.shown)
+        self.animation().map_or(0, |f| f.shown)
     }
 
     /// Shows frame `frame` (from 0, as BART counts them) of an animated scene: its moving
@@ -321,6 +319,11 @@ impl Session {
 }
 
 impl Session {
+    /// The loaded scene's frames, if it is animated.
+    fn animation(&self) -> Option<&Frames> {
+        self.loaded.as_ref()?.frames.as_ref()
+    }
+
     /// The frame's options: the scene's resolution and the defaults, with the page's
     /// settings over them.
     fn options(&self) -> Option<RenderOptions> {
