@@ -72,8 +72,8 @@ async function run() {
       const [done, spp] = session.samples();
       status(`${done} / ${spp} samples, ${session.rays()} rays, on ${session.adapter()}`);
       if (playing && done >= 1) {
-        const next = (shownFrame + 1) % frameCount;
-        pending.push(() => showFrame(next));
+        // Unless paused before the loop comes round to it.
+        pending.push(() => playing && showFrame((shownFrame + 1) % frameCount));
       } else if (mine === generation && !more && pending.length === 0) {
         break;
       }
