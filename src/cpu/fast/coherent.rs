@@ -1,18 +1,23 @@
 //! The CPU renderer's tiles traced with packets where rays are coherent: for each sample,
 //! the camera rays of a block of pixels (4x4, 4x2 or 2x2, as many as the kernels' lanes)
 //! go as one packet, then their shadow rays to each point or directional light as an
-//! occlusion packet, then their reflections off flat mirrors (planes and triangles
-//! without vertex normals) as another; every other ray (refraction, curved mirrors, area
-//! light samples, deeper bounces) is walked alone when the shading asks for it.
+//! occlusion packet, then the mirror rays off the surfaces they met as another, and those
+//! rays' shadow rays to each light as more (a `Stage` each: the camera rays, their
+//! mirror rays); every other ray (refraction, area light samples, deeper bounces) is
+//! walked alone when the shading asks for it. Mirror rays off curved surfaces diverge,
+//! but a block's still share most of their path through the tree: traced in packets,
+//! teapot-6's 1080p render took 15% less time and balls-4's 3% less (one run each way,
+//! alternating), and lanes that part from the rest go on alone (`packet::single`).
 //!
 //! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
 //! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
 //! the single-ray walk's to the bit (`packet`), and walks the others alone: the image is the
-//! per-pixel renderer's to the bit, and so are the rays counted. A camera or mirror ray is
-//! answered from a packet only when it is that very ray (origin, direction and interval,
-//! bit for bit); the camera ray's surface and light samples, which the shadow packets
-//! needed, are handed over as `shade::surface` and `shade::light_sample` made them there
-//! (the shading asks for them first, in the lights' order), not made a second time.
+//! per-pixel renderer's to the bit, and so are the rays counted. A ray is answered from a
+//! packet only when it is that very ray (origin, direction and interval, bit for bit);
+//! its surface and light samples, which the shadow packets needed, are handed over as
+//! `shade::surface` and `shade::light_sample` made them there (the shading asks for the
+//! surface of the ray it traced last, then for the light samples in the lights' order),
+//! not made a second time.
 
 use std::ops::Range;
 
@@ -52,9 +57,9 @@ impl<T: Copy> Answer<T> {
     }
 }
 
-/// What a point or directional light gives a camera ray's surface, worked out from its
-/// shadow packet: `light_sample`'s answer, with the node fetches of its shadow ray and
-/// whether the packet traced it (rather than a walk of its own).
+/// What a point or directional light gives a surface met by a packet's ray, worked out
+/// from its shadow packet: `light_sample`'s answer, with the node fetches of its shadow
+/// ray and whether the packet traced it (rather than a walk of its own).
 #[derive(Clone, Copy)]
 struct Lit {
     sample: Option<Vec3>,
@@ -62,34 +67,196 @@ struct Lit {
     packed: bool,
 }
 
-/// One pixel's rays traced beforehand: its camera ray and its mirror ray, and the camera
-/// ray's surface and what each point or directional light gives it. Any other ray is
+const UNLIT: Lit = Lit {
+    sample: None,
+    nodes: 0,
+    packed: false,
+};
+
+/// What a lane without a surface holds in a stage's array of surfaces.
+const NO_SURFACE: Surface = Surface {
+    point: Vec3::ZERO,
+    ng: Vec3::ZERO,
+    ns: Vec3::ZERO,
+    entering: false,
+    material: 0,
+};
+
+const NO_RAY: Ray = Ray {
+    origin: Vec3::ZERO,
+    dir: Vec3::X,
+};
+
+/// One generation of a block's rays (its camera rays, or their mirror rays) traced as a
+/// packet and shaded ahead of the pixels' own shading: each lane's ray and hit, the
+/// surface it met, and what each point or directional light gives that surface, its
+/// shadow rays traced as one packet a light. Kept from block to block and written in
+/// place: arrays built afresh for each block were copied through temporaries a field at a
+/// time, and the wide loads after the narrow stores stalled (a tenth of teapot-6's
+/// render, by `perf`).
+struct Stage {
+    rays: [Ray; MAX_LANES],
+    tmin: f32,
+    /// The lanes holding a ray.
+    traced: u32,
+    hits: [Hit; MAX_LANES],
+    /// The lanes the packet answered (rather than walks of their own).
+    packed: u32,
+    /// The surfaces of the lanes in `met` (those whose ray met one).
+    surfaces: [Surface; MAX_LANES],
+    met: u32,
+    /// `lights.len() / MAX_LANES` a lane: one a point or directional light, in the
+    /// lights' order.
+    lights: Vec<Lit>,
+}
+
+impl Stage {
+    fn new(shadowed: usize) -> Self {
+        Stage {
+            rays: [NO_RAY; MAX_LANES],
+            tmin: 0.0,
+            traced: 0,
+            hits: [NO_HIT_AT; MAX_LANES],
+            packed: 0,
+            surfaces: [NO_SURFACE; MAX_LANES],
+            met: 0,
+            lights: vec![UNLIT; MAX_LANES * shadowed],
+        }
+    }
+
+    /// Traces the rays of `packet` (each from `tmin`), and keeps them with their hits.
+    fn trace(&mut self, b: &Bindings, kernels: &Kernels, packet: &Packet, tmin: f32) {
+        self.traced = packet.lanes();
+        self.tmin = tmin;
+        self.met = 0;
+        for k in lanes_of(self.traced) {
+            // Field by field: a copy whole read the ray back in loads that straddled the
+            // packet's stores.
+            let ray = packet.ray(k);
+            (self.rays[k].origin, self.rays[k].dir) = (ray.origin, ray.dir);
+        }
+        self.packed = if self.traced == 0 {
+            0
+        } else {
+            kernels.closest_hits(b, packet, &mut self.hits)
+        };
+    }
+
+    /// Finds the surfaces the rays met and lights them with each of the `shadowed` lights
+    /// (`packet` is the scratch for the shadow rays).
+    fn light(&mut self, b: &Bindings, kernels: &Kernels, shadowed: &[usize], packet: &mut Packet) {
+        self.met = 0;
+        for k in lanes_of(self.traced).filter(|&k| self.hits[k].prim != NO_PRIM) {
+            self.surfaces[k] = surface(b, &self.rays[k], &self.hits[k]);
+            self.met |= 1 << k;
+        }
+        if self.met == 0 {
+            return;
+        }
+        let dirs = self.rays.map(|ray| ray.dir);
+        let lit = Surfaces::new(b, (&self.surfaces, self.met), &self.hits, &dirs);
+        let mut light = [Vec3::ZERO; MAX_LANES];
+        let mut nodes = [0; MAX_LANES];
+        for (j, &li) in shadowed.iter().enumerate() {
+            packet.clear();
+            let rays = light_rays(b, &lit, &b.lights[li], packet);
+            let packed = if packet.lanes() == 0 {
+                0
+            } else {
+                kernels.transmissions(b, packet, &mut light, &mut nodes)
+            };
+            for k in lanes_of(self.met) {
+                self.lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
+                    // `light_sample`'s product, in its order.
+                    Lit {
+                        sample: Some(light[k] * rays.intensity * rays.term(k)),
+                        nodes: nodes[k],
+                        packed: packed & 1 << k != 0,
+                    }
+                } else {
+                    UNLIT
+                };
+            }
+        }
+    }
+
+    /// Lane `k`'s ray and hit, for `Known`, with its surface and lights where it met one.
+    fn ahead(&self, k: usize, shadowed: usize) -> Option<Ahead<'_>> {
+        (self.traced & 1 << k != 0).then(|| Ahead {
+            answer: Answer {
+                ray: self.rays[k],
+                tmin: self.tmin,
+                tmax: NO_HIT,
+                value: self.hits[k],
+                packed: self.packed & 1 << k != 0,
+            },
+            surface: (self.met & 1 << k != 0).then_some(&self.surfaces[k]),
+            lights: &self.lights[k * shadowed..(k + 1) * shadowed],
+        })
+    }
+}
+
+/// A hit that is none yet.
+const NO_HIT_AT: Hit = Hit {
+    t: 0.0,
+    prim: NO_PRIM,
+    u: 0.0,
+    v: 0.0,
+    cost: 0,
+    nodes: 0,
+};
+
+/// One ray of a pixel traced ahead, in a stage: its answer, and where it met a surface,
+/// the surface and its light samples.
+struct Ahead<'a> {
+    answer: Answer<Hit>,
+    surface: Option<&'a Surface>,
+    lights: &'a [Lit],
+}
+
+/// One pixel's rays traced beforehand (its camera ray and its mirror ray, with their
+/// surfaces and what each point or directional light gives them); any other ray is
 /// walked alone.
 struct Known<'a> {
-    eye: Option<Answer<Hit>>,
-    mirror: Option<Answer<Hit>>,
-    /// The camera ray's surface, for the first surface asked for (the camera ray's hit:
-    /// the shading asks for that ray first).
-    eye_surface: Option<&'a Surface>,
-    /// Its light samples, one a point or directional light in the lights' order, handed
-    /// out while the shading lights that surface (until it asks for the next surface).
-    eye_lights: &'a [Lit],
+    eye: Option<Ahead<'a>>,
+    mirror: Option<Ahead<'a>>,
+    /// The surface of the ray `closest_hit` answered last from a stage, with its light
+    /// samples: the shading asks for that ray's surface next.
+    next: Option<(&'a Surface, &'a [Lit])>,
+    /// The light samples of the surface being shaded, handed out in the lights' order
+    /// (until the shading asks for the next surface).
+    lights: &'a [Lit],
     /// Rays answered from packets, by kind.
     counts: RayCounts,
 }
 
+impl<'a> Known<'a> {
+    /// The answer to `ray` from `ahead`, where it is that very ray (taken: the shading
+    /// traces each ray once), its surface kept for `surface`.
+    fn answer(
+        ahead: &mut Option<Ahead<'a>>,
+        next: &mut Option<(&'a Surface, &'a [Lit])>,
+        (ray, tmin, tmax): (&Ray, f32, f32),
+    ) -> Option<(Hit, bool)> {
+        let answer = ahead.as_ref()?.answer.of(ray, tmin, tmax)?;
+        let a = ahead.take()?;
+        *next = a.surface.map(|s| (s, a.lights));
+        Some(answer)
+    }
+}
+
 impl Tracer for Known<'_> {
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
-        if let Some((hit, packed)) = self.eye.as_ref().and_then(|a| a.of(ray, tmin, tmax)) {
-            self.eye = None;
+        let asked = (ray, tmin, tmax);
+        if let Some((hit, packed)) = Known::answer(&mut self.eye, &mut self.next, asked) {
             self.counts.eye_packed += u64::from(packed);
             return hit;
         }
-        if let Some((hit, packed)) = self.mirror.as_ref().and_then(|a| a.of(ray, tmin, tmax)) {
-            self.mirror = None;
+        if let Some((hit, packed)) = Known::answer(&mut self.mirror, &mut self.next, asked) {
             self.counts.reflected_packed += u64::from(packed);
             return hit;
         }
+        self.next = None;
         Alone.closest_hit(b, ray, tmin, tmax)
     }
 
@@ -98,10 +265,13 @@ impl Tracer for Known<'_> {
     }
 
     fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
-        match self.eye_surface.take() {
-            Some(s) => *s,
+        match self.next.take() {
+            Some((s, lights)) => {
+                self.lights = lights;
+                *s
+            }
             None => {
-                self.eye_lights = &[];
+                self.lights = &[];
                 surface(b, ray, hit)
             }
         }
@@ -116,11 +286,11 @@ impl Tracer for Known<'_> {
         counts: &mut RayCounts,
     ) -> Option<Vec3> {
         if packed(light)
-            && let Some((lit, rest)) = self.eye_lights.split_first()
+            && let Some((lit, rest)) = self.lights.split_first()
         {
             // `light_sample` on the same surface, its shadow ray answered by the packet
             // (the images are the per-pixel renderer's to the bit: tests/gpurt/packet.rs).
-            self.eye_lights = rest;
+            self.lights = rest;
             if lit.sample.is_some() {
                 counts.shadow_nodes += u64::from(lit.nodes);
                 self.counts.shadow_packed += u64::from(lit.packed);
@@ -131,30 +301,12 @@ impl Tracer for Known<'_> {
     }
 }
 
-/// What a lane without a surface holds in the packet loop's array of surfaces.
-const NO_SURFACE: Surface = Surface {
-    point: Vec3::ZERO,
-    ng: Vec3::ZERO,
-    ns: Vec3::ZERO,
-    entering: false,
-    material: 0,
-};
-
 /// Pixels of a packet, `(columns, rows)`, for `lanes` lanes.
 fn block(lanes: usize) -> (u32, u32) {
     match lanes {
         16 => (4, 4),
         8 => (4, 2),
         _ => (2, 2),
-    }
-}
-
-/// Whether reflections off the surface `hit` stay as coherent as the rays that met it:
-/// a plane, or a triangle whose shading normal is its face's.
-fn flat(b: &Bindings, hit: &Hit) -> bool {
-    hit.prim & PLANE_FLAG != 0 || {
-        let p = &b.prims[hit.prim as usize];
-        p.kind() == PRIM_TRIANGLE && p.f1 < 0.0
     }
 }
 
@@ -174,117 +326,50 @@ pub fn render_tile(
     let shadowed: Vec<usize> = (0..b.lights.len())
         .filter(|&i| packed(&b.lights[i]))
         .collect();
-    let unlit = Lit {
-        sample: None,
-        nodes: 0,
-        packed: false,
-    };
-    let mut eye_lights = vec![unlit; MAX_LANES * shadowed.len()];
     let mut packet = Packet::default();
-    let mut hits = [Hit {
-        t: 0.0,
-        prim: NO_PRIM,
-        u: 0.0,
-        v: 0.0,
-        cost: 0,
-        nodes: 0,
-    }; MAX_LANES];
-    let mut light = [Vec3::ZERO; MAX_LANES];
-    let mut shadow_nodes = [0; MAX_LANES];
-    // The camera rays' surfaces, lane by lane, those of the lanes in a block's `met` mask
-    // (the others: no surface, or no pixel). Kept from block to block and written in
-    // place: an array of `Option`s built afresh for each block (`array::from_fn`) copied
-    // every lane through temporaries a field at a time, and the wide loads after the
-    // narrow stores stalled (a tenth of teapot-6's render, by `perf`).
-    let mut surfaces = [NO_SURFACE; MAX_LANES];
+    let mut eye = Stage::new(shadowed.len());
+    let mut mirror = Stage::new(shadowed.len());
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
-                // The block's pixels: (sums index, camera ray, random stream), lane by lane.
-                let mut lanes = [(
-                    0usize,
-                    Ray {
-                        origin: Vec3::ZERO,
-                        dir: Vec3::X,
-                    },
-                    0u32,
-                ); MAX_LANES];
+                // The block's pixels: (sums index, random stream), lane by lane.
+                let mut pixels = [(0usize, 0u32); MAX_LANES];
                 let mut n = 0;
                 packet.clear();
                 for y in by..(by + bh).min(rows.end) {
                     for x in bx..(bx + bw).min(x1) {
                         let mut rng = 0;
                         let ray = sample_ray(g, x, y, s, &mut rng);
-                        let i = ((y - rows.start) * (x1 - x0) + x - x0) as usize;
-                        // Field by field: the ray comes back through memory, and a copy
-                        // whole read it back in loads that straddled the call's stores.
-                        let lane = &mut lanes[n];
-                        (lane.0, lane.2) = (i, rng);
-                        (lane.1.origin, lane.1.dir) = (ray.origin, ray.dir);
+                        pixels[n] = (((y - rows.start) * (x1 - x0) + x - x0) as usize, rng);
                         packet.set(n, &ray, g.hither, NO_HIT);
                         n += 1;
                     }
                 }
                 counts.eye += n as u64;
-                let eye_packed = kernels.closest_hits(b, &packet, &mut hits);
-                let answer = |k: usize, ray: Ray, tmin: f32, value: Hit, packed: u32| Answer {
-                    ray,
-                    tmin,
-                    tmax: NO_HIT,
-                    value,
-                    packed: packed & 1 << k != 0,
-                };
+                eye.trace(b, kernels, &packet, g.hither);
                 if g.aov != AOV_COLOR {
-                    for (k, &(i, ray, _)) in lanes[..n].iter().enumerate() {
+                    for (k, &(i, _)) in pixels[..n].iter().enumerate() {
                         let mut known = Known {
-                            eye: Some(answer(k, ray, g.hither, hits[k], eye_packed)),
+                            eye: eye.ahead(k, 0),
                             mirror: None,
-                            eye_surface: None,
-                            eye_lights: &[],
+                            next: None,
+                            lights: &[],
                             counts: RayCounts::default(),
                         };
-                        sums[i] += aov(b, &mut known, &ray, counts);
+                        sums[i] += aov(b, &mut known, &eye.rays[k], counts);
                         counts.add(&known.counts);
                     }
                     continue;
                 }
-                let mut met = 0u32;
-                for k in (0..n).filter(|&k| hits[k].prim != NO_PRIM) {
-                    surfaces[k] = surface(b, &lanes[k].1, &hits[k]);
-                    met |= 1 << k;
-                }
-                // Shadow rays to each point and directional light, one packet a light, and
-                // what the light gives each surface, as `light_sample` works it out.
-                let dirs = lanes.map(|(_, ray, _)| ray.dir);
-                let lit = Surfaces::new(b, (&surfaces, met), &hits, &dirs);
-                for (j, &li) in shadowed.iter().enumerate() {
-                    packet.clear();
-                    let rays = light_rays(b, &lit, &b.lights[li], &mut packet);
-                    let packed = if packet.lanes() == 0 {
-                        0
-                    } else {
-                        kernels.transmissions(b, &packet, &mut light, &mut shadow_nodes)
-                    };
-                    for k in lanes_of(met) {
-                        eye_lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
-                            // `light_sample`'s product, in its order.
-                            Lit {
-                                sample: Some(light[k] * rays.intensity * rays.term(k)),
-                                nodes: shadow_nodes[k],
-                                packed: packed & 1 << k != 0,
-                            }
-                        } else {
-                            unlit
-                        };
-                    }
-                }
-                // Reflections off flat mirrors, where the depth lets the shading trace them.
+                eye.light(b, kernels, &shadowed, &mut packet);
+                // The mirror rays of the surfaces met, where the depth lets the shading
+                // trace them.
                 packet.clear();
                 if g.max_depth > 1 {
-                    for k in lanes_of(met) {
-                        let s = &surfaces[k];
-                        if b.materials[s.material as usize].ks > 0.0 && flat(b, &hits[k]) {
-                            let dir = reflect_dir(lanes[k].1.dir, s.ns);
+                    for k in lanes_of(eye.met) {
+                        let s = &eye.surfaces[k];
+                        if b.materials[s.material as usize].ks > 0.0 {
+                            let dir = reflect_dir(eye.rays[k].dir, s.ns);
                             let ray = Ray {
                                 origin: offset_origin(s, dir, g.epsilon),
                                 dir,
@@ -293,32 +378,27 @@ pub fn render_tile(
                         }
                     }
                 }
-                let mut mirror_hits = hits;
-                let mirror_packed = if packet.lanes() != 0 {
-                    kernels.closest_hits(b, &packet, &mut mirror_hits)
-                } else {
-                    0
-                };
-                for (k, (i, ray, rng)) in lanes[..n].iter().enumerate() {
-                    let (i, mut rng) = (*i, *rng);
-                    if met & 1 << k == 0 {
+                mirror.trace(b, kernels, &packet, 0.0);
+                mirror.light(b, kernels, &shadowed, &mut packet);
+                for (k, &(i, rng)) in pixels[..n].iter().enumerate() {
+                    if eye.met & 1 << k == 0 {
                         // A camera ray that met nothing (most of a scene with sky around
                         // it): what `trace` gives it and counts for it, `0 + 1 *
                         // background`, without setting up its stack and answers.
                         sums[i] += g.background;
-                        count_nodes(counts, 1, hits[k].nodes);
-                        counts.eye_packed += u64::from(eye_packed & 1 << k != 0);
+                        count_nodes(counts, 1, eye.hits[k].nodes);
+                        counts.eye_packed += u64::from(eye.packed & 1 << k != 0);
                         continue;
                     }
                     let mut known = Known {
-                        eye: Some(answer(k, *ray, g.hither, hits[k], eye_packed)),
-                        mirror: (packet.lanes() & 1 << k != 0)
-                            .then(|| answer(k, packet.ray(k), 0.0, mirror_hits[k], mirror_packed)),
-                        eye_surface: Some(&surfaces[k]),
-                        eye_lights: &eye_lights[k * shadowed.len()..(k + 1) * shadowed.len()],
+                        eye: eye.ahead(k, shadowed.len()),
+                        mirror: mirror.ahead(k, shadowed.len()),
+                        next: None,
+                        lights: &[],
                         counts: RayCounts::default(),
                     };
-                    sums[i] += trace(b, &mut known, ray, &mut rng, counts);
+                    let mut rng = rng;
+                    sums[i] += trace(b, &mut known, &eye.rays[k], &mut rng, counts);
                     counts.add(&known.counts);
                 }
             }

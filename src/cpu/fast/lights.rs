@@ -1,4 +1,4 @@
-//! The camera rays' surfaces of a packet lit by one point or directional light, lane by
+//! The surfaces a packet's rays met, lit by one point or directional light, lane by
 //! lane in plain arrays (which the compiler turns into SIMD instructions): what
 //! `shade::light_ray` makes for each surface (its shadow ray and the Lambert and highlight
 //! terms), for the whole packet at once (`coherent.rs`, which then traces the shadow rays
@@ -36,7 +36,7 @@ fn dot(a: &Rows, b: &Rows, k: usize) -> f32 {
     (a[0][k] * b[0][k]) + (a[1][k] * b[1][k]) + (a[2][k] * b[2][k])
 }
 
-/// The surfaces a packet's camera rays met, with what `light_ray` reads of them and of
+/// The surfaces a packet's rays met, with what `light_ray` reads of them and of
 /// their materials, lane by lane; `live` has a bit for each lane with a surface. (Every
 /// lane of the arrays is worked out, whatever the packet's width: fixed bounds vectorise
 /// without a remainder loop, which cost more than the unused lanes.)
@@ -45,7 +45,7 @@ pub struct Surfaces {
     point: Rows,
     ng: Rows,
     ns: Rows,
-    /// The camera ray's direction, and its mirror direction about `ns` (`reflect_dir`).
+    /// The ray's direction, and its mirror direction about `ns` (`reflect_dir`).
     dir: Rows,
     r: Rows,
     kd: Row,
@@ -56,7 +56,7 @@ pub struct Surfaces {
 
 impl Surfaces {
     /// The surfaces `surfaces` of the lanes in `met` (a lane each; the others met
-    /// nothing) of the camera rays with directions `dirs`, met at `hits` (their materials
+    /// nothing) of the rays with directions `dirs`, met at `hits` (their materials
     /// `textured`).
     pub fn new(
         b: &Bindings,

@@ -1,5 +1,5 @@
 //! Packets of coherent rays: up to sixteen rays of neighbouring pixels (or their shadow
-//! rays to one light, or their reflections off one flat mirror) traced together through
+//! rays to one light, or their mirror rays) traced together through
 //! the eight-wide tree, one SIMD lane a ray, where `traverse.rs` traces one ray at a time.
 //!
 //! - `lanes`: the SIMD operations, one trait over the instruction sets, `Portable` for
