@@ -594,6 +594,43 @@ fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
     );
 }
 
+/// The mirror rays off every surface, curved or flat, go in packets, and so do their
+/// shadow rays to point lights: on spheres.nff (a mirror sphere and a glass one on a
+/// floor of quads, two point lights) at depth 2, where every ray but the refracted ones
+/// is a camera ray, its shadow rays, its mirror ray or that ray's shadow rays.
+#[test]
+fn mirror_rays_and_their_shadow_rays_go_in_packets() {
+    let buffers = load(&own_scenes().join("spheres.nff"));
+    let kernels = Kernels::new(Isa::best()).expect("the best kernels");
+    let opts = |max_depth| RenderOptions {
+        width: 64,
+        height: 48,
+        spp: 2,
+        max_depth,
+        ..RenderOptions::for_camera(&buffers.camera)
+    };
+    let (_, one) = render(&buffers, &opts(1), Some(&kernels));
+    let (want, alone) = render(&buffers, &opts(2), None);
+    let (got, two) = render(&buffers, &opts(2), Some(&kernels));
+    assert_eq!(got, want, "the images");
+    let kinds = |c: &RayCounts| (c.eye, c.shadow, c.reflected, c.refracted);
+    assert_eq!(kinds(&two), kinds(&alone), "rays by kind");
+    assert!(
+        one.reflected == 0 && one.shadow - one.shadow_packed <= one.shadow / 50,
+        "{one:?}"
+    );
+    assert!(two.reflected > 0 && two.refracted > 0, "{two:?}");
+    // Lanes go on alone where a packet thins out (`packet::single`): most, not all.
+    assert!(two.reflected_packed * 10 >= two.reflected * 9, "{two:?}");
+    // Walked alone: the refracted rays' shadow rays (one a light at most), and a few lone
+    // lanes. Without the mirror rays' shadow packets, about twice as many.
+    let lights = buffers.lights.len() as u64;
+    assert!(
+        two.shadow - two.shadow_packed <= lights * two.refracted + two.shadow / 50,
+        "{two:?}"
+    );
+}
+
 /// `gpurt SCENE --stats` on the CPU with `GPURT_SIMD` set to `simd`.
 fn cli(dir: &Path, simd: &str, args: &[&str]) -> std::process::Output {
     std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
