@@ -155,77 +155,73 @@ impl Parser<'_> {
         })
     }
 
-    fn position_keys(&mut self, n: u32, what: &str) -> Result<Vec<PositionKey>> {
+    /// `n` keys, each its time then what `read` reads of it; the keys `key_time` leaves
+    /// out are read and dropped.
+    fn keys<K>(
+        &mut self,
+        n: u32,
+        mut read: impl FnMut(&mut Self, &Timed) -> Result<K>,
+    ) -> Result<Vec<K>> {
         let mut keys = Vec::with_capacity(n as usize);
         let mut last = None;
         for _ in 0..n {
             let (timed, keep) = self.key_time(last.as_ref())?;
-            let value = self.lx.vec3(&format!("{what} key"))?.as_dvec3();
-            let tcb = self.tcb()?;
+            let key = read(self, &timed)?;
             if keep {
-                keys.push(PositionKey {
-                    time: timed.time,
-                    value,
-                    tcb,
-                });
+                keys.push(key);
                 last = Some(timed);
             }
         }
         Ok(keys)
     }
 
+    fn position_keys(&mut self, n: u32, what: &str) -> Result<Vec<PositionKey>> {
+        self.keys(n, |p, timed| {
+            Ok(PositionKey {
+                time: timed.time,
+                value: p.lx.vec3(&format!("{what} key"))?.as_dvec3(),
+                tcb: p.tcb()?,
+            })
+        })
+    }
+
     fn rotation_keys(&mut self, n: u32) -> Result<Vec<RotationKey>> {
-        let mut keys = Vec::with_capacity(n as usize);
-        let mut last = None;
-        for _ in 0..n {
-            let (timed, keep) = self.key_time(last.as_ref())?;
-            let axis = self.lx.vec3("rotation key axis")?.as_dvec3();
-            let deg = f64::from(self.lx.number("rotation key angle in degrees")?);
+        self.keys(n, |p, timed| {
+            let axis = p.lx.vec3("rotation key axis")?.as_dvec3();
+            let deg = f64::from(p.lx.number("rotation key angle in degrees")?);
             // A zero angle turns about any axis (BART writes `0 0 0 0` for none).
             let axis = match axis.try_normalize() {
                 Some(a) => a,
                 None if deg == 0.0 => DVec3::X,
                 None => {
-                    return Err(self.lx.error_at(
+                    return Err(p.lx.error_at(
                         &timed.tok,
                         format!("a rotation key of {deg} degrees about a zero axis"),
                     ));
                 }
             };
-            let tcb = self.tcb()?;
-            if keep {
-                keys.push(RotationKey {
-                    time: timed.time,
-                    axis,
-                    angle: deg.to_radians(),
-                    tcb,
-                });
-                last = Some(timed);
-            }
-        }
-        Ok(keys)
+            Ok(RotationKey {
+                time: timed.time,
+                axis,
+                angle: deg.to_radians(),
+                tcb: p.tcb()?,
+            })
+        })
     }
 
     fn visibility_keys(&mut self, n: u32) -> Result<Vec<VisibilityKey>> {
-        let mut keys = Vec::with_capacity(n as usize);
-        let mut last = None;
-        for _ in 0..n {
-            let (timed, keep) = self.key_time(last.as_ref())?;
-            let (flag, ftok) = self.lx.count("visibility flag (0 or 1)")?;
+        self.keys(n, |p, timed| {
+            let (flag, ftok) = p.lx.count("visibility flag (0 or 1)")?;
             if flag > 1 {
-                return Err(self.lx.error_at(
+                return Err(p.lx.error_at(
                     &ftok,
                     format!("expected a visibility flag of 0 or 1, found {flag}"),
                 ));
             }
-            if keep {
-                keys.push(VisibilityKey {
-                    time: timed.time,
-                    visible: flag == 1,
-                });
-                last = Some(timed);
-            }
-        }
-        Ok(keys)
+            Ok(VisibilityKey {
+                time: timed.time,
+                visible: flag == 1,
+            })
+        })
     }
 }
