@@ -230,7 +230,7 @@ async function scripted(params) {
   const response = await fetch(url);
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   const name = decodeURIComponent(new URL(url, location.href).pathname.split("/").pop());
-  await loadBytes(name, new Uint8Array(await response.arrayBuffer()));
+  loadBytes(name, new Uint8Array(await response.arrayBuffer()));
   // A <select> ignores a value it has no option for: the library checks the name.
   if (params.has("shading")) applyOptions(params.get("shading"));
   if (params.has("frame")) session.set_frame(whole("frame", params.get("frame")));

@@ -64,6 +64,16 @@ const NO_RAY: Ray = Ray {
     dir: Vec3::X,
 };
 
+/// What a lane holds in a stage's array of hits before a packet answers it.
+const NO_HIT_YET: Hit = Hit {
+    t: 0.0,
+    prim: NO_PRIM,
+    u: 0.0,
+    v: 0.0,
+    cost: 0,
+    nodes: 0,
+};
+
 /// One generation of a block's rays (its camera rays, or their mirror rays) traced as a
 /// packet and shaded ahead of the pixels' own shading: each lane's ray and hit, the
 /// surface it met, and what each point or directional light gives that surface, its
@@ -93,7 +103,7 @@ impl Stage {
             rays: [NO_RAY; MAX_LANES],
             tmin: 0.0,
             traced: 0,
-            hits: [NO_HIT_AT; MAX_LANES],
+            hits: [NO_HIT_YET; MAX_LANES],
             packed: 0,
             surfaces: [NO_SURFACE; MAX_LANES],
             met: 0,
@@ -168,16 +178,6 @@ impl Stage {
             && NO_HIT.to_bits() == tmax.to_bits()
     }
 }
-
-/// A hit that is none yet.
-const NO_HIT_AT: Hit = Hit {
-    t: 0.0,
-    prim: NO_PRIM,
-    u: 0.0,
-    v: 0.0,
-    cost: 0,
-    nodes: 0,
-};
 
 /// The generations of rays traced ahead: the camera rays and their mirror rays; deeper
 /// ones are walked alone. A third and a fourth (the mirror rays' mirror rays) were
