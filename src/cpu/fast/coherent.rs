@@ -145,7 +145,6 @@ impl Stage {
         let mut light = [Vec3::ZERO; MAX_LANES];
         let mut nodes = [0; MAX_LANES];
         for (j, &li) in shadowed.iter().enumerate() {
-            packet.clear();
             let rays = light_rays(b, &lit, &b.lights[li], packet);
             let packed = if packet.lanes() == 0 {
                 0
@@ -221,7 +220,17 @@ impl<'a> Known<'a> {
     }
 }
 
+/// `Alone`'s walk, kept out of line so that `Known::closest_hit` can be inlined.
+#[inline(never)]
+fn walk_alone(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
+    Alone.closest_hit(b, ray, tmin, tmax)
+}
+
 impl Tracer for Known<'_> {
+    /// Inlined into the shading, which has just made `ray`: called, it read the ray back
+    /// in loads wider than the stores that made it, which waited for both (store
+    /// forwarding; 2% of balls-4's render, by `perf`).
+    #[inline]
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         let k = self.k;
         self.next = None;
@@ -240,7 +249,7 @@ impl Tracer for Known<'_> {
             }
             return stage.hits[k];
         }
-        Alone.closest_hit(b, ray, tmin, tmax)
+        walk_alone(b, ray, tmin, tmax)
     }
 
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {

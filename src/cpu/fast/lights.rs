@@ -21,7 +21,7 @@ use super::packet::{MAX_LANES, Packet};
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::shade::{Surface, light_samples};
 use crate::cpu::texture::textured;
-use crate::cpu::types::{Bindings, Hit, Ray};
+use crate::cpu::types::{Bindings, Hit};
 use crate::gpu_types::{GpuLight, LIGHT_DIRECTIONAL, LIGHT_POINT, NO_HIT, SHADING_BLINN_PHONG};
 
 /// One value a lane.
@@ -123,8 +123,9 @@ pub fn packed(light: &GpuLight) -> bool {
     matches!(light.kind, LIGHT_POINT | LIGHT_DIRECTIONAL)
 }
 
-/// `light_ray(b, s, m, dir, r, light, 0, _)` for every surface of `all`: puts each shadow
-/// ray in `packet` (lane by lane, over `(0, dist)`) and returns the rest. `light` is
+/// `light_ray(b, s, m, dir, r, light, 0, _)` for every surface of `all`: puts the shadow
+/// rays in `packet` (lane by lane, over `(0, dist)`, in place of its rays) and returns
+/// the rest. `light` is
 /// `packed`.
 pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut Packet) -> Lights {
     debug_assert!(packed(light));
@@ -190,13 +191,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
             term[a][k] = all.kd[k] * all.color[a][k] * ndotl[k] + spec[k];
         }
     }
-    for k in lanes_of(live) {
-        let ray = Ray {
-            origin: Vec3::new(origin[0][k], origin[1][k], origin[2][k]),
-            dir: Vec3::new(l[0][k], l[1][k], l[2][k]),
-        };
-        packet.set(k, &ray, 0.0, dist[k]);
-    }
+    packet.set_rows((&origin, &l), 0.0, &dist, live);
     Lights {
         live,
         intensity: light.color / light_samples(light) as f32,

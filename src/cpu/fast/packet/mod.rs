@@ -38,6 +38,7 @@ use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::util::error::{Error, Result};
 pub use lanes::MAX_LANES;
+use lanes::Row;
 use rays::Rows;
 
 /// The instruction sets the packet kernels are compiled for, widest first.
@@ -228,6 +229,22 @@ impl Packet {
         (r.dir[0][k], r.dir[1][k], r.dir[2][k]) = (ray.dir.x, ray.dir.y, ray.dir.z);
         (r.tmin[k], r.tmax[k]) = (tmin, tmax);
         r.lanes |= 1 << k;
+    }
+
+    /// Puts the rays of `origin` and `dir` (a row a coordinate), each over `(tmin,
+    /// tmax[k])`, in the lanes `lanes`, in place of the packet's: whole rows at once,
+    /// where `set` writes a lane at a time. The other lanes' values are not read.
+    pub fn set_rows(
+        &mut self,
+        (origin, dir): (&[Row; 3], &[Row; 3]),
+        tmin: f32,
+        tmax: &Row,
+        lanes: u32,
+    ) {
+        let r = &mut self.rows;
+        (r.origin, r.dir) = (*origin, *dir);
+        (r.tmin, r.tmax) = ([tmin; MAX_LANES], *tmax);
+        r.lanes = lanes;
     }
 
     /// The lanes holding a ray.
