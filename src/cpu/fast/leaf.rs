@@ -129,7 +129,11 @@ pub(crate) fn closest_in_leaf(
     if let Some((t, u, v)) = leaf_triangles4(b, first, leaf, ray) {
         // Four lanes at once, then those in the interval taken in order, as the loop below
         // would (most leaves have none; `hit.t` only shrinks, so no other lane can pass).
-        for k in lanes_of(crossings(t, tmin, hit.t, leaf.len())) {
+        // Read from arrays: a `Vec4` indexed by a lane known only at run time is a jump
+        // table, an indirect branch a lane.
+        let crossed = crossings(t, tmin, hit.t, leaf.len());
+        let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+        for k in lanes_of(crossed) {
             if t[k] < hit.t {
                 hit.t = t[k];
                 hit.prim = first + k as u32;
@@ -141,6 +145,7 @@ pub(crate) fn closest_in_leaf(
     }
     if let Some((t0, t1)) = intersect::intersect_spheres4(leaf, ray) {
         // Four spheres at once, then taken in order, as the loop below would.
+        let (t0, t1) = (t0.to_array(), t1.to_array());
         for k in 0..leaf.len() {
             let t_first = first_in(Vec4::new(t0[k], t1[k], 0.0, 0.0), tmin, hit.t);
             if t_first != NO_HIT {

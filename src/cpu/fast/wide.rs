@@ -96,36 +96,62 @@ impl Boxes for Slabs {
 /// order on each lane (`vmaxps`/`vminps` are `maxps`/`minps` eight wide), so the same
 /// bits; a node's test in half the instructions. Made only where the processor has AVX.
 #[cfg(target_arch = "x86_64")]
-pub struct SlabsAvx(Slabs);
+pub struct SlabsAvx {
+    slabs: Slabs,
+    /// Per axis, the byte offsets in a `WideNode` of the near and the far faces' row
+    /// (`lo` or `hi`): worked out once a ray. Chosen at each node, the rows' addresses
+    /// took a compare and two conditional moves an axis, a quarter of a node's test.
+    near: [usize; 3],
+    far: [usize; 3],
+}
+
+/// The byte offset in a `WideNode` of the row of `face` (0: `lo`, 1: `hi`) on `axis`:
+/// `hi` follows `lo` (`repr(C)`).
+#[cfg(target_arch = "x86_64")]
+const fn row_offset(face: usize, axis: usize) -> usize {
+    std::mem::offset_of!(WideNode, lo) + (face * 3 + axis) * std::mem::size_of::<Lanes>()
+}
+
+#[cfg(target_arch = "x86_64")]
+const _: () = assert!(std::mem::offset_of!(WideNode, hi) == row_offset(1, 0));
 
 #[cfg(target_arch = "x86_64")]
 impl SlabsAvx {
     /// # Safety
     /// The processor must have AVX (`isa::x86_64_v3`).
     pub unsafe fn new(slabs: Slabs) -> Self {
-        SlabsAvx(slabs)
+        let [nx, ny, nz] = slabs.near;
+        SlabsAvx {
+            near: [row_offset(nx, 0), row_offset(ny, 1), row_offset(nz, 2)],
+            far: [
+                row_offset(1 - nx, 0),
+                row_offset(1 - ny, 1),
+                row_offset(1 - nz, 2),
+            ],
+            slabs,
+        }
     }
 
     #[target_feature(enable = "avx")]
     #[inline]
     fn test_avx(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
         use std::arch::x86_64::*;
-        let s = &self.0;
-        let faces = [&n.lo, &n.hi];
-        // SAFETY: a `Lanes` is eight consecutive f32 (two `Vec4`s), which `loadu` reads.
-        let load = |l: &Lanes| unsafe { _mm256_loadu_ps(l.as_ptr().cast()) };
+        let s = &self.slabs;
+        let node = std::ptr::from_ref(n).cast::<u8>();
+        // SAFETY: `offset` is a row's (`row_offset`): eight consecutive f32 in `n`.
+        let load = |offset: usize| unsafe { _mm256_loadu_ps(node.add(offset).cast()) };
         let wide = |v: Vec4| _mm256_set_m128(v.into(), v.into());
-        let t = |axis: usize, face: usize| {
-            let d = _mm256_sub_ps(load(&faces[face][axis]), wide(s.origin[axis]));
+        let t = |axis: usize, offset: usize| {
+            let d = _mm256_sub_ps(load(offset), wide(s.origin[axis]));
             _mm256_mul_ps(d, wide(s.inv_dir[axis]))
         };
-        let [nx, ny, nz] = s.near;
+        let (near, far) = (self.near, self.far);
         let near = _mm256_max_ps(
-            _mm256_max_ps(_mm256_max_ps(t(0, nx), t(1, ny)), t(2, nz)),
+            _mm256_max_ps(_mm256_max_ps(t(0, near[0]), t(1, near[1])), t(2, near[2])),
             _mm256_set1_ps(tmin),
         );
         let far = _mm256_min_ps(
-            _mm256_min_ps(_mm256_min_ps(t(0, 1 - nx), t(1, 1 - ny)), t(2, 1 - nz)),
+            _mm256_min_ps(_mm256_min_ps(t(0, far[0]), t(1, far[1])), t(2, far[2])),
             _mm256_set1_ps(tmax),
         );
         let widened = _mm256_mul_ps(far, _mm256_set1_ps(SLAB_WIDEN));
@@ -207,6 +233,9 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             let n = &wide[next.child as usize];
             *nodes += 1;
             let (near, mut mask) = slabs.test(n, tmin, tmax);
+            // As arrays: a `Vec4` indexed by a lane known only at run time became a jump
+            // table, an indirect branch for each child pushed (teapot-6's mirror rays).
+            let near = near.map(|v| v.to_array());
             let entry = |lane: usize| Entry {
                 child: n.child[lane],
                 count: n.count[lane],
