@@ -13,7 +13,7 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec4};
 
-use crate::bvh::wide::{EMPTY, Lanes, WIDTH, WideNode};
+use crate::bvh::wide::{EMPTY, Lanes, WIDTH, WideNode, lane};
 use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
 
 /// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
@@ -233,17 +233,10 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
             let n = &wide[next.child as usize];
             *nodes += 1;
             let (near, mut mask) = slabs.test(n, tmin, tmax);
-            // As arrays: a `Vec4` indexed by a lane known only at run time became a jump
-            // table, an indirect branch for each child pushed (teapot-6's mirror rays).
-            let near = near.map(|v| v.to_array());
-            let entry = |lane: usize| Entry {
-                child: n.child[lane],
-                count: n.count[lane],
-                near: if NEAREST_FIRST {
-                    near[lane / 4][lane % 4]
-                } else {
-                    tmin
-                },
+            let entry = |l: usize| Entry {
+                child: n.child[l],
+                count: n.count[l],
+                near: if NEAREST_FIRST { lane(&near, l) } else { tmin },
             };
             if mask != 0 && mask & (mask - 1) == 0 {
                 // One child reached (the common case): straight on, nothing pushed.

@@ -24,7 +24,7 @@ use super::lanes::Lanes;
 use super::leaf::{self, Best};
 use super::rays::{Found, Occluded, Rays, Rows};
 use super::single::{self, LaneHit};
-use crate::bvh::wide::{EMPTY, WIDTH, WideNode};
+use crate::bvh::wide::{EMPTY, WIDTH, WideNode, lane};
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::Bindings;
 use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
@@ -61,12 +61,11 @@ const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 /// `tmin`, and the lanes that overlap it within `[tmin, tmax]`.
 #[inline(always)]
 fn child_slab<L: Lanes>(l: L, r: &Rays<L>, n: &WideNode, c: usize, tmax: L::F) -> (L::F, L::M) {
-    let (h, q) = (c / 4, c % 4);
     let mut near = [r.tmin; 3];
     let mut far = [tmax; 3];
     for a in 0..3 {
-        let t_lo = l.mul(l.sub(l.splat(n.lo[a][h][q]), r.o[a]), r.inv[a]);
-        let t_hi = l.mul(l.sub(l.splat(n.hi[a][h][q]), r.o[a]), r.inv[a]);
+        let t_lo = l.mul(l.sub(l.splat(lane(&n.lo[a], c)), r.o[a]), r.inv[a]);
+        let t_hi = l.mul(l.sub(l.splat(lane(&n.hi[a], c)), r.o[a]), r.inv[a]);
         near[a] = l.select(r.neg[a], t_hi, t_lo);
         far[a] = l.select(r.neg[a], t_lo, t_hi);
     }
@@ -218,7 +217,7 @@ fn closest_tree<L: Lanes>(
                         count: n.count[c],
                         reach: l.select(hit, near, inf),
                     };
-                    stack.push_sorted(base, &mut run_keys, entry, keys[c / 4][c % 4]);
+                    stack.push_sorted(base, &mut run_keys, entry, lane(&keys, c));
                 }
             }
         }
