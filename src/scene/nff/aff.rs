@@ -4,26 +4,22 @@
 //! indexed meshes (`m`), includes with detail levels (`i`, `d`). The format is BART's
 //! `parse.c`; `docs/scene-format.md` says what gpurt renders of it. The keyframes are
 //! read by `keys`; the blocks' state, and where they send what is read, are `blocks`'.
+//! This file holds the blocks, the time range, the moving lights, the extended material,
+//! the animated triangles read and left out (`tpa`) and the animation handed to the scene
+//! at its end; the textured triangles are `textured`'s, the indexed meshes
+//! `indexed_mesh`'s and the includes `include`'s.
 
-use std::path::Path;
-
-use glam::{DAffine3, DQuat, DVec3, Vec2, Vec3};
+use glam::{DAffine3, DQuat, DVec3, Vec3};
 
 use super::Parser;
 use super::blocks::{Open, Route, Target};
 use crate::scene::animation::{Animation, Group, Link, MovingLight, TimeRange, Track};
-use crate::scene::lex::{Lexer, Token};
-use crate::scene::model::{
-    Light, Material, MaterialId, Plane, Scene, Wrap, nff_default_camera, unit,
-};
+use crate::scene::lex::Token;
+use crate::scene::model::{Light, Material, Plane};
 use crate::scene::place::Placement;
 use crate::scene::sink::Sink;
-use crate::scene::{images, io};
 use crate::util::error::{Error, Result, escape};
-use crate::util::limits::{MAX_IMAGE_BYTES, MAX_LIGHT, MAX_MESH_VERTICES, MAX_SHINE};
-
-/// Includes nested deeper than this are refused (a file that includes itself).
-const MAX_INCLUDE_DEPTH: u32 = 32;
+use crate::util::limits::{MAX_LIGHT, MAX_SHINE};
 
 impl Parser<'_> {
     pub(super) fn route(&mut self) -> Route<'_> {
@@ -194,28 +190,6 @@ impl Parser<'_> {
         }
     }
 
-    /// Refuses a count of rows the rest of the file is too short to hold (each of at
-    /// least `min_bytes`), before anything is allocated for them.
-    pub(super) fn check_count(&self, ntok: &Token, n: u32, min_bytes: u64) -> Result<()> {
-        if let Some(rest) = self
-            .lx
-            .remaining()
-            .filter(|&r| u64::from(n) * min_bytes > r + 1)
-        {
-            return Err(self.lx.error_at(
-                ntok,
-                format!("{n} rows, but the file has only {rest} bytes left: too few to hold them (is the count right?)"),
-            ));
-        }
-        if n as usize > MAX_MESH_VERTICES {
-            return Err(self.lx.error_at(
-                ntok,
-                format!("{n} is above the limit of {MAX_MESH_VERTICES}"),
-            ));
-        }
-        Ok(())
-    }
-
     /// `la name x y z [r g b]`: a point light that the track `name` moves.
     pub(super) fn moving_light(&mut self, _tok: &Token) -> Result<()> {
         let (name, ntok) = self.name("light name")?;
@@ -275,86 +249,6 @@ impl Parser<'_> {
         Ok(())
     }
 
-    /// `tt texture` and three rows of `x y z u v`, or `ttp texture` (also written `tpp`)
-    /// and three rows of `x y z nx ny nz u v`.
-    pub(super) fn textured_triangle(&mut self, tok: &Token, patch: bool) -> Result<()> {
-        let (texture, _) = self.name("texture name")?;
-        let mut v = [Vec3::ZERO; 3];
-        let mut n = [Vec3::ZERO; 3];
-        let mut uv = [Vec2::ZERO; 3];
-        for i in 0..3 {
-            v[i] = self.lx.vec3("triangle vertex")?;
-            if patch {
-                n[i] = self.lx.vec3("triangle vertex normal")?;
-            }
-            uv[i] = Vec2::new(
-                self.lx.number("texture coordinate u")?,
-                self.lx.number("texture coordinate v")?,
-            );
-        }
-        let material = self.textured_material(tok, &texture);
-        let normals = if patch {
-            let units = [unit(n[0]), unit(n[1]), unit(n[2])];
-            match units {
-                [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-                _ => None,
-            }
-        } else {
-            None
-        };
-        self.room(tok, 1)?;
-        self.route().triangle(v, normals, Some(uv), material);
-        Ok(())
-    }
-
-    /// The material of surfaces textured with the image `name`: the current material
-    /// with that texture (repeating, as BART's textures do), or where the image cannot be
-    /// had, the current material, with a warning (once an image).
-    fn textured_material(&mut self, tok: &Token, name: &str) -> MaterialId {
-        let material = self.current_material();
-        match self.aff_texture(name) {
-            Ok(t) => {
-                let mut m = self.scene.materials[material.0 as usize];
-                m.texture = Some(t);
-                self.intern(m)
-            }
-            Err(why) => {
-                let msg = format!(
-                    "texture '{}' not applied: {why}; the surfaces keep their material's colour",
-                    escape(name.as_bytes())
-                );
-                self.warn_once(tok, &msg);
-                material
-            }
-        }
-    }
-
-    /// The texture of the image file `name`, read the first time a surface names it: in
-    /// the folder of the file naming it, else in a `TextureFiles` folder beside that
-    /// folder (how BART's scenes lay their images out).
-    fn aff_texture(&mut self, name: &str) -> std::result::Result<u32, String> {
-        let wrap = [Wrap::Repeat; 2];
-        let beside = self.base.join("..").join("TextureFiles");
-        let dirs = [self.base.to_path_buf(), beside];
-        for dir in dirs {
-            let full = dir.join(name);
-            let shown = full.display().to_string();
-            if let Some(i) = images::find(&self.scene.textures, &shown, wrap) {
-                return Ok(i);
-            }
-            if full.is_file() {
-                let bytes = io::read_inside(&dir, name, MAX_IMAGE_BYTES)?;
-                let texture = images::decode(&bytes, &shown, wrap)?;
-                return Ok(images::add(
-                    &mut self.scene.textures,
-                    texture,
-                    &mut self.scene.warnings,
-                ));
-            }
-        }
-        Err("no such file in the folder of the file naming it, nor in a TextureFiles folder beside that folder".into())
-    }
-
     /// `tpa N` and N samples of `time` and three rows of `x y z nx ny nz`: a triangle
     /// that moves by its own keys. Read and left out, with a warning.
     pub(super) fn animated_triangle(&mut self, tok: &Token) -> Result<()> {
@@ -371,169 +265,6 @@ impl Parser<'_> {
             "animated triangles ('tpa') are not rendered yet; left out",
         );
         Ok(())
-    }
-
-    /// `m vertices N ... [normals N ...] [texturecoords N texture ...] triangles N ...`:
-    /// an indexed mesh; each triangle is its three vertex indices, then its three normal
-    /// indices and its three texture coordinate indices where the mesh has them.
-    pub(super) fn indexed_mesh(&mut self, tok: &Token) -> Result<()> {
-        let mut section = self.lx.expect_token("'vertices'")?;
-        if self.lx.text(&section) != b"vertices" {
-            return Err(self.lx.error_at(
-                &section,
-                format!(
-                    "expected 'vertices' after 'm', found {}",
-                    self.lx.show(&section)
-                ),
-            ));
-        }
-        let verts = self.vectors("mesh vertex")?;
-        let mut normals = Vec::new();
-        let mut uvs = Vec::new();
-        let mut material = None;
-        section = self
-            .lx
-            .expect_token("'normals', 'texturecoords' or 'triangles'")?;
-        if self.lx.text(&section) == b"normals" {
-            normals = self.vectors("mesh normal")?;
-            section = self.lx.expect_token("'texturecoords' or 'triangles'")?;
-        }
-        if self.lx.text(&section) == b"texturecoords" {
-            let (n, ntok) = self.lx.count("number of texture coordinates")?;
-            let (texture, _) = self.name("texture name")?;
-            self.check_count(&ntok, n, 4)?;
-            for _ in 0..n {
-                uvs.push(Vec2::new(
-                    self.lx.number("texture coordinate u")?,
-                    self.lx.number("texture coordinate v")?,
-                ));
-            }
-            material = Some(self.textured_material(tok, &texture));
-            section = self.lx.expect_token("'triangles'")?;
-        }
-        if self.lx.text(&section) != b"triangles" {
-            return Err(self.lx.error_at(
-                &section,
-                format!(
-                    "expected 'triangles' in the mesh, found {}",
-                    self.lx.show(&section)
-                ),
-            ));
-        }
-        let (n, ntok) = self.lx.count("number of mesh triangles")?;
-        self.check_count(&ntok, n, 6)?;
-        self.room(tok, n as usize)?;
-        let material = material.unwrap_or_else(|| self.current_material());
-        for _ in 0..n {
-            let v = self.indices(&verts, "vertex")?;
-            let nm = if normals.is_empty() {
-                None
-            } else {
-                let [a, b, c] = self.indices(&normals, "normal")?;
-                match [unit(a), unit(b), unit(c)] {
-                    [Some(a), Some(b), Some(c)] => Some([a, b, c]),
-                    _ => None,
-                }
-            };
-            let uv = if uvs.is_empty() {
-                None
-            } else {
-                Some(self.indices(&uvs, "texture coordinate")?)
-            };
-            self.route().triangle(v, nm, uv, material);
-        }
-        Ok(())
-    }
-
-    /// `N` and N vectors.
-    fn vectors(&mut self, what: &str) -> Result<Vec<Vec3>> {
-        let (n, ntok) = self.lx.count(&format!("number of {what}s"))?;
-        self.check_count(&ntok, n, 6)?;
-        (0..n).map(|_| self.lx.vec3(what)).collect()
-    }
-
-    /// Three indices into `of`, and what they index.
-    fn indices<T: Copy>(&mut self, of: &[T], what: &str) -> Result<[T; 3]> {
-        let mut out = [of[0]; 3];
-        for o in &mut out {
-            let (i, itok) = self.lx.count(&format!("mesh {what} index"))?;
-            *o = *of.get(i as usize).ok_or_else(|| {
-                self.lx.error_at(
-                    &itok,
-                    format!("mesh {what} index {i} is past the last ({})", of.len() - 1),
-                )
-            })?;
-        }
-        Ok(out)
-    }
-
-    /// `d level`: includes of a higher detail level are skipped from here on.
-    pub(super) fn detail_level(&mut self) -> Result<()> {
-        let (level, _) = self.lx.count("detail level")?;
-        self.blocks.detail = level;
-        Ok(())
-    }
-
-    /// `i level file`: another AFF (or NFF) file read here, inside the open blocks, with
-    /// the current material; skipped when its level is above the detail level (`d`).
-    pub(super) fn include(&mut self, _tok: &Token) -> Result<()> {
-        let (level, _) = self.lx.count("include detail level")?;
-        let ptok = self.lx.expect_token("included file name")?;
-        if level > self.blocks.detail {
-            return Ok(());
-        }
-        let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
-        let path = self.base.join(raw.trim_matches('"'));
-        if self.blocks.depth >= MAX_INCLUDE_DEPTH {
-            return Err(self.lx.error_at(
-                &ptok,
-                format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
-            ));
-        }
-        let input = io::open(&path).map_err(|e| {
-            self.lx.error_at(
-                &ptok,
-                format!(
-                    "cannot read included file '{}': {}",
-                    escape(path.as_os_str().as_encoded_bytes()),
-                    match e {
-                        Error::Io { source, .. } => source.to_string(),
-                        other => other.to_string(),
-                    }
-                ),
-            )
-        })?;
-        let name = path.display().to_string();
-        let dir = path.parent().unwrap_or(Path::new("."));
-        let blank = || Scene::new(String::new(), nff_default_camera());
-        let mut child = Parser {
-            lx: Lexer::through(input, &name, self.window),
-            base: dir,
-            sink: &mut *self.sink,
-            lenient: self.lenient,
-            window: self.window,
-            scene: std::mem::replace(&mut self.scene, blank()),
-            have_view: self.have_view,
-            material: self.material,
-            palette: std::mem::take(&mut self.palette),
-            verts: Vec::new(),
-            normals: Vec::new(),
-            tris: Vec::new(),
-            blocks: std::mem::take(&mut self.blocks),
-            depth_floor: 0,
-            warned: std::mem::take(&mut self.warned),
-        };
-        child.blocks.depth += 1;
-        child.depth_floor = child.blocks.stack.len();
-        let read = child.statements();
-        self.scene = child.scene;
-        self.have_view = child.have_view;
-        self.material = child.material;
-        self.palette = child.palette;
-        self.blocks = child.blocks;
-        self.blocks.depth -= 1;
-        self.warned = child.warned;
-        read
     }
 
     /// At the end of the scene: every animated transform has its keyframes, and what

@@ -1,18 +1,26 @@
 //! The `mesh PATH [translate ..] [rotate ..] [scale ..] [nomtl]` statement: an STL or OBJ
 //! file read (relative to the scene's directory, gzip-aware) and transformed; its faces get
 //! the materials an OBJ's `usemtl` names, and the current material where it names none
-//! (or everywhere, with `nomtl`). The only statement that opens another file, so the only
-//! one that needs `io`.
+//! (or everywhere, with `nomtl`). Beside it, AFF's include (`i level file`): another AFF
+//! or NFF file read in place, inside the open blocks, with the current material, unless
+//! its level is above the detail level (`d`). The two statements that read another scene
+//! file.
+
+use std::path::Path;
 
 use glam::Vec3;
 
 use super::{Parser, keyword};
 use crate::scene::io::{self, FileKind};
-use crate::scene::lex::Token;
+use crate::scene::lex::{Lexer, Token};
 use crate::scene::mesh::{self, MeshTransform};
+use crate::scene::model::{Scene, nff_default_camera};
 use crate::scene::place::Placed;
 use crate::scene::sink::MeshOut;
 use crate::util::error::{Error, Result, escape};
+
+/// Includes nested deeper than this are refused (a file that includes itself).
+const MAX_INCLUDE_DEPTH: u32 = 32;
 
 impl Parser<'_> {
     pub(super) fn mesh(&mut self, tok: &Token) -> Result<()> {
@@ -107,5 +115,74 @@ impl Parser<'_> {
             );
         }
         Ok(())
+    }
+
+    /// `d level`: includes of a higher detail level are skipped from here on.
+    pub(super) fn detail_level(&mut self) -> Result<()> {
+        let (level, _) = self.lx.count("detail level")?;
+        self.blocks.detail = level;
+        Ok(())
+    }
+
+    /// `i level file`: another AFF (or NFF) file read here, inside the open blocks, with
+    /// the current material; skipped when its level is above the detail level (`d`).
+    pub(super) fn include(&mut self, _tok: &Token) -> Result<()> {
+        let (level, _) = self.lx.count("include detail level")?;
+        let ptok = self.lx.expect_token("included file name")?;
+        if level > self.blocks.detail {
+            return Ok(());
+        }
+        let raw = String::from_utf8_lossy(self.lx.text(&ptok)).into_owned();
+        let path = self.base.join(raw.trim_matches('"'));
+        if self.blocks.depth >= MAX_INCLUDE_DEPTH {
+            return Err(self.lx.error_at(
+                &ptok,
+                format!("includes nested more than {MAX_INCLUDE_DEPTH} deep (does a file include itself?)"),
+            ));
+        }
+        let input = io::open(&path).map_err(|e| {
+            self.lx.error_at(
+                &ptok,
+                format!(
+                    "cannot read included file '{}': {}",
+                    escape(path.as_os_str().as_encoded_bytes()),
+                    match e {
+                        Error::Io { source, .. } => source.to_string(),
+                        other => other.to_string(),
+                    }
+                ),
+            )
+        })?;
+        let name = path.display().to_string();
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let blank = || Scene::new(String::new(), nff_default_camera());
+        let mut child = Parser {
+            lx: Lexer::through(input, &name, self.window),
+            base: dir,
+            sink: &mut *self.sink,
+            lenient: self.lenient,
+            window: self.window,
+            scene: std::mem::replace(&mut self.scene, blank()),
+            have_view: self.have_view,
+            material: self.material,
+            palette: std::mem::take(&mut self.palette),
+            verts: Vec::new(),
+            normals: Vec::new(),
+            tris: Vec::new(),
+            blocks: std::mem::take(&mut self.blocks),
+            depth_floor: 0,
+            warned: std::mem::take(&mut self.warned),
+        };
+        child.blocks.depth += 1;
+        child.depth_floor = child.blocks.stack.len();
+        let read = child.statements();
+        self.scene = child.scene;
+        self.have_view = child.have_view;
+        self.material = child.material;
+        self.palette = child.palette;
+        self.blocks = child.blocks;
+        self.blocks.depth -= 1;
+        self.warned = child.warned;
+        read
     }
 }

@@ -9,9 +9,11 @@
 mod aff;
 mod blocks;
 mod include;
+mod indexed_mesh;
 mod keys;
 mod keywords;
 mod material;
+mod textured;
 mod view;
 
 use std::collections::HashSet;
