@@ -125,8 +125,7 @@ pub fn packed(light: &GpuLight) -> bool {
 
 /// `light_ray(b, s, m, dir, r, light, 0, _)` for every surface of `all`: puts the shadow
 /// rays in `packet` (lane by lane, over `(0, dist)`, in place of its rays) and returns
-/// the rest. `light` is
-/// `packed`.
+/// the rest. `light` is `packed`.
 pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut Packet) -> Lights {
     debug_assert!(packed(light));
     let g = b.globals;

@@ -89,8 +89,9 @@ const ROOM: usize = STACK * 128;
 
 /// Room for a walk's stack, one a thread, which each packet walk on it takes in turn (they
 /// never nest). In the walk's frame, the stack made the frame 57 KB with AVX-512 (28 KB
-/// with AVX2), which Linux's stack guard has touched a page at a time at every call:
-/// teapot-6's primary packets took 13% longer (`examples/rays`, one thread).
+/// with AVX2), which the compiler's stack probes (which keep a frame from jumping the
+/// guard page) touched a page at a time at every call: teapot-6's primary packets took
+/// 9% longer (`examples/rays`, one thread).
 #[repr(C, align(64))]
 struct Room([MaybeUninit<u8>; ROOM]);
 
