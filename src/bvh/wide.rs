@@ -39,13 +39,6 @@ pub struct WideNode {
     pub(crate) count: [u32; WIDTH],
 }
 
-/// Lane `l` of `row`. Read from the row as eight floats: a `Vec4` indexed by a lane known
-/// only at run time compiles to a jump table, an indirect branch at every read.
-#[inline(always)]
-pub(crate) fn lane(row: &Lanes, l: usize) -> f32 {
-    bytemuck::cast_ref::<Lanes, [f32; WIDTH]>(row)[l]
-}
-
 impl WideNode {
     /// The node's leaf children as `(first primitive, count)`.
     pub fn leaves(&self) -> impl Iterator<Item = (u32, u32)> + '_ {

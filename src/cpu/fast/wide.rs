@@ -13,8 +13,15 @@ use std::mem::MaybeUninit;
 
 use glam::{Vec3, Vec4};
 
-use crate::bvh::wide::{EMPTY, Lanes, WIDTH, WideNode, lane};
+use crate::bvh::wide::{EMPTY, Lanes, WIDTH, WideNode};
 use crate::gpu_types::{SLAB_WIDEN, TRAVERSAL_STACK};
+
+/// Lane `l` of `row`. Read from the row as eight floats: a `Vec4` indexed by a lane known
+/// only at run time compiles to a jump table, an indirect branch at every read.
+#[inline(always)]
+pub(crate) fn lane(row: &Lanes, l: usize) -> f32 {
+    bytemuck::cast_ref::<Lanes, [f32; WIDTH]>(row)[l]
+}
 
 /// A child waiting on the stack: where it leads (`WideNode::child`, `count`) and where the
 /// ray enters its box.
