@@ -68,17 +68,19 @@ impl Parser<'_> {
     }
 
     pub(super) fn expect_open_brace(&mut self, what: &str) -> Result<()> {
-        let t = self.lx.expect_token(&format!("'{{' opening the {what}"))?;
-        if self.lx.text(&t) != b"{" {
-            return Err(self.lx.error_at(
-                &t,
-                format!(
-                    "expected '{{' opening the {what}, found {}",
-                    self.lx.show(&t)
-                ),
-            ));
+        let expected = format!("'{{' opening the {what}");
+        let t = self.lx.expect_token(&expected)?;
+        self.expect_word(&t, b"{", &expected)
+    }
+
+    /// An error at `t` unless it is `word`: "expected {expected}, found ...".
+    pub(super) fn expect_word(&self, t: &Token, word: &[u8], expected: &str) -> Result<()> {
+        if self.lx.text(t) == word {
+            return Ok(());
         }
-        Ok(())
+        Err(self
+            .lx
+            .error_at(t, format!("expected {expected}, found {}", self.lx.show(t))))
     }
 
     /// A transform's name: one word.

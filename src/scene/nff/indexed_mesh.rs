@@ -39,15 +39,7 @@ impl Parser<'_> {
     /// indices and its three texture coordinate indices where the mesh has them.
     pub(super) fn indexed_mesh(&mut self, tok: &Token) -> Result<()> {
         let mut section = self.lx.expect_token("'vertices'")?;
-        if self.lx.text(&section) != b"vertices" {
-            return Err(self.lx.error_at(
-                &section,
-                format!(
-                    "expected 'vertices' after 'm', found {}",
-                    self.lx.show(&section)
-                ),
-            ));
-        }
+        self.expect_word(&section, b"vertices", "'vertices' after 'm'")?;
         let verts = self.vectors("mesh vertex")?;
         let mut normals = Vec::new();
         let mut uvs = Vec::new();
@@ -72,15 +64,7 @@ impl Parser<'_> {
             material = Some(self.textured_material(tok, &texture));
             section = self.lx.expect_token("'triangles'")?;
         }
-        if self.lx.text(&section) != b"triangles" {
-            return Err(self.lx.error_at(
-                &section,
-                format!(
-                    "expected 'triangles' in the mesh, found {}",
-                    self.lx.show(&section)
-                ),
-            ));
-        }
+        self.expect_word(&section, b"triangles", "'triangles' in the mesh")?;
         let (n, ntok) = self.lx.count("number of mesh triangles")?;
         self.check_count(&ntok, n, 6)?;
         self.room(tok, n as usize)?;
