@@ -31,7 +31,8 @@
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
 # for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default; a first run on a fresh machine compiles every shader variant cold, so give it 600) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
-# than the limit and still says where it was.
+# than the limit and still says where it was; TEST_THREADS sets its threads (8 by default: the
+# number under which a fresh H200 ran the suite through, docs/gpu.md).
 # `loss` looks for what stalls the GPU when a device is destroyed with work in flight
 # (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
@@ -274,7 +275,7 @@ if [[ $what == *tests* ]]; then
     # A stalled GPU fails the tests that wait on it within a minute, each saying so,
     # rather than leaving the run to its timeout.
     GPURT_WAIT_LIMIT=${GPURT_WAIT_LIMIT:-60} timeout "${TESTS_TIMEOUT:-300}" \
-        ./.device/gpurt-tests --test-threads "$(nproc)" "${skips[@]}" >"$OUT/tests.log" 2>&1
+        ./.device/gpurt-tests --test-threads "${TEST_THREADS:-8}" "${skips[@]}" >"$OUT/tests.log" 2>&1
     status=$?
     grep -v '^test .* ok$' "$OUT/tests.log" | tail -60
     if [[ $status == 124 ]]; then
