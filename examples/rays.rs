@@ -241,7 +241,7 @@ fn main() -> anyhow::Result<()> {
             .for_each(|(rays, out)| {
                 for (r, o) in rays.iter().zip(out) {
                     if let Some((r, tmax)) = r {
-                        *o = transmission(&b, r, *tmax, &mut 0) == Vec3::ZERO;
+                        *o = transmission(&b, r, *tmax, &mut 0, &mut None) == Vec3::ZERO;
                     }
                 }
             });
@@ -260,7 +260,7 @@ fn main() -> anyhow::Result<()> {
                             p.set(k, r, 0.0, *tmax);
                         }
                     }
-                    kernels.transmissions(&b, &p, &mut light, &mut [0; MAX_LANES]);
+                    kernels.transmissions(&b, &p, &mut light, &mut [0; MAX_LANES], &mut None);
                     for (k, o) in out.iter_mut().enumerate() {
                         *o = p.lanes() & 1 << k != 0 && light[k] == Vec3::ZERO;
                     }

@@ -296,7 +296,7 @@ fn check_rays(
         };
         let want = brute_transmission(b, ray, seg);
         for w in &walks {
-            let got = transmission(w, ray, seg, &mut 0);
+            let got = transmission(w, ray, seg, &mut 0, &mut None);
             assert!(
                 close3(got, want),
                 "{}: transmission to {seg}: BVH walk {} {got}, brute force {want}",
@@ -505,8 +505,8 @@ fn planes_only_scene_has_no_nodes_and_still_hits() {
     let hit = closest_hit(&b, &ray, 0.0, NO_HIT);
     assert_eq!(hit.prim, PLANE_FLAG);
     assert!((hit.t - 5.0).abs() < 1e-6);
-    assert_eq!(transmission(&b, &ray, 10.0, &mut 0), Vec3::ZERO);
-    assert_eq!(transmission(&b, &ray, 4.0, &mut 0), Vec3::ONE);
+    assert_eq!(transmission(&b, &ray, 10.0, &mut 0, &mut None), Vec3::ZERO);
+    assert_eq!(transmission(&b, &ray, 4.0, &mut 0, &mut None), Vec3::ONE);
 }
 
 /// Largest distance from the true surface, as a fraction of the radius, of the hit points

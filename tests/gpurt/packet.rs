@@ -149,20 +149,29 @@ fn check_closest(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) 
     (packed, all)
 }
 
+/// Traces the shadow rays of `groups` as packets with `kernels` and alone, each way with the
+/// blocker of the last ray carried over (`hint`, as the renderer carries one a light; here
+/// from ray to ray whatever the light), against the walk alone without one. Returns the
+/// rays the packets answered.
 fn check_shadows(b: &Bindings, kernels: &Kernels, groups: &[Group], what: &str) -> usize {
     let mut p = Packet::default();
     let mut light = [Vec3::ZERO; MAX_LANES];
     let mut packed = 0;
+    let (mut hint, mut alone_hint) = (None, None);
     for (g, group) in groups.iter().enumerate() {
         p.clear();
         for (k, (ray, _, tmax)) in group.iter().enumerate() {
             p.set(k, ray, 0.0, *tmax);
         }
         packed += kernels
-            .transmissions(b, &p, &mut light, &mut [0; MAX_LANES])
+            .transmissions(b, &p, &mut light, &mut [0; MAX_LANES], &mut hint)
             .count_ones() as usize;
         for (k, (ray, _, tmax)) in group.iter().enumerate() {
-            if let Some(why) = light_differs(light[k], transmission(b, ray, *tmax, &mut 0)) {
+            let alone = transmission(b, ray, *tmax, &mut 0, &mut None);
+            let hinted = transmission(b, ray, *tmax, &mut 0, &mut alone_hint);
+            if let Some(why) = light_differs(light[k], alone)
+                .or_else(|| light_differs(hinted, alone).map(|why| format!("hinted: {why}")))
+            {
                 panic!(
                     "{what}, {}: shadow packet {g} lane {k}, {ray:?}: {why}",
                     kernels.isa().name()
@@ -423,6 +432,89 @@ fn packets_find_the_single_ray_walks_hits_among_planes_and_boxes() {
     );
 }
 
+/// An opaque ball under a light above a floor, among smaller balls (so that the tree has
+/// levels to walk), and a glass ball beside it.
+fn ball_under_a_light() -> String {
+    let mut src = String::from(
+        "v\nfrom 0 -12 6\nat 0 0 1\nup 0 0 1\nangle 45\nhither 0.01\nresolution 8 8\n\
+         b 0 0 0\nl 0 0 10\nf 0.8 0.8 0.8 1 0 1 0 1\ns 0 0 5 1\n\
+         p 4\n-20 -20 0\n20 -20 0\n20 20 0\n-20 20 0\n",
+    );
+    for i in 0..60 {
+        let (x, y) = ((i % 10) as f32 - 4.5, (i / 10) as f32 * 1.5 + 3.0);
+        src += &format!("s {x} {y} 0.5 0.2\n");
+    }
+    src + "f 0.9 0.9 1 0 0 1 0.8 1.5\ns 4 0 3 0.8\n"
+}
+
+/// The blocker of the last shadow ray to a light (`hint`) is tested first: a ray it blocks
+/// walks no tree, alone or in a packet, and gets the same darkness; a ray it does not block
+/// walks as before and gets the same light; a glass ball is never taken for a blocker.
+#[test]
+fn a_shadow_ray_blocked_where_the_last_one_was_walks_no_tree() {
+    let dir = crate::common::temp_dir("packet-blocker");
+    let path = dir.join("ball.nff");
+    std::fs::write(&path, ball_under_a_light()).unwrap();
+    let buffers = load(&path);
+    let globals = small_frame(&buffers);
+    let b = Bindings::new(&buffers, &globals);
+    let light = Vec3::new(0.0, 0.0, 10.0);
+    let shadow = |from: Vec3| {
+        let to = light - from;
+        let ray = Ray {
+            origin: from,
+            dir: to.normalize(),
+        };
+        (ray, to.length())
+    };
+    // Under the ball: blocked.
+    let (under, dist) = shadow(Vec3::new(0.1, -0.2, 0.01));
+    let (mut hint, mut walked) = (None, 0);
+    assert_eq!(
+        transmission(&b, &under, dist, &mut walked, &mut hint),
+        Vec3::ZERO
+    );
+    let blocker = hint.expect("the ball blocked it");
+    assert_eq!(buffers.prims[blocker as usize].kind(), PRIM_SPHERE);
+    assert!(walked > 0);
+    let mut again = 0;
+    assert_eq!(
+        transmission(&b, &under, dist, &mut again, &mut hint),
+        Vec3::ZERO
+    );
+    assert_eq!(
+        (again, hint),
+        (0, Some(blocker)),
+        "walked with the blocker known"
+    );
+    // Beside it, in the open and through the glass ball: the light the walk gives.
+    for from in [Vec3::new(-8.0, 0.0, 0.01), Vec3::new(4.5, 0.0, 0.01)] {
+        let (ray, dist) = shadow(from);
+        let mut nodes = 0;
+        let lit = transmission(&b, &ray, dist, &mut nodes, &mut hint);
+        assert_ne!(lit, Vec3::ZERO, "from {from}");
+        assert!(light_differs(lit, transmission(&b, &ray, dist, &mut 0, &mut None)).is_none());
+        assert!(nodes > 0);
+        assert_eq!(hint, Some(blocker), "from {from}");
+    }
+    // A packet of rays under the ball, with the blocker known: no node fetched.
+    for k in &all_kernels() {
+        let mut p = Packet::default();
+        for lane in 0..k.lanes() {
+            let (ray, dist) = shadow(Vec3::new(0.05 * lane as f32, 0.1, 0.01));
+            p.set(lane, &ray, 0.0, dist);
+        }
+        let (mut lights, mut nodes) = ([Vec3::ONE; MAX_LANES], [0; MAX_LANES]);
+        let mut packet_hint = None;
+        k.transmissions(&b, &p, &mut lights, &mut nodes, &mut packet_hint);
+        assert_eq!(packet_hint, Some(blocker), "{}", k.isa().name());
+        assert!(nodes.iter().sum::<u32>() > 0);
+        k.transmissions(&b, &p, &mut lights, &mut nodes, &mut packet_hint);
+        assert_eq!(nodes, [0; MAX_LANES], "{}", k.isa().name());
+        assert!(lights[..k.lanes()].iter().all(|&l| l == Vec3::ZERO));
+    }
+}
+
 /// A glass panel of one material between a light and the floor, a glass sphere of that
 /// material under it, and with `two`, a glass sphere of another.
 fn glass(two: bool) -> String {
@@ -469,7 +561,7 @@ fn shadow_packets_answer_rays_through_glass_of_one_material() {
         let mut lights: Vec<[u32; 3]> = rays
             .iter()
             .map(|(ray, _, tmax)| {
-                transmission(&b, ray, *tmax, &mut 0)
+                transmission(&b, ray, *tmax, &mut 0, &mut None)
                     .to_array()
                     .map(f32::to_bits)
             })

@@ -26,6 +26,7 @@ use glam::Vec3;
 use super::lights::{Surfaces, light_rays, packed};
 use super::packet::{Kernels, MAX_LANES, Packet};
 use super::tracer::Alone;
+use super::wide_ray;
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
@@ -95,6 +96,9 @@ struct Stage {
     /// `lights.len() / MAX_LANES` a lane: one a point or directional light, in the
     /// lights' order.
     lights: Vec<Lit>,
+    /// The primitive that blocked a lane of the last shadow packet to each of the
+    /// `shadowed` lights, tested first by the next (`Kernels::transmissions`' hint).
+    blockers: Vec<Option<u32>>,
 }
 
 impl Stage {
@@ -108,6 +112,7 @@ impl Stage {
             surfaces: [NO_SURFACE; MAX_LANES],
             met: 0,
             lights: vec![UNLIT; MAX_LANES * shadowed],
+            blockers: vec![None; shadowed],
         }
     }
 
@@ -149,7 +154,7 @@ impl Stage {
             let packed = if packet.lanes() == 0 {
                 0
             } else {
-                kernels.transmissions(b, packet, &mut light, &mut nodes)
+                kernels.transmissions(b, packet, &mut light, &mut nodes, &mut self.blockers[j])
             };
             for k in lanes_of(self.met) {
                 self.lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
@@ -202,10 +207,14 @@ struct Known<'a> {
     lights: &'a [Lit],
     /// Rays answered from packets, by kind.
     counts: RayCounts,
+    /// The primitive that blocked the last shadow ray walked alone to each light.
+    blockers: &'a mut [Option<u32>],
+    /// The light whose sample the shading is taking, where it is one of `b.lights`.
+    light: Option<usize>,
 }
 
 impl<'a> Known<'a> {
-    fn new(stages: &'a [Stage], k: usize) -> Self {
+    fn new(stages: &'a [Stage], k: usize, blockers: &'a mut [Option<u32>]) -> Self {
         let waiting = (0..stages.len())
             .filter(|&i| stages[i].traced & 1 << k != 0)
             .fold(0, |w, i| w | 1 << i);
@@ -216,6 +225,8 @@ impl<'a> Known<'a> {
             next: None,
             lights: &[],
             counts: RayCounts::default(),
+            blockers,
+            light: None,
         }
     }
 }
@@ -253,7 +264,12 @@ impl Tracer for Known<'_> {
     }
 
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
-        Alone.transmission(b, ray, tmax, nodes)
+        let mut none = None;
+        let hint = match self.light {
+            Some(i) => &mut self.blockers[i],
+            None => &mut none,
+        };
+        wide_ray::transmission(b, ray, tmax, nodes, hint)
     }
 
     fn surface(&mut self, b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
@@ -291,8 +307,17 @@ impl Tracer for Known<'_> {
             }
             return lit.sample;
         }
+        self.light = index_in(b.lights, light);
         light_sample(b, self, at, (light, k), rng, counts)
     }
+}
+
+/// Where `light` lies in `lights`, if it is one of them (an emitter's triangles are not).
+fn index_in(lights: &[GpuLight], light: &GpuLight) -> Option<usize> {
+    let at = std::ptr::from_ref(light) as usize;
+    let first = lights.as_ptr() as usize;
+    let i = at.checked_sub(first)? / std::mem::size_of::<GpuLight>();
+    (i < lights.len()).then_some(i)
 }
 
 /// Pixels of a packet, `(columns, rows)`, for `lanes` lanes.
@@ -324,6 +349,7 @@ pub fn render_tile(
     // The camera rays, then their mirror rays as deep as the shading traces them.
     let depth = (g.max_depth as usize).clamp(1, STAGES);
     let mut stages: Vec<Stage> = (0..depth).map(|_| Stage::new(shadowed.len())).collect();
+    let mut blockers = vec![None; b.lights.len()];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
@@ -345,7 +371,7 @@ pub fn render_tile(
                 if g.aov != AOV_COLOR {
                     let eye = &stages[0];
                     for (k, &(i, _)) in pixels[..n].iter().enumerate() {
-                        let mut known = Known::new(&stages[..1], k);
+                        let mut known = Known::new(&stages[..1], k, &mut blockers);
                         sums[i] += aov(b, &mut known, &eye.rays[k], counts);
                         counts.add(&known.counts);
                     }
@@ -382,7 +408,7 @@ pub fn render_tile(
                         counts.eye_packed += u64::from(eye.packed & 1 << k != 0);
                         continue;
                     }
-                    let mut known = Known::new(&stages, k);
+                    let mut known = Known::new(&stages, k, &mut blockers);
                     let mut rng = rng;
                     sums[i] += trace(b, &mut known, &eye.rays[k], &mut rng, counts);
                     counts.add(&known.counts);

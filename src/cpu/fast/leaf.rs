@@ -39,7 +39,8 @@ pub(crate) fn leaf_triangles4(
 
 /// Each primitive of the leaf that the segment `(0, tmax)` crosses, in the order
 /// `transmission` multiplies their factors, and how many times (a sphere or a cone can be
-/// passed through): `cross(material, times)`, until it returns false; false when it did.
+/// passed through): `cross(prim, material, times)`, until it returns false; false when it
+/// did.
 /// The packets' lone shadow lanes (`packet/single.rs`) cross leaves here too.
 #[inline(always)]
 pub(crate) fn leaf_crossings(
@@ -48,15 +49,42 @@ pub(crate) fn leaf_crossings(
     inv_dir: Vec3,
     (first, count): (u32, u32),
     tmax: f32,
-    mut cross: impl FnMut(u32, u32) -> bool,
+    cross: impl FnMut(u32, u32, u32) -> bool,
 ) -> bool {
     let leaf = &b.prims[first as usize..(first + count) as usize];
+    let triangles = leaf_triangles4(b, first, leaf, ray);
+    crossings_of((ray, inv_dir), (first, leaf), triangles, tmax, cross)
+}
+
+/// Whether the opaque primitive `prim` blocks the segment `(0, tmax)`: `leaf_crossings`'
+/// test of it alone, from the primitive itself (its leaf's block, which it may share with
+/// others, holds it in another lane).
+#[inline(always)]
+pub(crate) fn blocks(b: &Bindings, ray: &Ray, inv_dir: Vec3, prim: u32, tmax: f32) -> bool {
+    let leaf = &b.prims[prim as usize..prim as usize + 1];
+    let triangles = intersect::intersect_triangles4(leaf, ray);
+    let opaque = |material: u32| b.materials[material as usize].t <= 0.0;
+    !crossings_of((ray, inv_dir), (prim, leaf), triangles, tmax, |_, m, _| {
+        !opaque(m)
+    })
+}
+
+/// `leaf_crossings` of the primitives `leaf`, the first of them `first`, with the four
+/// triangles' distances `triangles` where the leaf is of triangles.
+#[inline(always)]
+fn crossings_of(
+    (ray, inv_dir): (&Ray, Vec3),
+    (first, leaf): (u32, &[GpuPrim]),
+    triangles: Option<(Vec4, Vec4, Vec4)>,
+    tmax: f32,
+    mut cross: impl FnMut(u32, u32, u32) -> bool,
+) -> bool {
     // Loops, not `Iterator::all`, which the compiler leaves out of line, where it loses
     // the single-ray walk's instruction set (`closest_wide_v3`).
-    if let Some((t, _, _)) = leaf_triangles4(b, first, leaf, ray) {
+    if let Some((t, _, _)) = triangles {
         // As in `closest_in_leaf`: four at once, then in order. A triangle is crossed once.
         for k in lanes_of(crossings(t, 0.0, tmax, leaf.len())) {
-            if !cross(leaf[k].material(), 1) {
+            if !cross(first + k as u32, leaf[k].material(), 1) {
                 return false;
             }
         }
@@ -67,16 +95,17 @@ pub(crate) fn leaf_crossings(
         let in0 = crossings(t0, 0.0, tmax, leaf.len());
         let in1 = crossings(t1, 0.0, tmax, leaf.len());
         for k in lanes_of(in0 | in1) {
-            if !cross(leaf[k].material(), (in0 >> k & 1) + (in1 >> k & 1)) {
+            let times = (in0 >> k & 1) + (in1 >> k & 1);
+            if !cross(first + k as u32, leaf[k].material(), times) {
                 return false;
             }
         }
         return true;
     }
-    for p in leaf {
+    for (i, p) in (first..).zip(leaf) {
         let t = intersect::intersect_prim(p, ray, inv_dir);
         let times = (t.x > 0.0 && t.x < tmax) as u32 + (t.y > 0.0 && t.y < tmax) as u32;
-        if times > 0 && !cross(p.material(), times) {
+        if times > 0 && !cross(i, p.material(), times) {
             return false;
         }
     }
@@ -84,7 +113,7 @@ pub(crate) fn leaf_crossings(
 }
 
 /// Multiplies `light` by the transmission of each crossing of the leaf's primitives within
-/// `(0, tmax)`; false when one of them is opaque.
+/// `(0, tmax)`; the primitive that blocks it, where one of them is opaque.
 #[inline(always)]
 pub(crate) fn transmit_leaf(
     b: &Bindings,
@@ -93,7 +122,8 @@ pub(crate) fn transmit_leaf(
     leaf: (u32, u32),
     tmax: f32,
     light: &mut Vec3,
-) -> bool {
+) -> Option<u32> {
+    let mut blocker = None;
     leaf_crossings(
         b,
         ray,
@@ -101,9 +131,10 @@ pub(crate) fn transmit_leaf(
         leaf,
         tmax,
         #[inline(always)]
-        |material, times| {
+        |prim, material, times| {
             let m = &b.materials[material as usize];
             if m.t <= 0.0 {
+                blocker = Some(prim);
                 return false;
             }
             for _ in 0..times {
@@ -111,7 +142,8 @@ pub(crate) fn transmit_leaf(
             }
             true
         },
-    )
+    );
+    blocker
 }
 
 /// Tests the leaf's primitives `first..first + count`, keeping the nearest in `hit`.

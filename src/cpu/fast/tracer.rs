@@ -18,6 +18,6 @@ impl Tracer for Alone {
     }
     #[inline]
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
-        wide_ray::transmission(b, ray, tmax, nodes)
+        wide_ray::transmission(b, ray, tmax, nodes, &mut None)
     }
 }

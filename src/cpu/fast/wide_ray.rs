@@ -6,7 +6,7 @@ use glam::Vec3;
 
 #[cfg(target_arch = "x86_64")]
 use super::isa;
-use super::leaf::{closest_in_leaf, transmit_leaf};
+use super::leaf::{blocks, closest_in_leaf, transmit_leaf};
 use super::wide::{self, Slabs};
 use crate::bvh::wide::WideNode;
 use crate::cpu::types::{Bindings, Hit, Ray};
@@ -32,9 +32,18 @@ pub fn closest_hit(b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
     closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
 }
 
-/// `traverse::transmission` as the CPU renders it, as `closest_hit` is.
+/// `traverse::transmission` as the CPU renders it, as `closest_hit` is. `hint` is the
+/// primitive that blocked the caller's last shadow ray to the same light, if it kept one:
+/// tested before the walk (a ray it blocks walks no tree, with the same answer, since an
+/// opaque crossing anywhere blocks), and set to the primitive that blocks this ray.
 #[inline(always)]
-pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
+pub fn transmission(
+    b: &Bindings,
+    ray: &Ray,
+    tmax: f32,
+    nodes: &mut u32,
+    hint: &mut Option<u32>,
+) -> Vec3 {
     let Some(wide) = b.wide.filter(|_| b.globals.n_nodes > 0) else {
         return traverse::transmission(b, ray, tmax, nodes);
     };
@@ -44,11 +53,11 @@ pub fn transmission(b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3
     #[cfg(target_arch = "x86_64")]
     if isa::x86_64_v3() {
         // SAFETY: as in `closest_hit`.
-        return unsafe { transmission_wide_v3(b, wide, ray, tmax, nodes, light) };
+        return unsafe { transmission_wide_v3(b, wide, ray, (tmax, nodes, hint), light) };
     }
     let inv_dir = intersect::safe_inverse(ray.dir);
     let slabs = Slabs::new(ray.origin, inv_dir);
-    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
+    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
 }
 
 /// `closest_hit` through the CPU's eight-wide tree (`fast/wide.rs`), the planes done (the
@@ -126,10 +135,13 @@ fn transmission_wide(
     wide: &[WideNode],
     ray: &Ray,
     (inv_dir, slabs): (Vec3, &impl wide::Boxes),
-    (tmax, nodes): (f32, &mut u32),
+    (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
     mut light: Vec3,
 ) -> Vec3 {
-    let mut blocked = false;
+    if hint.is_some_and(|p| blocks(b, ray, inv_dir, p, tmax)) {
+        return Vec3::ZERO;
+    }
+    let mut blocker = None;
     wide::walk::<false>(
         wide,
         slabs,
@@ -138,11 +150,17 @@ fn transmission_wide(
         nodes,
         #[inline(always)]
         |first, count| {
-            blocked = !transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light);
-            (!blocked).then_some(tmax)
+            blocker = transmit_leaf(b, ray, inv_dir, (first, count), tmax, &mut light);
+            blocker.is_none().then_some(tmax)
         },
     );
-    if blocked { Vec3::ZERO } else { light }
+    match blocker {
+        Some(_) => {
+            *hint = blocker;
+            Vec3::ZERO
+        }
+        None => light,
+    }
 }
 
 /// `transmission_wide` compiled for x86-64-v3, as `closest_wide_v3` is.
@@ -152,12 +170,11 @@ fn transmission_wide_v3(
     b: &Bindings,
     wide: &[WideNode],
     ray: &Ray,
-    tmax: f32,
-    nodes: &mut u32,
+    (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
     light: Vec3,
 ) -> Vec3 {
     let inv_dir = intersect::safe_inverse(ray.dir);
     // SAFETY: as in `closest_wide_v3`.
     let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes), light)
+    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
 }

@@ -55,8 +55,10 @@ pub fn closest_hits<L: Lanes>(l: L, b: &Bindings, rows: &Rows, hits: &mut [Hit; 
     packed
 }
 
-/// `transmission(b, ray, tmax)` of every ray of `rows` (whose `tmin` must be 0), into
-/// `light`, and the node fetches of each lane into `nodes` (as `closest_hits` counts them).
+/// `transmission(b, ray, tmax, _, hint)` of every ray of `rows` (whose `tmin` must be 0),
+/// into `light`, and the node fetches of each lane into `nodes` (as `closest_hits` counts
+/// them): `hint`, the primitive that blocked the last packet to the same light, is tested
+/// against every lane before the walk, and is set to the last that blocks one of these.
 /// Returns the lanes the occlusion packet answered: blocked, crossing nothing, or crossing
 /// surfaces of one material that transmits light; the planes are each lane's own, and
 /// lanes crossing two such materials go alone, as do all where the packet cannot (see
@@ -68,6 +70,7 @@ pub fn transmissions<L: Lanes>(
     rows: &Rows,
     light: &mut [Vec3; MAX_LANES],
     nodes: &mut [u32; MAX_LANES],
+    hint: &mut Option<u32>,
 ) -> u32 {
     // The planes first, lane by lane (most scenes have none: all lanes open).
     let mut open = if b.planes.is_empty() { rows.lanes } else { 0 };
@@ -83,7 +86,10 @@ pub fn transmissions<L: Lanes>(
     }
     let (found, packed) = match b.wide {
         Some(wide) if open.count_ones() >= MIN_LANES => {
-            let found = walk::occluded(l, b, wide, rows, open);
+            let found = walk::occluded(l, b, wide, rows, open, *hint);
+            if found.blocker.is_some() {
+                *hint = found.blocker;
+            }
             let packed = found.traced & !found.mixed;
             (found, packed)
         }
@@ -101,7 +107,7 @@ pub fn transmissions<L: Lanes>(
         }
     }
     for k in lanes_of(open & !packed) {
-        light[k] = transmission(b, &rows.ray(k), rows.tmax[k], &mut nodes[k]);
+        light[k] = transmission(b, &rows.ray(k), rows.tmax[k], &mut nodes[k], hint);
     }
     packed
 }

@@ -179,8 +179,9 @@ impl Kernels {
         }
     }
 
-    /// `transmission(b, ray, tmax)` of every ray of `p` (whose `tmin` must be 0), into
-    /// `light`, and each lane's node fetches into `nodes`: see `answer::transmissions`.
+    /// `transmission(b, ray, tmax, _, hint)` of every ray of `p` (whose `tmin` must be 0),
+    /// into `light`, and each lane's node fetches into `nodes`: see
+    /// `answer::transmissions`.
     /// Returns the lanes the occlusion packet answered.
     pub fn transmissions(
         &self,
@@ -188,6 +189,7 @@ impl Kernels {
         p: &Packet,
         light: &mut [Vec3; MAX_LANES],
         nodes: &mut [u32; MAX_LANES],
+        hint: &mut Option<u32>,
     ) -> u32 {
         debug_assert!(
             lanes_of(p.rows.lanes).all(|k| p.rows.tmin[k] == 0.0),
@@ -197,12 +199,14 @@ impl Kernels {
         use x86_walks::Kernels as _;
         match self.kind {
             #[cfg(target_arch = "x86_64")]
-            Kind::Avx512(l) => l.transmissions(b, &p.rows, light, nodes),
+            Kind::Avx512(l) => l.transmissions(b, &p.rows, light, nodes, hint),
             #[cfg(target_arch = "x86_64")]
-            Kind::Avx2(l) => l.transmissions(b, &p.rows, light, nodes),
+            Kind::Avx2(l) => l.transmissions(b, &p.rows, light, nodes, hint),
             #[cfg(target_arch = "x86_64")]
-            Kind::Sse(l) => l.transmissions(b, &p.rows, light, nodes),
-            Kind::Portable => answer::transmissions(lanes::Portable, b, &p.rows, light, nodes),
+            Kind::Sse(l) => l.transmissions(b, &p.rows, light, nodes, hint),
+            Kind::Portable => {
+                answer::transmissions(lanes::Portable, b, &p.rows, light, nodes, hint)
+            }
         }
     }
 }

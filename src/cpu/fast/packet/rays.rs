@@ -161,6 +161,8 @@ pub struct Occluded {
     pub traced: u32,
     /// Wide nodes the walk fetched, as `Found::nodes`.
     pub nodes: u32,
+    /// The opaque primitive that blocked a lane last, if one did.
+    pub blocker: Option<u32>,
 }
 
 impl Occluded {

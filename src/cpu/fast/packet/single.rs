@@ -85,10 +85,21 @@ pub fn occluded_from(
     let bit = 1 << lane;
     let mut nodes = 0;
     wide::walk_from::<false>(wide, &slabs, node, 0.0, tmax, &mut nodes, |first, count| {
-        let open = leaf_crossings(b, ray, inv_dir, (first, count), tmax, |material, times| {
-            out.cross(b, material, bit, if times == 2 { bit } else { 0 });
-            out.open(bit) != 0
-        });
+        let open = leaf_crossings(
+            b,
+            ray,
+            inv_dir,
+            (first, count),
+            tmax,
+            |prim, material, times| {
+                let blocked = out.blocked;
+                out.cross(b, material, bit, if times == 2 { bit } else { 0 });
+                if out.blocked != blocked {
+                    out.blocker = Some(prim);
+                }
+                out.open(bit) != 0
+            },
+        );
         open.then_some(tmax)
     });
     out.nodes += nodes;

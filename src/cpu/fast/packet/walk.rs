@@ -295,6 +295,7 @@ pub fn occluded<L: Lanes>(
     wide: &[WideNode],
     rows: &Rows,
     packet: u32,
+    hint: Option<u32>,
 ) -> Occluded {
     let r = Rays::new(l, rows);
     let packet = packet & r.finite;
@@ -305,11 +306,22 @@ pub fn occluded<L: Lanes>(
     if b.globals.n_nodes == 0 || wide.is_empty() || packet == 0 {
         return out;
     }
+    let mut alive = packet;
+    // The primitive that blocked the last packet to the same light, first: lanes it blocks
+    // walk no further. Only an opaque one, whose crossings the walk cannot meet again
+    // to count twice.
+    let opaque = |p: u32| b.materials[b.prims[p as usize].material() as usize].t <= 0.0;
+    if let Some(p) = hint.filter(|&p| opaque(p)) {
+        leaf::occlusion(l, b, &r, rows, (p, 1), packet, &mut out);
+        alive = out.open(alive);
+        if alive == 0 {
+            return out;
+        }
+    }
     let tmax = l.load(&rows.tmax);
     let frustum = Frustum::new(l, &r, packet);
     let tmin_lo = l.min_of(r.tmin, packet);
     let tmax_hi = l.max_of(tmax, packet);
-    let mut alive = packet;
     let mut stack = Stack::new();
     let mut next = Some(Entry {
         child: 0,

@@ -20,6 +20,7 @@ pub trait Kernels {
         rows: &Rows,
         light: &mut [Vec3; MAX_LANES],
         nodes: &mut [u32; MAX_LANES],
+        hint: &mut Option<u32>,
     ) -> u32;
 }
 
@@ -48,6 +49,7 @@ macro_rules! kernels {
                 rows: &Rows,
                 light: &mut [Vec3; MAX_LANES],
                 nodes: &mut [u32; MAX_LANES],
+                hint: &mut Option<u32>,
             ) -> u32 {
                 #[target_feature(enable = $features)]
                 fn compiled(
@@ -56,11 +58,12 @@ macro_rules! kernels {
                     rows: &Rows,
                     light: &mut [Vec3; MAX_LANES],
                     nodes: &mut [u32; MAX_LANES],
+                    hint: &mut Option<u32>,
                 ) -> u32 {
-                    answer::transmissions(l, b, rows, light, nodes)
+                    answer::transmissions(l, b, rows, light, nodes, hint)
                 }
                 // SAFETY: as in `closest_hits`.
-                unsafe { compiled(self, b, rows, light, nodes) }
+                unsafe { compiled(self, b, rows, light, nodes, hint) }
             }
         }
     };
