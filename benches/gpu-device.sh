@@ -31,8 +31,9 @@
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
 # for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default; a first run on a fresh machine compiles every shader variant cold, so give it 600) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
-# than the limit and still says where it was; TEST_THREADS sets its threads (8 by default: the
-# number under which a fresh H200 ran the suite through, docs/gpu.md).
+# than the limit and still says where it was (and `stall.txt`, where each thread waited);
+# TEST_THREADS sets its threads (8 by default: the number under which a fresh H200 ran the
+# suite through, docs/gpu.md).
 # `loss` looks for what stalls the GPU when a device is destroyed with work in flight
 # (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
@@ -78,6 +79,22 @@ cp .device/gpurt-debug target/debug/gpurt
 export GPURT_REQUIRE_GPU=1 CI=true GPURT_ADAPTER=${GPURT_ADAPTER:-nvidia}
 ./.device/gpurt "$manifest/scenes/spheres.nff" -o "$OUT/spheres.png" -v --stats 2>&1
 
+
+# Each thread of process $1 and of its descendants: its name (a test thread is named for
+# its test, cut to 15 characters), its state and the kernel function it waits in, then
+# its kernel stack (readable as root): whether a stalled test waits on a lock of its own
+# process (futex) or in the driver (ioctl, poll).
+stall_dump() {
+    local p t
+    for p in "$1" $(pgrep -P "$1"); do
+        echo "process $p: $(tr '\0' ' ' <"/proc/$p/cmdline" 2>/dev/null | cut -c1-200)"
+        for t in /proc/"$p"/task/*; do
+            echo "  task ${t##*/} $(cat "$t/comm" 2>/dev/null | tr ' ' '_')" \
+                "$(awk '{print $3}' "$t/stat" 2>/dev/null) $(cat "$t/wchan" 2>/dev/null)"
+            sed 's/^/      /' "$t/stack" 2>/dev/null | head -12
+        done
+    done
+}
 
 spd="$manifest/../shared/scenes/spd"
 scenes=()
@@ -274,12 +291,29 @@ if [[ $what == *tests* ]]; then
     fi
     # A stalled GPU fails the tests that wait on it within a minute, each saying so,
     # rather than leaving the run to its timeout.
-    GPURT_WAIT_LIMIT=${GPURT_WAIT_LIMIT:-60} timeout "${TESTS_TIMEOUT:-300}" \
-        ./.device/gpurt-tests --test-threads "${TEST_THREADS:-8}" "${skips[@]}" >"$OUT/tests.log" 2>&1
-    status=$?
+    GPURT_WAIT_LIMIT=${GPURT_WAIT_LIMIT:-60} ./.device/gpurt-tests \
+        --test-threads "${TEST_THREADS:-8}" "${skips[@]}" >"$OUT/tests.log" 2>&1 &
+    pid=$!
+    SECONDS=0
+    while kill -0 "$pid" 2>/dev/null && ((SECONDS < ${TESTS_TIMEOUT:-300})); do sleep 1; done
+    if kill -0 "$pid" 2>/dev/null; then
+        # Stopped making progress (docs/gpu.md, "A suite that stops"): where each thread of
+        # the test process and of the processes it started waits, before they are killed.
+        stall_dump "$pid" >"$OUT/stall.txt" 2>&1
+        pkill -KILL -P "$pid" 2>/dev/null
+        kill -KILL "$pid" 2>/dev/null
+        wait "$pid" 2>/dev/null
+        status=124
+    else
+        wait "$pid"
+        status=$?
+    fi
     grep -v '^test .* ok$' "$OUT/tests.log" | tail -60
     if [[ $status == 124 ]]; then
-        echo "tests stopped after ${TESTS_TIMEOUT:-300} s; not reported:"
+        echo "tests stopped after ${TESTS_TIMEOUT:-300} s; threads by what they wait in" \
+            "(stall.txt has each one's kernel stack):"
+        grep -E '^  task' "$OUT/stall.txt" | awk '{print $4, $5}' | sort | uniq -c | sort -rn | head -20
+        echo "not reported:"
         ./.device/gpurt-tests --list 2>/dev/null | sed -n 's/: test$//p' | sort >/tmp/all-tests
         grep -oE '^test [^ ]+' "$OUT/tests.log" | cut -d' ' -f2 | sort | comm -23 /tmp/all-tests - | head -40
     fi
