@@ -379,11 +379,7 @@ pub fn occlusion<L: Lanes>(
         };
         let once = once & lanes;
         if once != 0 {
-            let blocked = out.blocked;
-            out.cross(b, p.material(), once, twice);
-            if out.blocked != blocked {
-                out.blocker = Some(i);
-            }
+            out.cross(b, (i, p.material()), once, twice);
             lanes = out.open(lanes);
             if lanes == 0 {
                 break;

@@ -173,16 +173,17 @@ impl Occluded {
         lanes & !(self.blocked | self.mixed)
     }
 
-    /// The lanes `once` cross a surface of material `material` (a primitive's), those of
-    /// them in `twice` a second time (a sphere or cone passed through).
+    /// The lanes `once` cross a surface of primitive `prim`, of material `material`, those
+    /// of them in `twice` a second time (a sphere or cone passed through).
     #[inline(always)]
-    pub fn cross(&mut self, b: &Bindings, material: u32, once: u32, twice: u32) {
+    pub fn cross(&mut self, b: &Bindings, (prim, material): (u32, u32), once: u32, twice: u32) {
         let once = self.open(once);
         if once == 0 {
             return;
         }
         if b.materials[material as usize].t <= 0.0 {
             self.blocked |= once;
+            self.blocker = Some(prim);
             return;
         }
         for k in lanes_of(once) {

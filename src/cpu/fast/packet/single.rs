@@ -92,11 +92,7 @@ pub fn occluded_from(
             (first, count),
             tmax,
             |prim, material, times| {
-                let blocked = out.blocked;
-                out.cross(b, material, bit, if times == 2 { bit } else { 0 });
-                if out.blocked != blocked {
-                    out.blocker = Some(prim);
-                }
+                out.cross(b, (prim, material), bit, if times == 2 { bit } else { 0 });
                 out.open(bit) != 0
             },
         );
