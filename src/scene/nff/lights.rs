@@ -42,15 +42,8 @@ impl Parser<'_> {
         let color = self.hold3(tok, "area light colour", color, MAX_LIGHT);
         let (nu, nut) = self.lx.count("area light samples along u")?;
         let (nv, nvt) = self.lx.count("area light samples along v")?;
-        for (n, t) in [(nu, nut), (nv, nvt)] {
-            if n == 0 || n > MAX_AREA_LIGHT_SAMPLES {
-                return Err(self.lx.error_at(
-                    &t,
-                    format!(
-                        "expected area light samples between 1 and {MAX_AREA_LIGHT_SAMPLES}, found {n}"
-                    ),
-                ));
-            }
+        for count in [(nu, nut), (nv, nvt)] {
+            self.within(count, "area light samples", MAX_AREA_LIGHT_SAMPLES)?;
         }
         if u.cross(v).length_squared() == 0.0 {
             return Err(self

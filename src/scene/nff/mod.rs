@@ -245,6 +245,17 @@ impl Parser<'_> {
         Ok(())
     }
 
+    /// Refuses a count read at `tok` outside `1..=max`, naming what it counts (`noun`).
+    fn within(&self, (n, tok): (u32, Token), noun: &str, max: u32) -> Result<()> {
+        if n == 0 || n > max {
+            return Err(self.lx.error_at(
+                &tok,
+                format!("expected {noun} between 1 and {max}, found {n}"),
+            ));
+        }
+        Ok(())
+    }
+
     /// Refuses a statement that would take the scene past `MAX_PRIMITIVES`.
     fn room(&self, tok: &Token, more: usize) -> Result<()> {
         if self.sink.count() + self.blocks.moving() + more > MAX_PRIMITIVES {

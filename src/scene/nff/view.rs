@@ -65,15 +65,8 @@ impl Parser<'_> {
                 b"resolution" => {
                     let (w, wt) = self.lx.count("resolution width")?;
                     let (h, ht) = self.lx.count("resolution height")?;
-                    for (v, t) in [(w, wt), (h, ht)] {
-                        if v == 0 || v > MAX_IMAGE_SIDE {
-                            return Err(self.lx.error_at(
-                                &t,
-                                format!(
-                                    "expected a resolution between 1 and {MAX_IMAGE_SIDE}, found {v}"
-                                ),
-                            ));
-                        }
+                    for count in [(w, wt), (h, ht)] {
+                        self.within(count, "a resolution", MAX_IMAGE_SIDE)?;
                     }
                     resolution = Some((w, h));
                 }
