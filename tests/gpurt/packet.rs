@@ -64,6 +64,13 @@ fn load(path: &Path) -> SceneBuffers {
     pack::pack(scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
+/// The NFF text `src` written to `NAME.nff` in a directory of its own, and loaded.
+fn load_nff(name: &str, src: &str) -> SceneBuffers {
+    let path = crate::common::temp_dir(&format!("packet-{name}")).join(format!("{name}.nff"));
+    std::fs::write(&path, src).unwrap();
+    load(&path)
+}
+
 /// Why two hits differ, if they do: every field but `cost` (the wide walks count none).
 fn hit_differs(packet: &Hit, alone: &Hit) -> Option<String> {
     let bits = |h: &Hit| (h.t.to_bits(), h.prim, h.u.to_bits(), h.v.to_bits());
@@ -398,10 +405,7 @@ fn planes_and_boxes() -> String {
 /// kernel, and the random rays do meet the planes and the boxes.
 #[test]
 fn packets_find_the_single_ray_walks_hits_among_planes_and_boxes() {
-    let dir = crate::common::temp_dir("packet-planes");
-    let path = dir.join("planes.nff");
-    std::fs::write(&path, planes_and_boxes()).unwrap();
-    let buffers = load(&path);
+    let buffers = load_nff("planes", &planes_and_boxes());
     assert_eq!(buffers.planes.len(), 3);
     let globals = small_frame(&buffers);
     let b = Bindings::new(&buffers, &globals);
@@ -452,10 +456,7 @@ fn ball_under_a_light() -> String {
 /// walks as before and gets the same light; a glass ball is never taken for a blocker.
 #[test]
 fn a_shadow_ray_blocked_where_the_last_one_was_walks_no_tree() {
-    let dir = crate::common::temp_dir("packet-blocker");
-    let path = dir.join("ball.nff");
-    std::fs::write(&path, ball_under_a_light()).unwrap();
-    let buffers = load(&path);
+    let buffers = load_nff("ball", &ball_under_a_light());
     let globals = small_frame(&buffers);
     let b = Bindings::new(&buffers, &globals);
     let light = Vec3::new(0.0, 0.0, 10.0);
@@ -537,7 +538,6 @@ fn glass(two: bool) -> String {
 /// bit, and some rays pass through the sphere as well as the panel.
 #[test]
 fn shadow_packets_answer_rays_through_glass_of_one_material() {
-    let dir = crate::common::temp_dir("packet-glass");
     let light = Vec3::new(0.0, 0.0, 10.0);
     let n = 32;
     let rays: Vec<(Ray, f32, f32)> = (0..n * n)
@@ -553,9 +553,8 @@ fn shadow_packets_answer_rays_through_glass_of_one_material() {
         })
         .collect();
     for two in [false, true] {
-        let path = dir.join(format!("glass-{two}.nff"));
-        std::fs::write(&path, glass(two)).expect("writes");
-        let buffers = load(&path);
+        let name = format!("glass-{two}");
+        let buffers = load_nff(&name, &glass(two));
         let globals = frame::globals(&buffers, &RenderOptions::for_camera(&buffers.camera));
         let b = Bindings::new(&buffers, &globals);
         let mut lights: Vec<[u32; 3]> = rays
@@ -575,7 +574,7 @@ fn shadow_packets_answer_rays_through_glass_of_one_material() {
         );
         for k in &all_kernels() {
             let groups: Vec<Group> = rays.chunks(k.lanes()).map(<[_]>::to_vec).collect();
-            let packed = check_shadows(&b, k, &groups, &path.display().to_string());
+            let packed = check_shadows(&b, k, &groups, &name);
             let what = format!("{two}, {}: {packed} of {}", k.isa().name(), rays.len());
             if two {
                 assert!(packed < rays.len(), "{what}");
