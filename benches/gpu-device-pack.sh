@@ -19,8 +19,10 @@ rm -rf .device
 mkdir -p .device
 strip -o .device/gpurt target/release/gpurt
 strip -o .device/spd target/release/examples/spd
-strip -o .device/gpurt-debug target/debug/gpurt
-strip -o .device/gpurt-tests "$tests"
+# The test process and the gpurt it starts keep their symbol tables (not their debug
+# information): a stalled suite's threads are then named by function (`eu-stack`).
+strip --strip-debug -o .device/gpurt-debug target/debug/gpurt
+strip --strip-debug -o .device/gpurt-tests "$tests"
 # Compressed: what travels to the device is limited in size.
 tar -C .. -cJf .device/shared.tar.xz shared/scenes
 pwd >.device/manifest-dir
@@ -32,5 +34,14 @@ if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
     apt-get $o update -qq
     # shellcheck disable=SC2086
     (cd .gl && apt-get $o download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
+fi
+# eu-stack, for the stacks of a stalled suite's threads (benches/gpu-device.sh).
+if ! ls .gl/elfutils_*.deb >/dev/null 2>&1; then
+    mkdir -p .gl /tmp/amd64/partial
+    o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
+    # shellcheck disable=SC2086
+    apt-get $o update -qq
+    # shellcheck disable=SC2086
+    (cd .gl && apt-get $o download elfutils libdw1 libelf1 libdebuginfod1)
 fi
 du -sh .device .gl

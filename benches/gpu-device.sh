@@ -29,11 +29,11 @@
 # 1080p and 4K at 1 spp and at 4K at 16 spp, each into a cache directory of its own under
 # $OUT (tune-SIZE-SPP/, the kept file included; tune-*.md the tables). `images` renders three scenes at 4K with the scene
 # read from textures and from storage buffers (GPURT_FETCH) and compares the PNGs byte
-# for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300 by default; a first run on a fresh machine compiles every shader variant cold, so give it 600) and, if
+# for byte. `tests` runs the integration tests under a limit (TESTS_TIMEOUT seconds, 300
+# by default; a fresh H200 runs them in about 110 s, its shaders compiled cold) and, if
 # they do not finish, lists the tests that had not reported, so that a hang costs no more
-# than the limit and still says where it was (and `stall.txt`, where each thread waited);
-# TEST_THREADS sets its threads (8 by default: the number under which a fresh H200 ran the
-# suite through, docs/gpu.md).
+# than the limit and still says where it was (and `stall.txt`, where each thread waited,
+# its kernel stack and its own); TEST_THREADS sets its threads (the cores by default).
 # `loss` looks for what stalls the GPU when a device is destroyed with work in flight
 # (a command beside fifteen busy ones, then the GPU tests with both device-loss tests).
 # `huge` generates SPD mount-10, mount-11 and balls-7 (examples/spd.rs, carried as
@@ -51,9 +51,9 @@ if [[ -n ${SMOKE:-} ]]; then
     sizes=96x54,192x108 spps=1,2 hd=(96 54) uhd=(192 108)
 fi
 
-for f in .device/*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
+for f in .device/gpurt*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
 chmod +x .device/gpurt* 2>/dev/null
-if ! ldconfig -p | grep -q libvulkan.so.1; then
+if ! ldconfig -p | grep -q libvulkan.so.1 || ! command -v eu-stack >/dev/null; then
     for f in .gl/*.deb; do dpkg -x "$f" /; done
     ldconfig
 fi
@@ -93,6 +93,11 @@ stall_dump() {
                 "$(awk '{print $3}' "$t/stat" 2>/dev/null) $(cat "$t/wchan" 2>/dev/null)"
             sed 's/^/      /' "$t/stack" 2>/dev/null | head -12
         done
+        # Each thread's own stack, by function (the binaries keep their symbol tables).
+        if command -v eu-stack >/dev/null; then
+            echo "  stacks of process $p:"
+            timeout 60 eu-stack -p "$p" 2>&1 | sed 's/^/    /'
+        fi
     done
 }
 
@@ -292,12 +297,12 @@ if [[ $what == *tests* ]]; then
     # A stalled GPU fails the tests that wait on it within a minute, each saying so,
     # rather than leaving the run to its timeout.
     GPURT_WAIT_LIMIT=${GPURT_WAIT_LIMIT:-60} ./.device/gpurt-tests \
-        --test-threads "${TEST_THREADS:-8}" "${skips[@]}" >"$OUT/tests.log" 2>&1 &
+        --test-threads "${TEST_THREADS:-$(nproc)}" "${skips[@]}" >"$OUT/tests.log" 2>&1 &
     pid=$!
     SECONDS=0
     while kill -0 "$pid" 2>/dev/null && ((SECONDS < ${TESTS_TIMEOUT:-300})); do sleep 1; done
     if kill -0 "$pid" 2>/dev/null; then
-        # Stopped making progress (docs/gpu.md, "A suite that stops"): where each thread of
+        # Stopped making progress (docs/gpu.md, "A suite that stopped"): where each thread of
         # the test process and of the processes it started waits, before they are killed.
         stall_dump "$pid" >"$OUT/stall.txt" 2>&1
         pkill -KILL -P "$pid" 2>/dev/null

@@ -57,11 +57,33 @@ pub fn quiet_device_select() {
     });
 }
 
-/// A wgpu instance for the backends `WGPU_BACKEND` allows, the device-select layer
-/// silenced first (`quiet_device_select`): what every GPU path opens adapters on.
+/// A wgpu instance for Vulkan, Metal and DX12, or for the backends `WGPU_BACKEND` names,
+/// the device-select layer silenced first (`quiet_device_select`): what every GPU path
+/// opens adapters on first. GL is left to `gl_instance`, asked only where these offer no
+/// adapter: an instance with GL starts EGL, and on NVIDIA's driver (580.159 on an H200)
+/// EGL's teardown as a context is dropped deadlocked with Vulkan pipelines compiling and
+/// devices being destroyed on other threads of the process (each thread waiting on a
+/// lock inside the driver's shared library; docs/gpu.md, "A suite that stopped"). It also
+/// spares every start the EGL driver's loading.
 pub fn instance() -> wgpu::Instance {
+    instance_for(wgpu::Backends::PRIMARY)
+}
+
+/// An instance for GL alone, for where `instance` found no adapter; `None` when
+/// `WGPU_BACKEND` names the backends, since `instance` searched exactly those.
+pub fn gl_instance() -> Option<wgpu::Instance> {
+    wgpu::Backends::from_env()
+        .is_none()
+        .then(|| instance_for(wgpu::Backends::GL))
+}
+
+fn instance_for(backends: wgpu::Backends) -> wgpu::Instance {
     quiet_device_select();
-    wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    let descriptor = wgpu::InstanceDescriptor {
+        backends,
+        ..wgpu::InstanceDescriptor::new_without_display_handle()
+    };
+    wgpu::Instance::new(descriptor.with_env())
 }
 
 pub fn describe(info: &wgpu::AdapterInfo) -> String {
@@ -88,8 +110,15 @@ fn rank(info: &wgpu::AdapterInfo) -> (u8, u8) {
 /// (case-insensitive; from `--adapter` or `GPURT_ADAPTER`). `WGPU_BACKEND` limits the
 /// backends searched, as in every wgpu program.
 pub fn open(filter: Option<&str>) -> Result<GpuContext> {
-    let instance = instance();
-    open_on(&instance, filter, None)
+    open_adapter(best_anywhere(filter)?)
+}
+
+/// The best adapter of `instance` (see `best_adapter`), else of `gl_instance`.
+fn best_anywhere(filter: Option<&str>) -> Result<wgpu::Adapter> {
+    match best_adapter(&instance(), filter, None) {
+        Err(Error::NoAdapter(_)) if let Some(gl) = gl_instance() => best_adapter(&gl, filter, None),
+        found => found,
+    }
 }
 
 /// `open` on a given instance, among the adapters that can present to `surface` when
@@ -121,8 +150,7 @@ pub fn choose(filter: Option<&str>) -> Result<Choice> {
     if !named && let Some(why) = no_gpu_device() {
         return Ok(Choice::Cpu(why));
     }
-    let instance = instance();
-    match best_adapter(&instance, filter, None) {
+    match best_anywhere(filter) {
         Ok(adapter) if named || !is_software(&adapter.get_info()) => {
             open_adapter(adapter).map(|ctx| Choice::Gpu(Box::new(ctx)))
         }

@@ -48,7 +48,8 @@ mod wavefront;
 mod waves;
 
 pub use context::{
-    Choice, GpuContext, choose, instance, is_software, open, open_on, quiet_device_select, request,
+    Choice, GpuContext, choose, gl_instance, instance, is_software, open, open_on,
+    quiet_device_select, request,
 };
 pub use cut::DISPATCH_BUDGET;
 #[cfg(feature = "native")]

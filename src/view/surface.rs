@@ -48,11 +48,18 @@ impl Surface {
         readable: bool,
         buffers: &SceneBuffers,
     ) -> Result<Surface> {
-        let instance = gpu::instance();
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| Error::Gpu(format!("cannot draw into the window: {e}")))?;
-        let ctx = gpu::open_on(&instance, adapter, Some(&surface))?;
+        let on = |instance: wgpu::Instance| -> Result<(wgpu::Surface<'static>, GpuContext)> {
+            let surface = instance
+                .create_surface(window.clone())
+                .map_err(|e| Error::Gpu(format!("cannot draw into the window: {e}")))?;
+            let ctx = gpu::open_on(&instance, adapter, Some(&surface))?;
+            Ok((surface, ctx))
+        };
+        // GL only where Vulkan, Metal and DX12 have no adapter for the window (`gpu::instance`).
+        let (surface, ctx) = match on(gpu::instance()) {
+            Err(Error::NoAdapter(_)) if let Some(gl) = gpu::gl_instance() => on(gl)?,
+            found => found?,
+        };
         let caps = surface.get_capabilities(&ctx.adapter);
         // 8-bit formats only: the image's bytes go into the surface texture unchanged.
         let format = caps
