@@ -70,19 +70,22 @@ impl<'a> Device<'a> {
         Device { device }
     }
 
-    /// Runs `f` inside validation and out-of-memory error scopes, turning any captured
-    /// error into `Error::Gpu` naming `what` was being done (never a silent black image).
-    /// An out-of-memory error is the one reported when both come: a resource that could
-    /// not be allocated is invalid, and every later use of it is a validation error that
-    /// hides the cause.
+    /// Runs `f` inside validation, internal and out-of-memory error scopes, turning any
+    /// captured error into `Error::Gpu` naming `what` was being done (never a silent black
+    /// image, nor wgpu's panic for an uncaptured error). An internal error is a driver's
+    /// or a shader translator's (a pipeline its GLSL compiler refuses). An out-of-memory
+    /// error is the one reported when several come: a resource that could not be allocated
+    /// is invalid, and every later use of it is a validation error that hides the cause.
     #[cfg(not(target_arch = "wasm32"))]
     pub(crate) fn scoped<T>(&self, what: &str, f: impl FnOnce() -> T) -> Result<T> {
         let oom = self.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let out = f();
         let v = pollster::block_on(validation.pop());
+        let i = pollster::block_on(internal.pop());
         let o = pollster::block_on(oom.pop());
-        match o.or(v) {
+        match o.or(i).or(v) {
             Some(e) => Err(Error::Gpu(format!("{what}: {}", error_chain(&e)))),
             None => Ok(out),
         }

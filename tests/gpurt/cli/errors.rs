@@ -375,6 +375,37 @@ fn a_gpu_that_does_not_finish_is_an_error_not_a_hang() {
     assert!(o.status.success(), "{}", stderr(&o));
 }
 
+/// Through wgpu's GL backend, asked for by name (`WGPU_BACKEND=gl`; gpurt otherwise
+/// leaves GL out where Vulkan, Metal or DX12 has an adapter), a render ends in an image or
+/// in an error with exit 2 and no file, never in wgpu's panic for an error it was not told
+/// to catch: Mesa's GL compiler refuses the GLSL that naga writes for the shader (an
+/// internal error, not a validation error), and one without a GL adapter has none to
+/// offer.
+#[test]
+fn a_gl_adapter_renders_or_fails_with_an_error() {
+    let d = workdir("gl-backend");
+    std::fs::write(d.join("ball.nff"), SCENE).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["ball.nff", "--backend", "gpu", "-o", "out.png"])
+        .args(["--width", "32", "--height", "32"])
+        .current_dir(&d)
+        .env("GPURT_CACHE_DIR", "")
+        .env("WGPU_BACKEND", "gl")
+        .output()
+        .expect("gpurt runs");
+    let err = stderr(&o);
+    println!("WGPU_BACKEND=gl: {:?}, {err}", o.status.code());
+    match o.status.code() {
+        Some(0) => assert!(d.join("out.png").exists()),
+        Some(2) => {
+            assert!(err.starts_with("gpurt: "), "{err}");
+            assert!(!err.contains("panicked"), "{err}");
+            assert!(!d.join("out.png").exists(), "no output");
+        }
+        code => panic!("exit {code:?}: {err}"),
+    }
+}
+
 /// A GPU out of memory on upload (`GPURT_FAULT=out-of-memory` allocates each texture, or
 /// storage buffer where the adapter reads the scene from buffers, on its own with the process's address space capped just above its size, and
 /// lavapipe's device memory is the process's own: `fault.rs`) ends in an error naming the
