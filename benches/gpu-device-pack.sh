@@ -35,13 +35,14 @@ if ! ls .gl/libvulkan1_*.deb >/dev/null 2>&1; then
     # shellcheck disable=SC2086
     (cd .gl && apt-get $o download libvulkan1 libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2)
 fi
-# eu-stack, for the stacks of a stalled suite's threads (benches/gpu-device.sh).
-if ! ls .gl/elfutils_*.deb >/dev/null 2>&1; then
-    mkdir -p .gl /tmp/amd64/partial
+# eu-stack, for the stacks of a stalled suite's threads (benches/gpu-device.sh unpacks
+# it apart from the system's libraries).
+if ! ls .gl/elfutils/elfutils_*.deb >/dev/null 2>&1; then
+    mkdir -p .gl/elfutils /tmp/amd64/partial
     o='-oAPT::Architecture=amd64 -oAPT::Architectures=amd64 -oDir::State::Lists=/tmp/amd64'
     # shellcheck disable=SC2086
     apt-get $o update -qq
     # shellcheck disable=SC2086
-    (cd .gl && apt-get $o download elfutils libdw1 libelf1 libdebuginfod1)
+    (cd .gl/elfutils && apt-get $o download elfutils libdw1 libelf1 libdebuginfod1)
 fi
 du -sh .device .gl

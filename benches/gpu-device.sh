@@ -53,10 +53,13 @@ fi
 
 for f in .device/gpurt*.xz; do [[ -e $f ]] && xz -dkf "$f"; done
 chmod +x .device/gpurt* 2>/dev/null
-if ! ldconfig -p | grep -q libvulkan.so.1 || ! command -v eu-stack >/dev/null; then
+if ! ldconfig -p | grep -q libvulkan.so.1; then
     for f in .gl/*.deb; do dpkg -x "$f" /; done
     ldconfig
 fi
+# eu-stack (for stall.txt) and its libraries, unpacked apart, replacing nothing.
+eu=/tmp/gpurt-elfutils
+for f in .gl/elfutils/*.deb; do [[ -e $f ]] && dpkg -x "$f" "$eu"; done
 if [[ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]]; then
     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi
@@ -94,9 +97,10 @@ stall_dump() {
             sed 's/^/      /' "$t/stack" 2>/dev/null | head -12
         done
         # Each thread's own stack, by function (the binaries keep their symbol tables).
-        if command -v eu-stack >/dev/null; then
+        if [[ -x $eu/usr/bin/eu-stack ]]; then
             echo "  stacks of process $p:"
-            timeout 60 eu-stack -p "$p" 2>&1 | sed 's/^/    /'
+            LD_LIBRARY_PATH=$eu/usr/lib/x86_64-linux-gnu timeout 60 "$eu/usr/bin/eu-stack" \
+                -p "$p" 2>&1 | sed 's/^/    /'
         fi
     done
 }

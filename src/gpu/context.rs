@@ -61,10 +61,10 @@ pub fn quiet_device_select() {
 /// the device-select layer silenced first (`quiet_device_select`): what every GPU path
 /// opens adapters on first. GL is left to `gl_instance`, asked only where these offer no
 /// adapter: an instance with GL starts EGL, and on NVIDIA's driver (580.159 on an H200)
-/// EGL's teardown as a context is dropped deadlocked with Vulkan pipelines compiling and
-/// devices being destroyed on other threads of the process (each thread waiting on a
+/// EGL's teardown, as a context was dropped, deadlocked with Vulkan pipelines compiling
+/// and devices being destroyed on other threads of the process (each thread waiting on a
 /// lock inside the driver's shared library; docs/gpu.md, "A suite that stopped"). It also
-/// spares every start the EGL driver's loading.
+/// spares the process the EGL driver's loading.
 pub fn instance() -> wgpu::Instance {
     instance_for(wgpu::Backends::PRIMARY)
 }

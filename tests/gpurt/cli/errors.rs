@@ -318,9 +318,9 @@ fn a_gpu_fault_exits_2_without_an_output_file(
 
 /// A GPU lost mid-render (`GPURT_FAULT=lose-device` destroys the device once the first
 /// band is in) ends the command with an error naming the step, a non-zero exit and no
-/// output file, partial or temporary. On every adapter: on H100s and H200s the suite run
-/// with it once stopped making progress, a deadlock in NVIDIA's driver between EGL and
-/// Vulkan (docs/gpu.md, "A suite that stopped"), gone since gpurt leaves GL out.
+/// output file, partial or temporary. On every adapter: on an H100 and H200s the suite with
+/// it stopped making progress, a deadlock in NVIDIA's driver between EGL and Vulkan
+/// (docs/gpu.md, "A suite that stopped"), gone since gpurt leaves GL out there.
 #[test]
 fn a_device_lost_mid_render_exits_non_zero_without_an_output_file() {
     let Some(ctx) = crate::common::gpu_context() else {

@@ -266,9 +266,9 @@ fn a_lost_device_is_an_error_not_an_image() {
 
 /// A device lost while it renders (destroyed once the first band has been read back) ends
 /// the render with an error naming the step, never a partial image. On every adapter: on
-/// H100s and H200s the suite run with it once stopped making progress, a deadlock in
-/// NVIDIA's driver between EGL and Vulkan (docs/gpu.md, "A suite that stopped"), gone
-/// since gpurt leaves GL out.
+/// an H100 and H200s the suite with it stopped making progress, a deadlock in NVIDIA's
+/// driver between EGL and Vulkan (docs/gpu.md, "A suite that stopped"), gone since gpurt
+/// leaves GL out there.
 #[test]
 fn a_device_lost_half_way_is_an_error_not_an_image() {
     let Some(g) = gpu() else {
