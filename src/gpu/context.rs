@@ -150,7 +150,14 @@ pub fn choose(filter: Option<&str>) -> Result<Choice> {
     if !named && let Some(why) = no_gpu_device() {
         return Ok(Choice::Cpu(why));
     }
-    match best_anywhere(filter) {
+    // GL only when asked for, by name or by `WGPU_BACKEND`: the shader does not compile on
+    // Mesa's GL (docs/gpu.md, "Host side"), and the CPU renders wherever it cannot.
+    let found = if named {
+        best_anywhere(filter)
+    } else {
+        best_adapter(&instance(), filter, None)
+    };
+    match found {
         Ok(adapter) if named || !is_software(&adapter.get_info()) => {
             open_adapter(adapter).map(|ctx| Choice::Gpu(Box::new(ctx)))
         }
