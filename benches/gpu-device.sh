@@ -59,7 +59,9 @@ if ! ldconfig -p | grep -q libvulkan.so.1; then
 fi
 # eu-stack (for stall.txt) and its libraries, unpacked apart, replacing nothing.
 eu=/tmp/gpurt-elfutils
-for f in .gl/elfutils/*.deb; do [[ -e $f ]] && dpkg -x "$f" "$eu"; done
+if [[ ! -x $eu/usr/bin/eu-stack ]]; then
+    for f in .gl/elfutils/*.deb; do [[ -e $f ]] && dpkg -x "$f" "$eu"; done
+fi
 if [[ -f /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json ]]; then
     export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 fi

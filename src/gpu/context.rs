@@ -69,9 +69,18 @@ pub fn instance() -> wgpu::Instance {
     instance_for(wgpu::Backends::PRIMARY)
 }
 
+/// What `find` finds on `instance`, or where it finds no adapter there, on `gl_instance`:
+/// the one order every adapter search takes (`open`, `choose` when named, the viewer).
+pub fn on_any_backend<T>(find: impl Fn(wgpu::Instance) -> Result<T>) -> Result<T> {
+    match find(instance()) {
+        Err(Error::NoAdapter(_)) if let Some(gl) = gl_instance() => find(gl),
+        found => found,
+    }
+}
+
 /// An instance for GL alone, for where `instance` found no adapter; `None` when
 /// `WGPU_BACKEND` names the backends, since `instance` searched exactly those.
-pub fn gl_instance() -> Option<wgpu::Instance> {
+fn gl_instance() -> Option<wgpu::Instance> {
     wgpu::Backends::from_env()
         .is_none()
         .then(|| instance_for(wgpu::Backends::GL))
@@ -113,12 +122,9 @@ pub fn open(filter: Option<&str>) -> Result<GpuContext> {
     open_adapter(best_anywhere(filter)?)
 }
 
-/// The best adapter of `instance` (see `best_adapter`), else of `gl_instance`.
+/// The best adapter (see `best_adapter`) on any backend (`on_any_backend`).
 fn best_anywhere(filter: Option<&str>) -> Result<wgpu::Adapter> {
-    match best_adapter(&instance(), filter, None) {
-        Err(Error::NoAdapter(_)) if let Some(gl) = gl_instance() => best_adapter(&gl, filter, None),
-        found => found,
-    }
+    on_any_backend(|instance| best_adapter(&instance, filter, None))
 }
 
 /// `open` on a given instance, among the adapters that can present to `surface` when

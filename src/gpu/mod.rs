@@ -48,7 +48,7 @@ mod wavefront;
 mod waves;
 
 pub use context::{
-    Choice, GpuContext, choose, gl_instance, instance, is_software, open, open_on,
+    Choice, GpuContext, choose, instance, is_software, on_any_backend, open, open_on,
     quiet_device_select, request,
 };
 pub use cut::DISPATCH_BUDGET;

@@ -55,11 +55,7 @@ impl Surface {
             let ctx = gpu::open_on(&instance, adapter, Some(&surface))?;
             Ok((surface, ctx))
         };
-        // GL only where Vulkan, Metal and DX12 have no adapter for the window (`gpu::instance`).
-        let (surface, ctx) = match on(gpu::instance()) {
-            Err(Error::NoAdapter(_)) if let Some(gl) = gpu::gl_instance() => on(gl)?,
-            found => found?,
-        };
+        let (surface, ctx) = gpu::on_any_backend(on)?;
         let caps = surface.get_capabilities(&ctx.adapter);
         // 8-bit formats only: the image's bytes go into the surface texture unchanged.
         let format = caps
