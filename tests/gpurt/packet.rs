@@ -650,7 +650,7 @@ fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
             width: [37, 21, 50][i % 3],
             height: [29, 17, 18][i % 3],
             spp: [3, 1, 5][i % 3],
-            max_depth: [8, 2, 12][i % 3],
+            max_depth: [8, 2, 12, 1][i % 4],
             aov: if i % 5 == 4 { AOV_DEPTH } else { base.aov },
             ..base
         };

@@ -17,7 +17,8 @@
 //! its surface and light samples, which the shadow packets needed, are handed over as
 //! `shade::surface` and `shade::light_sample` made them there (the shading asks for the
 //! surface of the ray it traced last, then for the light samples in the lights' order),
-//! not made a second time.
+//! not made a second time. A camera ray that met nothing, or met a surface that sends no
+//! ray on, is summed from its stage as `trace` would sum it, without `trace`.
 
 use std::ops::Range;
 
@@ -31,7 +32,9 @@ use crate::cpu::intersect::lanes_of;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
     Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, surface, trace,
+    unlit,
 };
+use crate::cpu::texture::textured;
 use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
 
@@ -169,6 +172,37 @@ impl Stage {
                 };
             }
         }
+    }
+
+    /// What `trace` gives lane `k`'s camera ray, which met a surface, where that surface
+    /// sends no ray on (neither mirror nor transmission, or the depth ends there) and every
+    /// light is packed: `1 * direct`, its direct light summed from the packets' answers in
+    /// `direct`'s order, counted as `trace` counts it; `None` where the surface sends a
+    /// ray on. Most of a frame's pixels are such (balls-4's floor), and its shading from
+    /// the stage's arrays skips `trace`'s set-up and its look-ups of the answers.
+    #[inline]
+    fn direct_only(&self, b: &Bindings, k: usize, counts: &mut RayCounts) -> Option<Vec3> {
+        let g = b.globals;
+        let (s, hit) = (&self.surfaces[k], &self.hits[k]);
+        let m = &textured(b, &b.materials[s.material as usize], hit);
+        if g.max_depth > 1 && (m.ks > 0.0 || m.t > 0.0) {
+            return None;
+        }
+        count_nodes(counts, 1, hit.nodes);
+        counts.eye_packed += u64::from(self.packed & 1 << k != 0);
+        let shadowed = self.lights.len() / MAX_LANES;
+        let mut colour = unlit(g, s, m);
+        for lit in &self.lights[k * shadowed..(k + 1) * shadowed] {
+            if let Some(c) = lit.sample {
+                counts.shadow += 1;
+                counts.shadow_nodes += u64::from(lit.nodes);
+                counts.shadow_packed += u64::from(lit.packed);
+                colour += c;
+            }
+        }
+        // `trace`'s sum, `0 + weight * direct` with a weight of 1, to the bit (a -0 comes
+        // out +0).
+        Some(Vec3::ZERO + 1.0 * colour)
     }
 
     /// Whether `(ray, tmin, tmax)` is lane `k`'s ray, bit for bit (its answer, then, is
@@ -345,6 +379,9 @@ pub fn render_tile(
     let shadowed: Vec<usize> = (0..b.lights.len())
         .filter(|&i| packed(&b.lights[i]))
         .collect();
+    // Whether every light's samples come from the packets (then a surface that sends no
+    // ray on is shaded from its stage alone: `Stage::direct_only`).
+    let all_packed = shadowed.len() == b.lights.len();
     let mut packet = Packet::default();
     // The camera rays, then their mirror rays as deep as the shading traces them.
     let depth = (g.max_depth as usize).clamp(1, STAGES);
@@ -406,6 +443,10 @@ pub fn render_tile(
                         sums[i] += g.background;
                         count_nodes(counts, 1, eye.hits[k].nodes);
                         counts.eye_packed += u64::from(eye.packed & 1 << k != 0);
+                        continue;
+                    }
+                    if all_packed && let Some(colour) = eye.direct_only(b, k, counts) {
+                        sums[i] += colour;
                         continue;
                     }
                     let mut known = Known::new(&stages, k, &mut blockers);
