@@ -77,7 +77,10 @@ pub struct Surface {
     pub material: u32,
 }
 
-/// Hit point, normals (two-sided: flipped to face the ray) and material.
+/// Hit point, normals (two-sided: flipped to face the ray) and material. Inlined: returned
+/// through memory, the caller's copy of it read back wider than it was written and stalled
+/// (store forwarding; a tenth of a packet's lighting, `fast::coherent`).
+#[inline(always)]
 pub fn surface(b: &Bindings, ray: &Ray, hit: &Hit) -> Surface {
     let point = ray.origin + hit.t * ray.dir;
     let (outward, mut ns, material) = if hit.prim & PLANE_FLAG != 0 {

@@ -140,6 +140,22 @@ impl Stage {
     /// Finds the surfaces the rays met and lights them with each of the `shadowed` lights
     /// (`packet` is the scratch for the shadow rays).
     fn light(&mut self, b: &Bindings, kernels: &Kernels, shadowed: &[usize], packet: &mut Packet) {
+        match kernels.lanes() {
+            4 => self.light_lanes::<4>(b, kernels, shadowed, packet),
+            8 => self.light_lanes::<8>(b, kernels, shadowed, packet),
+            _ => self.light_lanes::<MAX_LANES>(b, kernels, shadowed, packet),
+        }
+    }
+
+    /// `light` for packets of `N` lanes: the lights' arithmetic worked out for those lanes
+    /// only (`Surfaces`).
+    fn light_lanes<const N: usize>(
+        &mut self,
+        b: &Bindings,
+        kernels: &Kernels,
+        shadowed: &[usize],
+        packet: &mut Packet,
+    ) {
         self.met = 0;
         for k in lanes_of(self.traced).filter(|&k| self.hits[k].prim != NO_PRIM) {
             self.surfaces[k] = surface(b, &self.rays[k], &self.hits[k]);
@@ -149,11 +165,11 @@ impl Stage {
             return;
         }
         let dirs = self.rays.map(|ray| ray.dir);
-        let lit = Surfaces::new(b, (&self.surfaces, self.met), &self.hits, &dirs);
+        let lit = Surfaces::new::<N>(b, (&self.surfaces, self.met), &self.hits, &dirs);
         let mut light = [Vec3::ZERO; MAX_LANES];
         let mut nodes = [0; MAX_LANES];
         for (j, &li) in shadowed.iter().enumerate() {
-            let rays = light_rays(b, &lit, &b.lights[li], packet);
+            let rays = light_rays::<N>(b, &lit, &b.lights[li], packet);
             let packed = if packet.lanes() == 0 {
                 0
             } else {

@@ -37,9 +37,10 @@ fn dot(a: &Rows, b: &Rows, k: usize) -> f32 {
 }
 
 /// The surfaces a packet's rays met, with what `light_ray` reads of them and of
-/// their materials, lane by lane; `live` has a bit for each lane with a surface. (Every
-/// lane of the arrays is worked out, whatever the packet's width: fixed bounds vectorise
-/// without a remainder loop, which cost more than the unused lanes.)
+/// their materials, lane by lane; `live` has a bit for each lane with a surface. (The
+/// first `N` lanes of the arrays are worked out, `N` the packet's width, whichever lanes
+/// hold a surface: fixed bounds vectorise without a remainder loop, which cost more than
+/// the unused lanes; the arrays' other lanes are never read.)
 pub struct Surfaces {
     live: u32,
     point: Rows,
@@ -58,7 +59,7 @@ impl Surfaces {
     /// The surfaces `surfaces` of the lanes in `met` (a lane each; the others met
     /// nothing) of the rays with directions `dirs`, met at `hits` (their materials
     /// `textured`).
-    pub fn new(
+    pub fn new<const N: usize>(
         b: &Bindings,
         (surfaces, met): (&[Surface; MAX_LANES], u32),
         hits: &[Hit; MAX_LANES],
@@ -91,7 +92,7 @@ impl Surfaces {
             (all.kd[k], all.ks[k], all.shine[k]) = (m.kd, m.ks, m.shine);
         }
         // `reflect_dir(dir, ns)`: d - 2 (n.d) n.
-        for k in 0..MAX_LANES {
+        for k in 0..N {
             let twice = 2.0 * dot(&all.ns, &all.dir, k);
             for a in 0..3 {
                 all.r[a][k] = all.dir[a][k] - twice * all.ns[a][k];
@@ -125,8 +126,13 @@ pub fn packed(light: &GpuLight) -> bool {
 
 /// `light_ray(b, s, m, dir, r, light, 0, _)` for every surface of `all`: puts the shadow
 /// rays in `packet` (lane by lane, over `(0, dist)`, in place of its rays) and returns
-/// the rest. `light` is `packed`.
-pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut Packet) -> Lights {
+/// the rest. `light` is `packed`; `N` is the packet's width, as in `Surfaces::new`.
+pub fn light_rays<const N: usize>(
+    b: &Bindings,
+    all: &Surfaces,
+    light: &GpuLight,
+    packet: &mut Packet,
+) -> Lights {
     debug_assert!(packed(light));
     let g = b.globals;
     let mut l: Rows = [[0.0; MAX_LANES]; 3];
@@ -138,7 +144,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
     } else {
         // `(lp - point).normalize()` and its length.
         let mut to: Rows = [[0.0; MAX_LANES]; 3];
-        for k in 0..MAX_LANES {
+        for k in 0..N {
             for a in 0..3 {
                 to[a][k] = light.pos[a] - all.point[a][k];
             }
@@ -152,7 +158,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
     }
     let mut ndotl = [0.0; MAX_LANES];
     let mut live = 0;
-    for (k, n) in ndotl.iter_mut().enumerate() {
+    for (k, n) in ndotl[..N].iter_mut().enumerate() {
         *n = dot(&all.ns, &l, k);
         // `light_ray` gives up where `ndotl <= 0` (not where it is NaN, as at a surface
         // point on the light itself).
@@ -161,7 +167,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
     live &= all.live;
     // `highlight`: the power only where there is a highlight, as there.
     let mut cosine = [0.0; MAX_LANES];
-    for (k, c) in cosine.iter_mut().enumerate() {
+    for (k, c) in cosine[..N].iter_mut().enumerate() {
         *c = if g.shading == SHADING_BLINN_PHONG {
             let h = [0, 1, 2].map(|a| l[a][k] - all.dir[a][k]);
             let recip = 1.0 / ((h[0] * h[0]) + (h[1] * h[1]) + (h[2] * h[2])).sqrt();
@@ -181,7 +187,7 @@ pub fn light_rays(b: &Bindings, all: &Surfaces, light: &GpuLight, packet: &mut P
     // `offset_origin(s, l, epsilon)`, and the terms.
     let mut term: Rows = [[0.0; MAX_LANES]; 3];
     let mut origin: Rows = [[0.0; MAX_LANES]; 3];
-    for k in 0..MAX_LANES {
+    for k in 0..N {
         let out = dot(&all.ng, &l, k) >= 0.0;
         for a in 0..3 {
             let step = g.epsilon * all.ng[a][k];
