@@ -252,10 +252,13 @@ struct Known<'a> {
     lights: &'a [Lit],
     /// Rays answered from packets, by kind.
     counts: RayCounts,
-    /// The primitive that blocked the last shadow ray walked alone to each light.
+    /// The primitive that blocked the last shadow ray walked alone to each light from a
+    /// pixel's `n`-th ray, `HINTS` a light (`Known::hint`).
     blockers: &'a mut [Option<u32>],
     /// The light whose sample the shading is taking, where it is one of `b.lights`.
     light: Option<usize>,
+    /// Rays the shading has traced so far (its last one the `rays`-th).
+    rays: usize,
 }
 
 impl<'a> Known<'a> {
@@ -272,6 +275,7 @@ impl<'a> Known<'a> {
             counts: RayCounts::default(),
             blockers,
             light: None,
+            rays: 0,
         }
     }
 }
@@ -289,6 +293,7 @@ impl Tracer for Known<'_> {
     #[inline]
     fn closest_hit(&mut self, b: &Bindings, ray: &Ray, tmin: f32, tmax: f32) -> Hit {
         let k = self.k;
+        self.rays += 1;
         self.next = None;
         for i in lanes_of(self.waiting) {
             let stage = &self.stages[i];
@@ -311,7 +316,10 @@ impl Tracer for Known<'_> {
     fn transmission(&mut self, b: &Bindings, ray: &Ray, tmax: f32, nodes: &mut u32) -> Vec3 {
         let mut none = None;
         let hint = match self.light {
-            Some(i) => &mut self.blockers[i],
+            Some(i) => {
+                let n = self.rays.clamp(1, HINTS) - 1;
+                &mut self.blockers[i * HINTS + n]
+            }
             None => &mut none,
         };
         wide_ray::transmission(b, ray, tmax, nodes, hint)
@@ -403,6 +411,15 @@ fn traced_ahead(b: &Bindings, stages: &[Stage], k: usize, counts: &mut RayCounts
     Some(colour)
 }
 
+/// Blockers kept a light for the shadow rays walked alone (`Known::blockers`): one for the
+/// surfaces met by each of a pixel's first `HINTS - 1` rays, and one for all its later
+/// ones. A pixel's `n`-th ray tends to meet a surface near its neighbour's `n`-th (the same
+/// path through a scene of mirrors and glass), and so does its shadow ray's blocker. Kept
+/// apart so, rather than one a light for every ray, gears-4's shadow rays fetched 326 node
+/// bytes instead of 364 and its render took 2% less time (960x540, 4 spp, one thread,
+/// AVX2); balls-4's and teapot-6's within the machine's swing.
+const HINTS: usize = 8;
+
 /// Where `light` lies in `lights`, if it is one of them (an emitter's triangles are not).
 fn index_in(lights: &[GpuLight], light: &GpuLight) -> Option<usize> {
     let at = std::ptr::from_ref(light) as usize;
@@ -457,7 +474,7 @@ fn render_tile_with<const AHEAD: bool>(
     // The camera rays, then their mirror rays as deep as the shading traces them.
     let depth = (g.max_depth as usize).clamp(1, STAGES);
     let mut stages: Vec<Stage> = (0..depth).map(|_| Stage::new(shadowed.len())).collect();
-    let mut blockers = vec![None; b.lights.len()];
+    let mut blockers = vec![None; b.lights.len() * HINTS];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {
             for bx in (x0..x1).step_by(bw as usize) {
