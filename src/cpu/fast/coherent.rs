@@ -253,7 +253,7 @@ struct Known<'a> {
     /// Rays answered from packets, by kind.
     counts: RayCounts,
     /// The primitive that blocked the last shadow ray walked alone to each light from a
-    /// pixel's `n`-th ray, `HINTS` a light (`Known::hint`).
+    /// pixel's `n`-th ray, `HINTS` a light.
     blockers: &'a mut [Option<u32>],
     /// The light whose sample the shading is taking, where it is one of `b.lights`.
     light: Option<usize>,
@@ -407,7 +407,7 @@ fn traced_ahead(b: &Bindings, stages: &[Stage], k: usize, counts: &mut RayCounts
         };
     }
     #[cfg(test)]
-    tests::AHEAD.with(|n| n.set(n.get() + 1));
+    tests::SUMMED_AHEAD.with(|n| n.set(n.get() + 1));
     Some(colour)
 }
 
@@ -558,16 +558,31 @@ mod tests {
 
     thread_local! {
         /// Pixels `traced_ahead` summed on this thread.
-        pub(super) static AHEAD: Cell<u64> = const { Cell::new(0) };
+        pub(super) static SUMMED_AHEAD: Cell<u64> = const { Cell::new(0) };
+    }
+
+    /// A whole frame as one tile: each pixel's sum, as bits, and the rays counted.
+    fn render_frame<const AHEAD: bool>(
+        b: &Bindings,
+        kernels: &Kernels,
+    ) -> (Vec<[u32; 3]>, RayCounts) {
+        let g = b.globals;
+        let mut sums = vec![Vec3::ZERO; (g.width * g.height) as usize];
+        let mut counts = RayCounts::default();
+        let (x, rows, samples) = ((0, g.width), 0..g.height, 0..g.spp);
+        render_tile_with::<AHEAD>(b, kernels, x, rows, samples, &mut sums, &mut counts);
+        let bits = sums.iter().map(|s| s.to_array().map(f32::to_bits));
+        (bits.collect(), counts)
     }
 
     /// The pixels summed without `trace` (`traced_ahead`) get `trace`'s colour to the bit
     /// and are counted as `trace` counts them, every count (rays by kind, node fetches by
-    /// kind, rays in packets): tiles rendered both ways, on scenes of mirrors, glass,
+    /// kind, rays in packets): frames rendered both ways, on scenes of mirrors, glass,
     /// cones and meshes, at depths from one to six, with every kernel this machine runs.
     #[test]
     fn pixels_traced_ahead_sum_and_count_as_trace_does() {
         let scenes = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+        let summed = || SUMMED_AHEAD.with(Cell::get);
         let mut ahead = 0;
         for name in ["spheres", "mirrors", "glass", "cones", "mesh", "patches"] {
             let path = scenes.join(format!("{name}.nff"));
@@ -583,50 +598,15 @@ mod tests {
                 };
                 let g = globals(&buffers, &opts);
                 let b = Bindings::new(&buffers, &g);
-                for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512, Isa::Portable] {
-                    let Some(kernels) = Kernels::new(isa) else {
-                        continue;
-                    };
-                    let n = (g.width * g.height) as usize;
-                    let render = |with: bool| {
-                        let (mut sums, mut counts) = (vec![Vec3::ZERO; n], RayCounts::default());
-                        let tile = ((0, g.width), 0..g.height, 0..g.spp);
-                        let (x, rows, samples) = tile;
-                        if with {
-                            render_tile_with::<true>(
-                                &b,
-                                &kernels,
-                                x,
-                                rows,
-                                samples,
-                                &mut sums,
-                                &mut counts,
-                            );
-                        } else {
-                            render_tile_with::<false>(
-                                &b,
-                                &kernels,
-                                x,
-                                rows,
-                                samples,
-                                &mut sums,
-                                &mut counts,
-                            );
-                        }
-                        let bits: Vec<[u32; 3]> = sums
-                            .iter()
-                            .map(|s| s.to_array().map(f32::to_bits))
-                            .collect();
-                        (bits, counts)
-                    };
-                    let before = AHEAD.with(Cell::get);
-                    let (want, want_counts) = render(false);
-                    assert_eq!(AHEAD.with(Cell::get), before, "{name}: none ahead");
-                    let (got, counts) = render(true);
-                    let what = format!("{name}, depth {max_depth}, {}", isa.name());
+                for kernels in Isa::ALL.into_iter().filter_map(Kernels::new) {
+                    let what = format!("{name}, depth {max_depth}, {}", kernels.isa().name());
+                    let before = summed();
+                    let (want, want_counts) = render_frame::<false>(&b, &kernels);
+                    assert_eq!(summed(), before, "{what}: none summed ahead");
+                    let (got, counts) = render_frame::<true>(&b, &kernels);
                     assert_eq!(got, want, "{what}: sums");
                     assert_eq!(counts, want_counts, "{what}: counts");
-                    ahead += AHEAD.with(Cell::get) - before;
+                    ahead += summed() - before;
                 }
             }
         }
