@@ -49,6 +49,20 @@ struct Lit {
     packed: bool,
 }
 
+impl Lit {
+    /// Its sample, with its shadow ray's node fetches, and whether a packet traced it,
+    /// added to `counts` as `light_sample` counts a shadow ray (which `direct` then
+    /// counts as a ray).
+    #[inline(always)]
+    fn counted(&self, counts: &mut RayCounts) -> Option<Vec3> {
+        if self.sample.is_some() {
+            counts.shadow_nodes += u64::from(self.nodes);
+            counts.shadow_packed += u64::from(self.packed);
+        }
+        self.sample
+    }
+}
+
 const UNLIT: Lit = Lit {
     sample: None,
     nodes: 0,
@@ -199,10 +213,8 @@ impl Stage {
         let shadowed = self.lights.len() / MAX_LANES;
         let mut colour = unlit(b.globals, &self.surfaces[k], m);
         for lit in &self.lights[k * shadowed..(k + 1) * shadowed] {
-            if let Some(c) = lit.sample {
+            if let Some(c) = lit.counted(counts) {
                 counts.shadow += 1;
-                counts.shadow_nodes += u64::from(lit.nodes);
-                counts.shadow_packed += u64::from(lit.packed);
                 colour += c;
             }
         }
@@ -354,11 +366,7 @@ impl Tracer for Known<'_> {
             // `light_sample` on the same surface, its shadow ray answered by the packet
             // (the images are the per-pixel renderer's to the bit: tests/gpurt/packet.rs).
             self.lights = rest;
-            if lit.sample.is_some() {
-                counts.shadow_nodes += u64::from(lit.nodes);
-                self.counts.shadow_packed += u64::from(lit.packed);
-            }
-            return lit.sample;
+            return lit.counted(counts);
         }
         self.light = index_in(b.lights, light);
         light_sample(b, self, at, (light, k), rng, counts)
