@@ -2,12 +2,18 @@
 //! node's children tested together in SIMD lanes, the children reached entered nearest
 //! first.
 //!
-//! Each lane's box test is `intersect::overlaps` to the bit, so a ray finds the same
-//! primitives tested by the same code as the binary walk: only the order in which leaves
-//! are visited differs. The closest hit is therefore the binary walk's (the first of two
-//! primitives at exactly the same distance may differ), which is why the colour a pixel
-//! gets does not depend on the walk; the `cost` AOV, which counts the nodes of the GPU's
-//! walk, still uses the binary walk (`Bindings::new`).
+//! Each lane's box test is `intersect::overlaps` with its widening (`SLAB_WIDEN`) taken
+//! into the far faces' distances, the inverse direction scaled before the product rather
+//! than the nearest far face after it (`Slabs::inv_far`): one multiplication fewer on the
+//! longest chain of dependent operations of a node's test. The two far ends differ by the
+//! rounding of that product, a few ulps, where the widening is 2^-16: a box holding a hit
+//! is overlapped under both, by far more than either's rounding, so a ray finds the same
+//! nearest hit as the binary walk (the first of two primitives at exactly the same
+//! distance may differ, as the order in which leaves are visited already lets), and the
+//! colour a pixel gets does not depend on the walk. Every walk of this tree (the single
+//! rays', the packets' lanes and their interval test) tests with this same arithmetic. The
+//! `cost` AOV, which counts the nodes of the GPU's walk, still uses the binary walk
+//! (`Bindings::new`).
 
 use std::mem::MaybeUninit;
 
@@ -39,8 +45,9 @@ const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 /// The eight-lane slab test a walk uses: `Slabs`, in two halves of four lanes, or on
 /// x86-64 with AVX `SlabsAvx`, the same arithmetic in one register of eight.
 pub trait Boxes {
-    /// `intersect::slab_entry` for the eight boxes of `n` at once: where the ray enters
-    /// each, clamped to `tmin`, and a bit mask of those it overlaps within `[tmin, tmax]`.
+    /// `intersect::slab_entry` for the eight boxes of `n` at once, widened as the module
+    /// says: where the ray enters each, clamped to `tmin`, and a bit mask of those it
+    /// overlaps within `[tmin, tmax]`.
     fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32);
 }
 
@@ -48,6 +55,8 @@ pub trait Boxes {
 pub struct Slabs {
     origin: [Vec4; 3],
     inv_dir: [Vec4; 3],
+    /// `inv_dir * SLAB_WIDEN`, for the far faces: their distances come out widened.
+    inv_far: [Vec4; 3],
     /// Per axis, the near face's index in `[lo, hi]`: 1 where the direction is negative.
     /// Choosing the near face by the sign of the inverse direction gives the same value
     /// as the scalar `min(t0, t1)`, since that sign orders `t0` and `t1`.
@@ -68,6 +77,11 @@ impl Slabs {
                 Vec4::splat(inv_dir.y),
                 Vec4::splat(inv_dir.z),
             ],
+            inv_far: [
+                Vec4::splat(inv_dir.x * SLAB_WIDEN),
+                Vec4::splat(inv_dir.y * SLAB_WIDEN),
+                Vec4::splat(inv_dir.z * SLAB_WIDEN),
+            ],
             near: [
                 usize::from(inv_dir.x < 0.0),
                 usize::from(inv_dir.y < 0.0),
@@ -84,16 +98,19 @@ impl Boxes for Slabs {
         let mut near = [Vec4::ZERO; WIDTH / 4];
         let mut mask = 0;
         for (half, near) in near.iter_mut().enumerate() {
-            let t = |axis: usize, face: usize| {
-                (faces[face][axis][half] - self.origin[axis]) * self.inv_dir[axis]
+            let t = |axis: usize, face: usize, inv: &[Vec4; 3]| {
+                (faces[face][axis][half] - self.origin[axis]) * inv[axis]
             };
-            let [nx, ny, nz] = self.near;
-            *near = t(0, nx).max(t(1, ny)).max(t(2, nz)).max(Vec4::splat(tmin));
-            let far = t(0, 1 - nx)
-                .min(t(1, 1 - ny))
-                .min(t(2, 1 - nz))
-                .min(Vec4::splat(tmax));
-            mask |= near.cmple(far * SLAB_WIDEN).bitmask() << (4 * half);
+            let ([nx, ny, nz], (inv, far)) = (self.near, (&self.inv_dir, &self.inv_far));
+            *near = t(0, nx, inv)
+                .max(t(1, ny, inv))
+                .max(t(2, nz, inv))
+                .max(Vec4::splat(tmin));
+            let far = t(0, 1 - nx, far)
+                .min(t(1, 1 - ny, far))
+                .min(t(2, 1 - nz, far))
+                .min(Vec4::splat(tmax * SLAB_WIDEN));
+            mask |= near.cmple(far).bitmask() << (4 * half);
         }
         (near, mask)
     }
@@ -148,21 +165,27 @@ impl SlabsAvx {
         // SAFETY: `offset` is a row's (`row_offset`): eight consecutive f32 in `n`.
         let load = |offset: usize| unsafe { _mm256_loadu_ps(node.add(offset).cast()) };
         let wide = |v: Vec4| _mm256_set_m128(v.into(), v.into());
-        let t = |axis: usize, offset: usize| {
+        let t = |axis: usize, offset: usize, inv: &[Vec4; 3]| {
             let d = _mm256_sub_ps(load(offset), wide(s.origin[axis]));
-            _mm256_mul_ps(d, wide(s.inv_dir[axis]))
+            _mm256_mul_ps(d, wide(inv[axis]))
         };
-        let (near, far) = (self.near, self.far);
+        let (near, far, inv) = (self.near, self.far, &s.inv_dir);
         let near = _mm256_max_ps(
-            _mm256_max_ps(_mm256_max_ps(t(0, near[0]), t(1, near[1])), t(2, near[2])),
+            _mm256_max_ps(
+                _mm256_max_ps(t(0, near[0], inv), t(1, near[1], inv)),
+                t(2, near[2], inv),
+            ),
             _mm256_set1_ps(tmin),
         );
+        let inv = &s.inv_far;
         let far = _mm256_min_ps(
-            _mm256_min_ps(_mm256_min_ps(t(0, far[0]), t(1, far[1])), t(2, far[2])),
-            _mm256_set1_ps(tmax),
+            _mm256_min_ps(
+                _mm256_min_ps(t(0, far[0], inv), t(1, far[1], inv)),
+                t(2, far[2], inv),
+            ),
+            _mm256_set1_ps(tmax * SLAB_WIDEN),
         );
-        let widened = _mm256_mul_ps(far, _mm256_set1_ps(SLAB_WIDEN));
-        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, widened)) as u32;
+        let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(near, far)) as u32;
         let mut out = [Vec4::ZERO; WIDTH / 4];
         // SAFETY: `out` is eight consecutive f32.
         unsafe { _mm256_storeu_ps(out.as_mut_ptr().cast(), near) };
@@ -330,6 +353,63 @@ mod tests {
             Some(f32::MAX)
         });
         assert_eq!(leaves, []);
+    }
+
+    /// The far faces widened through the inverse direction keep the test conservative:
+    /// every box the ray meets within `[tmin, tmax]`, worked out exactly (in f64, where the
+    /// differences and products of these f32 are exact) from the same origin and inverse
+    /// direction, is overlapped. The rays are aimed at the boxes' corners and edges, and
+    /// some end there, so that entry and exit meet; without the widening the same
+    /// arithmetic misses some of those boxes, which shows the cases reach the boundary.
+    #[test]
+    fn the_widened_test_overlaps_every_box_the_ray_meets() {
+        let mut rand = crate::cpu::xorshift(0x2545_f491_4f6c_dd1d);
+        let wide = build(&bvh::build(&boxes(40), Quality::High).nodes);
+        let (mut met, mut missed_unwidened) = (0, 0);
+        for case in 0..30_000 {
+            let (n, l) = (&wide[case % wide.len()], case % WIDTH);
+            if n.count[l] == EMPTY {
+                continue;
+            }
+            let face = |row: &[Lanes; 3]| Vec3::from_array([0, 1, 2].map(|a| lane(&row[a], l)));
+            let (lo, hi) = (face(&n.lo), face(&n.hi));
+            // A corner, or a point on an edge: two or three coordinates on the faces.
+            let along = (case / WIDTH) % 4;
+            let target = Vec3::from_array([0, 1, 2].map(|a| match (case / (4 * WIDTH) + a) % 2 {
+                _ if a == along => lo[a] + (hi[a] - lo[a]) * (0.5 + 0.5 * rand()),
+                0 => lo[a],
+                _ => hi[a],
+            }));
+            let origin = target + Vec3::new(rand(), rand(), rand()) * 20.0;
+            let inv = crate::cpu::intersect::safe_inverse(target - origin);
+            // The target lies near t = 1: a third of the rays end there.
+            let (tmin, tmax) = (0.0, [f32::MAX, 1.0, 2.0][case % 3]);
+            let (_, mask) = Slabs::new(origin, inv).test(n, tmin, tmax);
+            let exact =
+                |a: usize, f: f32| (f64::from(f) - f64::from(origin[a])) * f64::from(inv[a]);
+            let (mut near, mut far) = (f64::from(tmin), f64::from(tmax));
+            let unwidened = |a: usize, f: f32| (f - origin[a]) * inv[a];
+            let (mut near32, mut far32) = (tmin, tmax);
+            for a in 0..3 {
+                let (t0, t1) = (exact(a, lo[a]), exact(a, hi[a]));
+                (near, far) = (near.max(t0.min(t1)), far.min(t0.max(t1)));
+                let (t0, t1) = (unwidened(a, lo[a]), unwidened(a, hi[a]));
+                (near32, far32) = (near32.max(t0.min(t1)), far32.min(t0.max(t1)));
+            }
+            if near <= far {
+                met += 1;
+                assert_eq!(
+                    mask >> l & 1,
+                    1,
+                    "case {case}: a box the ray meets is missed"
+                );
+                missed_unwidened += usize::from(near32 > far32);
+            }
+        }
+        assert!(
+            met > 5_000 && missed_unwidened > 5,
+            "met {met}, missed unwidened {missed_unwidened}"
+        );
     }
 
     /// The AVX slab test gives `Slabs::test`'s bits, lane by lane, on random boxes and

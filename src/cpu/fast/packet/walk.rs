@@ -59,22 +59,26 @@ struct Entry<R> {
 /// Entries a walk can hold: as `wide.rs`'s stack.
 const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 
-/// `Slabs::test` of child `c` of `n` for every lane: where each enters it, clamped to
-/// `tmin`, and the lanes that overlap it within `[tmin, tmax]`.
+/// `Slabs::test` of child `c` of `n` for every lane, in its arithmetic (the far faces'
+/// distances widened through `Rays::inv_lo` and `inv_hi`): where each enters it, clamped
+/// to `tmin`, and the lanes that overlap it within `[tmin, tmax]`.
 #[inline(always)]
 fn child_slab<L: Lanes>(l: L, r: &Rays<L>, n: &WideNode, c: usize, tmax: L::F) -> (L::F, L::M) {
     let mut near = [r.tmin; 3];
     let mut far = [tmax; 3];
     for a in 0..3 {
-        let t_lo = l.mul(l.sub(l.splat(lane(&n.lo[a], c)), r.o[a]), r.inv[a]);
-        let t_hi = l.mul(l.sub(l.splat(lane(&n.hi[a], c)), r.o[a]), r.inv[a]);
+        let t_lo = l.mul(l.sub(l.splat(lane(&n.lo[a], c)), r.o[a]), r.inv_lo[a]);
+        let t_hi = l.mul(l.sub(l.splat(lane(&n.hi[a], c)), r.o[a]), r.inv_hi[a]);
         near[a] = l.select(r.neg[a], t_hi, t_lo);
         far[a] = l.select(r.neg[a], t_lo, t_hi);
     }
     // The single walk's order: x, y, z, then the interval.
     let near = l.max(l.max(l.max(near[0], near[1]), near[2]), r.tmin);
-    let far = l.min(l.min(l.min(far[0], far[1]), far[2]), tmax);
-    (near, l.le(near, l.mul(far, l.splat(SLAB_WIDEN))))
+    let far = l.min(
+        l.min(l.min(far[0], far[1]), far[2]),
+        l.mul(tmax, l.splat(SLAB_WIDEN)),
+    );
+    (near, l.le(near, far))
 }
 
 /// The stack, not zeroed (as `wide.rs`'s): only entries below `sp` are read. Its entries
