@@ -10,12 +10,12 @@
 //! is overlapped under both, by far more than either's rounding, so a ray finds the same
 //! nearest hit as the binary walk (the first of two primitives at exactly the same
 //! distance may differ, as the order in which leaves are visited already lets), and the
-//! colour a pixel gets does not depend on the walk. Every walk of this tree (the single
-//! rays', the packets' lanes and their interval test) tests with this same arithmetic;
-//! the single rays' AVX2 copy (`SlabsAvx`) takes its minima and maxima as integers, which
-//! give the same entries and boxes but where a ray leaves a box exactly at its origin
-//! (see there), where it overlaps one box more. The `cost` AOV, which counts the nodes of
-//! the GPU's walk, still uses the binary walk (`Bindings::new`).
+//! colour a pixel gets does not depend on the walk. The packets' lanes keep `overlaps`'
+//! arithmetic (`packet::walk`), and so meet the same nearest hits. The AVX2 copy
+//! (`SlabsAvx`) takes its minima and maxima as integers, which give `Slabs`' entries and
+//! boxes but where a ray leaves a box exactly at its origin (see there), where it overlaps
+//! one box more. The `cost` AOV, which counts the nodes of the GPU's walk, still uses the
+//! binary walk (`Bindings::new`).
 
 use std::mem::MaybeUninit;
 

@@ -7,9 +7,7 @@
 //! The bounds are safe in floating point without any margin: every step (a subtraction, a
 //! product, a minimum) is monotonic in its operands, even rounded, so the bound computed
 //! from an interval's end is never on the wrong side of what a lane computes for its own
-//! ray with the same operations (`Slabs::test`, whose far faces' distances are widened
-//! through the lanes' scaled inverses: the least and greatest of those are the scaled ends
-//! of the interval, scaling being monotonic too). A child culled here is one that every
+//! ray with the same operations (`walk::child_slab`). A child culled here is one that every
 //! lane's own test would miss; the lanes' own tests still decide what each lane enters.
 
 use glam::Vec4;
@@ -31,12 +29,9 @@ struct Axis {
     /// largest for the far face (`max` then `min` of the lanes' for a positive direction).
     o_near: Vec4,
     o_far: Vec4,
-    /// The lanes' inverse directions on this axis, least and greatest: for the near
-    /// faces as they are, for the far faces scaled by `SLAB_WIDEN` (`Rays::inv_lo`).
+    /// The lanes' inverse directions on this axis, least and greatest.
     i_lo: Vec4,
     i_hi: Vec4,
-    far_lo: Vec4,
-    far_hi: Vec4,
 }
 
 /// A packet's rays as intervals, per axis; an axis on which the directions differ in sign
@@ -59,36 +54,23 @@ impl Frustum {
             o_far: Vec4::ZERO,
             i_lo: Vec4::ZERO,
             i_hi: Vec4::ZERO,
-            far_lo: Vec4::ZERO,
-            far_hi: Vec4::ZERO,
         };
         let mut f = Frustum {
             axes: [none; 3],
             bounded: 0,
         };
         for a in 0..3 {
-            // Where all directions share a sign, `inv_lo` holds the near faces' inverses
-            // and `inv_hi` the far faces' (the other way round where they are negative).
-            let (lo, hi) = (r.inv_lo[a], r.inv_hi[a]);
-            let (i_lo, i_hi) = (l.min_of(lo, lanes), l.max_of(lo, lanes));
-            let (h_lo, h_hi) = (l.min_of(hi, lanes), l.max_of(hi, lanes));
+            let (i_lo, i_hi) = (l.min_of(r.inv[a], lanes), l.max_of(r.inv[a], lanes));
             let (o_lo, o_hi) = (l.min_of(r.o[a], lanes), l.max_of(r.o[a], lanes));
             let neg = i_hi < 0.0;
             if neg || i_lo > 0.0 {
-                let ((n_lo, n_hi), (f_lo, f_hi)) = if neg {
-                    ((h_lo, h_hi), (i_lo, i_hi))
-                } else {
-                    ((i_lo, i_hi), (h_lo, h_hi))
-                };
                 f.axes[f.bounded] = Axis {
                     a,
                     neg,
                     o_near: Vec4::splat(if neg { o_lo } else { o_hi }),
                     o_far: Vec4::splat(if neg { o_hi } else { o_lo }),
-                    i_lo: Vec4::splat(n_lo),
-                    i_hi: Vec4::splat(n_hi),
-                    far_lo: Vec4::splat(f_lo),
-                    far_hi: Vec4::splat(f_hi),
+                    i_lo: Vec4::splat(i_lo),
+                    i_hi: Vec4::splat(i_hi),
                 };
                 f.bounded += 1;
             }
@@ -102,7 +84,7 @@ impl Frustum {
     #[inline(always)]
     pub fn cull(&self, n: &WideNode, tmin: f32, tmax: f32) -> (u32, [Vec4; WIDTH / 4]) {
         let mut near = [Vec4::splat(tmin); WIDTH / 4];
-        let mut far = [Vec4::splat(tmax * SLAB_WIDEN); WIDTH / 4];
+        let mut far = [Vec4::splat(tmax); WIDTH / 4];
         for x in &self.axes[..self.bounded] {
             let (near_face, far_face) = if x.neg {
                 (&n.hi[x.a], &n.lo[x.a])
@@ -113,12 +95,12 @@ impl Frustum {
                 let dn = near_face[half] - x.o_near;
                 let df = far_face[half] - x.o_far;
                 near[half] = near[half].max((dn * x.i_lo).min(dn * x.i_hi));
-                far[half] = far[half].min((df * x.far_lo).max(df * x.far_hi));
+                far[half] = far[half].min((df * x.i_lo).max(df * x.i_hi));
             }
         }
         let mut mask = 0;
         for half in 0..WIDTH / 4 {
-            mask |= near[half].cmple(far[half]).bitmask() << (4 * half);
+            mask |= near[half].cmple(far[half] * SLAB_WIDEN).bitmask() << (4 * half);
         }
         (mask, near)
     }
@@ -128,9 +110,9 @@ impl Frustum {
 mod tests {
     use super::super::lanes::Portable;
     use super::super::rays::Rows;
+    use super::super::walk::child_slab;
     use super::*;
     use crate::bvh::wide::EMPTY;
-    use crate::cpu::fast::wide::{Boxes, Slabs};
     use crate::cpu::intersect::lanes_of;
     use glam::Vec3;
 
@@ -154,7 +136,7 @@ mod tests {
     }
 
     /// Whatever the packet, a child culled by the interval test is missed by every lane's
-    /// own slab test (`Slabs::test`, the single-ray walk's), and children are culled:
+    /// own slab test (the packet walk's `child_slab`), and children are culled:
     /// packets of nearly parallel rays, of rays through one point, and of rays whose
     /// directions differ in sign on an axis.
     #[test]
@@ -181,15 +163,12 @@ mod tests {
             for k in 0..4 {
                 let inv = crate::cpu::intersect::safe_inverse(rows.ray(k).dir);
                 assert_eq!(inv, r.inv_of(k));
-                let slabs = Slabs::new(rows.ray(k).origin, inv);
-                let (lane_near, reached) = slabs.test(&n, 0.0, tmax);
-                assert_eq!(
-                    reached & !mask,
-                    0,
-                    "case {case} lane {k}: culled a child it reaches"
-                );
-                for c in lanes_of(reached) {
-                    assert!(near[c / 4][c % 4] <= lane_near[c / 4][c % 4], "case {case}");
+            }
+            for c in 0..WIDTH {
+                let (lane_near, reached) = child_slab(Portable, &r, &n, c, [tmax; 4]);
+                for k in lanes_of(reached) {
+                    assert_eq!(mask >> c & 1, 1, "case {case} lane {k}: culled child {c}");
+                    assert!(near[c / 4][c % 4] <= lane_near[k], "case {case}");
                 }
             }
             culled += (0x7f & !mask).count_ones();

@@ -6,7 +6,6 @@ use glam::Vec3;
 use super::lanes::{Lanes, MAX_LANES, Row};
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::{Bindings, Ray};
-use crate::gpu_types::SLAB_WIDEN;
 
 /// A packet as the kernels read it: one row a coordinate, lane `k` of each the `k`-th ray.
 #[derive(Clone, Debug)]
@@ -55,12 +54,9 @@ fn at(rows: &[Row; 3], k: usize) -> Vec3 {
 pub struct Rays<L: Lanes> {
     pub o: [L::F; 3],
     pub d: [L::F; 3],
-    /// `intersect::safe_inverse` of the directions, as the single-ray walk has them, for
-    /// the boxes' `lo` and `hi` faces: scaled by `SLAB_WIDEN` for the far one (`lo` where
-    /// the direction is negative), as `wide::Slabs` widens the far faces' distances. And
-    /// the plain inverses in rows, for lanes tested one at a time.
-    pub inv_lo: [L::F; 3],
-    pub inv_hi: [L::F; 3],
+    /// `intersect::safe_inverse` of the directions, as the single-ray walk has them; and
+    /// the same in rows, for lanes tested one at a time and for the interval test.
+    pub inv: [L::F; 3],
     pub inv_rows: [Row; 3],
     /// Per axis, the lanes whose direction is negative: their boxes' `hi` faces are near.
     pub neg: [L::M; 3],
@@ -90,21 +86,6 @@ impl<L: Lanes> Rays<L> {
         l.store(inv[1], &mut inv_rows[1]);
         l.store(inv[2], &mut inv_rows[2]);
         let zero = l.splat(0.0);
-        let neg = [l.lt(inv[0], zero), l.lt(inv[1], zero), l.lt(inv[2], zero)];
-        let widen = l.splat(SLAB_WIDEN);
-        let far = [
-            l.mul(inv[0], widen),
-            l.mul(inv[1], widen),
-            l.mul(inv[2], widen),
-        ];
-        let face = |a: usize, far_when_neg: bool| {
-            let (when_neg, otherwise) = if far_when_neg {
-                (far[a], inv[a])
-            } else {
-                (inv[a], far[a])
-            };
-            l.select(neg[a], when_neg, otherwise)
-        };
         let o = load3(&rows.origin);
         let tmin = l.load(&rows.tmin);
         let mut finite = l.mask(u32::MAX);
@@ -115,9 +96,8 @@ impl<L: Lanes> Rays<L> {
         Rays {
             o,
             d,
-            inv_lo: [face(0, true), face(1, true), face(2, true)],
-            inv_hi: [face(0, false), face(1, false), face(2, false)],
-            neg,
+            neg: [l.lt(inv[0], zero), l.lt(inv[1], zero), l.lt(inv[2], zero)],
+            inv,
             inv_rows,
             tmin,
             finite: l.bits(finite),

@@ -5,10 +5,13 @@
 //! enters the child (infinity for lanes that do not reach it): a popped entry's lanes are
 //! those whose entry is still within their nearest hit, as the single-ray walk culls a
 //! popped child. At a node the interval test (`frustum.rs`) culls the children no ray of
-//! the packet can reach, then each child left is tested against every active lane with the
-//! single-ray walk's own slab arithmetic (`Slabs::test`, lane by lane), and the children
-//! reached are pushed farthest first by the packet's entry bound, so that the nearest is
-//! taken next. Where few lanes are left at a node (`alone`), each walks its subtree by
+//! the packet can reach, then each child left is tested against every active lane with
+//! `intersect::overlaps`' arithmetic in the single-ray walk's order (`child_slab`), and the
+//! children reached are pushed farthest first by the packet's entry bound, so that the
+//! nearest is taken next. (The single-ray walk's `Slabs::test` takes the widening into the
+//! inverse direction instead, which gains a packet nothing and costs it the wider rays:
+//! the two differ by a few ulps at the widening's edge, where both overlap every box that
+//! holds a hit.) Where few lanes are left at a node (`alone`), each walks its subtree by
 //! itself (`single.rs`) and the packet goes on without them.
 //!
 //! A lane therefore enters a leaf exactly when its own slab test lets it in, against its
@@ -59,26 +62,29 @@ struct Entry<R> {
 /// Entries a walk can hold: as `wide.rs`'s stack.
 const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 
-/// `Slabs::test` of child `c` of `n` for every lane, in its arithmetic (the far faces'
-/// distances widened through `Rays::inv_lo` and `inv_hi`): where each enters it, clamped
-/// to `tmin`, and the lanes that overlap it within `[tmin, tmax]`.
+/// `intersect::overlaps` of child `c` of `n` for every lane, in `Slabs::test`'s order:
+/// where each enters it, clamped to `tmin`, and the lanes that overlap it within
+/// `[tmin, tmax]`.
 #[inline(always)]
-fn child_slab<L: Lanes>(l: L, r: &Rays<L>, n: &WideNode, c: usize, tmax: L::F) -> (L::F, L::M) {
+pub(super) fn child_slab<L: Lanes>(
+    l: L,
+    r: &Rays<L>,
+    n: &WideNode,
+    c: usize,
+    tmax: L::F,
+) -> (L::F, L::M) {
     let mut near = [r.tmin; 3];
     let mut far = [tmax; 3];
     for a in 0..3 {
-        let t_lo = l.mul(l.sub(l.splat(lane(&n.lo[a], c)), r.o[a]), r.inv_lo[a]);
-        let t_hi = l.mul(l.sub(l.splat(lane(&n.hi[a], c)), r.o[a]), r.inv_hi[a]);
+        let t_lo = l.mul(l.sub(l.splat(lane(&n.lo[a], c)), r.o[a]), r.inv[a]);
+        let t_hi = l.mul(l.sub(l.splat(lane(&n.hi[a], c)), r.o[a]), r.inv[a]);
         near[a] = l.select(r.neg[a], t_hi, t_lo);
         far[a] = l.select(r.neg[a], t_lo, t_hi);
     }
     // The single walk's order: x, y, z, then the interval.
     let near = l.max(l.max(l.max(near[0], near[1]), near[2]), r.tmin);
-    let far = l.min(
-        l.min(l.min(far[0], far[1]), far[2]),
-        l.mul(tmax, l.splat(SLAB_WIDEN)),
-    );
-    (near, l.le(near, far))
+    let far = l.min(l.min(l.min(far[0], far[1]), far[2]), tmax);
+    (near, l.le(near, l.mul(far, l.splat(SLAB_WIDEN))))
 }
 
 /// The stack, not zeroed (as `wide.rs`'s): only entries below `sp` are read. Its entries
