@@ -45,7 +45,8 @@ struct Entry {
 const STACK: usize = TRAVERSAL_STACK * (WIDTH - 1) + 1;
 
 /// The eight-lane slab test a walk uses: `Slabs`, in two halves of four lanes, or on
-/// x86-64 with AVX `SlabsAvx`, the same arithmetic in one register of eight.
+/// x86-64 with AVX2 `SlabsAvx`, in one register of eight (the same boxes but for one
+/// case: see there).
 pub trait Boxes {
     /// `intersect::slab_entry` for the eight boxes of `n` at once, widened as the module
     /// says: where the ray enters each, clamped to `tmin`, and a bit mask of those it
@@ -118,9 +119,10 @@ impl Boxes for Slabs {
     }
 }
 
-/// `Slabs::test` in one AVX register of eight lanes: the same operations in the same
-/// order on each lane (`vmaxps`/`vminps` are `maxps`/`minps` eight wide), so the same
-/// bits; a node's test in half the instructions. Made only where the processor has AVX.
+/// `Slabs::test` in one AVX register of eight lanes: the same subtractions and products
+/// in the same order on each lane, so the same distances, and their minima and maxima as
+/// integers (`test_avx` says why, and where that overlaps one box more); a node's test in
+/// half the instructions. Made only where the processor has AVX2.
 #[cfg(target_arch = "x86_64")]
 pub struct SlabsAvx {
     slabs: Slabs,
@@ -144,7 +146,7 @@ const _: () = assert!(std::mem::offset_of!(WideNode, hi) == row_offset(1, 0));
 #[cfg(target_arch = "x86_64")]
 impl SlabsAvx {
     /// # Safety
-    /// The processor must have AVX (`isa::x86_64_v3`).
+    /// The processor must have AVX2 (`isa::x86_64_v3`).
     pub unsafe fn new(slabs: Slabs) -> Self {
         let [nx, ny, nz] = slabs.near;
         SlabsAvx {
@@ -214,7 +216,7 @@ impl SlabsAvx {
 impl Boxes for SlabsAvx {
     #[inline(always)]
     fn test(&self, n: &WideNode, tmin: f32, tmax: f32) -> (Lanes, u32) {
-        // SAFETY: a `SlabsAvx` exists only where the processor has AVX.
+        // SAFETY: a `SlabsAvx` exists only where the processor has AVX2.
         unsafe { self.test_avx(n, tmin, tmax) }
     }
 }

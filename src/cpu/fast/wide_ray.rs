@@ -111,7 +111,8 @@ fn closest_wide(
 /// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
 /// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
 /// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
-/// result: the bits are the baseline's.
+/// result: the hits are the baseline's to the bit (the boxes overlapped too, but for
+/// `SlabsAvx`'s one case of a box more).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
 fn closest_wide_v3(
@@ -122,7 +123,7 @@ fn closest_wide_v3(
     planes: (f32, u32),
 ) -> Hit {
     let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: the function's features include AVX.
+    // SAFETY: the function's features include AVX2.
     let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
     closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
 }
