@@ -432,6 +432,18 @@ mod tests {
         );
     }
 
+    /// `SlabsAvx` for a ray's origin and inverse direction; `None`, saying the test is
+    /// skipped, where the processor has no AVX2.
+    #[cfg(target_arch = "x86_64")]
+    fn avx_slabs() -> Option<impl Fn(Vec3, Vec3) -> SlabsAvx> {
+        if !crate::cpu::fast::isa::x86_64_v3() {
+            eprintln!("skipped: this processor has no AVX2");
+            return None;
+        }
+        // SAFETY: the processor has AVX2, checked above.
+        Some(|origin, inv| unsafe { SlabsAvx::new(Slabs::new(origin, inv)) })
+    }
+
     /// The AVX slab test gives `Slabs::test`'s bits, lane by lane, on random boxes and
     /// rays: axis-parallel ones, origins inside boxes, empty lanes; and where its integer
     /// minima and maxima need not (a `tmin` below zero, NaN from an origin at infinity),
@@ -439,10 +451,9 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn eight_lanes_in_avx_match_two_halves_of_four() {
-        if !crate::cpu::fast::isa::x86_64_v3() {
-            eprintln!("skipped: this processor has no AVX2");
+        let Some(avx) = avx_slabs() else {
             return;
-        }
+        };
         let mut rand = crate::cpu::xorshift(0x9e37_79b9_7f4a_7c15);
         let wide = build(&bvh::build(&boxes(40), Quality::High).nodes);
         let (mut reached, mut loose) = (0, 0);
@@ -473,9 +484,7 @@ mod tests {
             };
             let tmax = [f32::MAX, 3.0, 30.0][case % 3];
             let (near, mask) = Slabs::new(origin, inv).test(n, tmin, tmax);
-            // SAFETY: checked above.
-            let avx = unsafe { SlabsAvx::new(Slabs::new(origin, inv)) };
-            let (near_avx, mask_avx) = avx.test(n, tmin, tmax);
+            let (near_avx, mask_avx) = avx(origin, inv).test(n, tmin, tmax);
             let lanes = |near: &Lanes| [0, 1, 2, 3, 4, 5, 6, 7].map(|l| lane(near, l));
             let (near, near_avx) = (lanes(&near), lanes(&near_avx));
             if origin.is_finite() && tmin.is_sign_positive() {
@@ -509,10 +518,9 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_overlaps_a_box_left_at_the_origin_on_one_axis_and_before_on_another() {
-        if !crate::cpu::fast::isa::x86_64_v3() {
-            eprintln!("skipped: this processor has no AVX2");
+        let Some(avx) = avx_slabs() else {
             return;
-        }
+        };
         let wide = build(&bvh::build(&boxes(1), Quality::High).nodes);
         let (n, l) = (&wide[0], 0);
         let (lo, hi) = (n.lo.map(|r| lane(&r, l)), n.hi.map(|r| lane(&r, l)));
@@ -521,9 +529,7 @@ mod tests {
         let origin = Vec3::new(lo[0], hi[1] + 1.0, 0.5 * (lo[2] + hi[2]));
         let inv = crate::cpu::intersect::safe_inverse(Vec3::new(-1.0, 1.0, 0.0));
         let (_, mask) = Slabs::new(origin, inv).test(n, 0.0, f32::MAX);
-        // SAFETY: checked above.
-        let avx = unsafe { SlabsAvx::new(Slabs::new(origin, inv)) };
-        let (_, mask_avx) = avx.test(n, 0.0, f32::MAX);
+        let (_, mask_avx) = avx(origin, inv).test(n, 0.0, f32::MAX);
         assert_eq!((mask >> l & 1, mask_avx >> l & 1), (0, 1));
     }
 }
