@@ -16,6 +16,9 @@
 #   SPP=16 benches/embree.sh          (our side traces the tree gpurt builds for a 16-sample
 #                                      render; the rays are the same)
 #   GPURT_BVH=high benches/embree.sh  (our side on its high-quality tree, whatever the size)
+#   REPEAT=3 benches/embree.sh        (each scene's programs run three times in turn, ours then
+#                                      Embree's two builds, and each figure the best of them: a
+#                                      machine whose speed swings disturbs one run, not all)
 #
 # Embree builds its tree twice: at its default (medium) quality for every table, and at
 # RTC_BUILD_QUALITY_HIGH (spatial splits; EMBREE_QUALITY=high to benches/embree/rays.c)
@@ -28,6 +31,7 @@
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 THREADS=${THREADS:-2}
+REPEAT=${REPEAT:-1}
 SIZE=${SIZE:-1024}
 if [[ ! -f /usr/include/embree3/rtcore.h ]]; then
     echo "skipped: Embree 3 is not installed (apt-get install -y libembree-dev)" >&2
@@ -41,13 +45,14 @@ trap 'rm -rf "$WORK"' EXIT
 cc -O3 -march=native -o "$WORK/rays" "$ROOT/benches/embree/rays.c" -lembree3 -lpthread -lm
 (cd "$ROOT" && cargo build --release --quiet --example rays)
 
-# `name count rate` triples: the count and the rate after `name`.
+# `name count rate` triples: the count and the rate after `name`; over the REPEAT runs'
+# lines, the first count and the best rate.
 count() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 1); exit}}' <<<"$1"; }
-rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 2); exit}}' <<<"$1"; }
+rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k && (m == "" || $(i + 2) + 0 > m + 0)) m = $(i + 2)} END{print m}' <<<"$1"; }
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
 best() { awk 'BEGIN{m = 0} {for (i = 1; i <= NF; i++) if ($i > m) m = $i} END{print m}' <<<"$*"; }
-# Embree's build time in seconds, from its summary line (`build 0.011 s`).
-built() { grep -o 'build [0-9.]* s' <<<"$1" | awk '{print $2}'; }
+# Embree's build time in seconds, from its summary line (`build 0.011 s`): the shortest.
+built() { grep -o 'build [0-9.]* s' <<<"$1" | awk '{print $2}' | sort -g | head -1; }
 
 # The tables for one instruction set: `default` (each side's widest), or `avx2` (both held
 # to AVX2: GPURT_SIMD=avx2, Embree's device config isa=avx2), so that a machine with
@@ -61,12 +66,15 @@ tables() {
     for scene in "$@"; do
         name=$(basename "$scene" .nff)
         echo "== $name ($set)" >&2
-        ours=$(GPURT_SIMD=$simd RAYON_NUM_THREADS=$THREADS "$ROOT/target/release/examples/rays" "$scene" "$SIZE" "$WORK/$name.rays")
-        theirs=$("$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)
-        # Embree's high-quality build (spatial splits), for the mirror rays' table.
-        high=$(EMBREE_QUALITY=high "$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)
-        lanes=$(awk '{for (i = 1; i < NF; i++) if ($i == "lanes") print $(i + 1)}' <<<"$ours")
-        isa=$(awk '{for (i = 1; i < NF; i++) if ($i == "isa") print $(i + 1)}' <<<"$ours")
+        ours="" theirs="" high=""
+        for _ in $(seq "$REPEAT"); do
+            ours+=$(GPURT_SIMD=$simd RAYON_NUM_THREADS=$THREADS "$ROOT/target/release/examples/rays" "$scene" "$SIZE" "$WORK/$name.rays")$'\n'
+            theirs+=$("$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)$'\n'
+            # Embree's high-quality build (spatial splits), for the mirror rays' table.
+            high+=$(EMBREE_QUALITY=high "$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)$'\n'
+        done
+        lanes=$(awk '{for (i = 1; i < NF; i++) if ($i == "lanes") {print $(i + 1); exit}}' <<<"$ours")
+        isa=$(awk '{for (i = 1; i < NF; i++) if ($i == "isa") {print $(i + 1); exit}}' <<<"$ours")
         g1=$(rate "$ours" primary1) gp=$(rate "$ours" primaryP)
         e1=$(rate "$theirs" primary1) e8=$(rate "$theirs" primary8) e16=$(rate "$theirs" primary16)
         primary+=("| $name | $(count "$ours" primary1) | $g1 | $gp | $e1 | $e8 | $e16 | $(ratio "$g1" "$e1") | $(ratio "$gp" "$(best "$e1 $e8 $e16")") |")
@@ -75,7 +83,7 @@ tables() {
         shadow+=("| $name | $(count "$ours" shadow1) | $s1 | $sp | $o1 | $o8 | $o16 | $(ratio "$s1" "$o1") | $(ratio "$sp" "$o16") |")
         m1=$(rate "$ours" mirror1) em=$(rate "$theirs" mirror1) eh=$(rate "$high" mirror1)
         mirror+=("| $name | $(count "$ours" mirror1) | $m1 | $em | $eh | $(built "$theirs") / $(built "$high") | $(ratio "$m1" "$em") | $(ratio "$m1" "$eh") |")
-        agree+=("| $name | $(awk '/^agree/ {print $3 ", " $5 ", " $7 " | " $9 ", " $11 ", " $13 " | " $15}' <<<"$theirs") |")
+        agree+=("| $name | $(awk '/^agree/ {print $3 ", " $5 ", " $7 " | " $9 ", " $11 ", " $13 " | " $15; exit}' <<<"$theirs") |")
     done
 
     echo "### $(if [ "$set" = avx2 ]; then echo "AVX2 on this AVX-512 machine (GPURT_SIMD=avx2, Embree's isa=avx2)"; else echo "This machine's widest instruction set (gpurt: $isa; Embree: its default)"; fi)"
@@ -114,7 +122,7 @@ else
     echo "(No AVX-512 here: the table above is AVX2's.)"
     echo
 fi
-echo "${SIZE}x${SIZE}, $THREADS threads on both sides, chunks of 64 rays, best of five runs"
+echo "${SIZE}x${SIZE}, $THREADS threads on both sides, chunks of 64 rays, best of five runs$([ "$REPEAT" -gt 1 ] && echo " in each of $REPEAT turns")"
 echo "(${CLOCK:-wall}-clock time). Embree 3: spheres as SPHERE_POINT, cones as user geometry (our"
 echo "intersection in C, lane by lane). gpurt: closest_hit / transmission and cpu::packet; our"
 echo "shadow rays go on through surfaces that transmit light, Embree's occlusion test stops."
