@@ -46,7 +46,7 @@ cc -O3 -march=native -o "$WORK/rays" "$ROOT/benches/embree/rays.c" -lembree3 -lp
 (cd "$ROOT" && cargo build --release --quiet --example rays)
 
 # `name count rate` triples: the count and the rate after `name`; over the REPEAT runs'
-# lines, the first count and the best rate.
+# lines, the first count and the best rate. (`count` also reads `lanes N` and `isa X`.)
 count() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k) {print $(i + 1); exit}}' <<<"$1"; }
 rate() { awk -v k="$2" '{for (i = 1; i < NF; i++) if ($i == k && (m == "" || $(i + 2) + 0 > m + 0)) m = $(i + 2)} END{print m}' <<<"$1"; }
 ratio() { awk -v a="$1" -v b="$2" 'BEGIN{printf "%.2f", a / b}'; }
@@ -73,8 +73,7 @@ tables() {
             # Embree's high-quality build (spatial splits), for the mirror rays' table.
             high+=$(EMBREE_QUALITY=high "$WORK/rays" "$WORK/$name.rays" "$THREADS" $config)$'\n'
         done
-        lanes=$(awk '{for (i = 1; i < NF; i++) if ($i == "lanes") {print $(i + 1); exit}}' <<<"$ours")
-        isa=$(awk '{for (i = 1; i < NF; i++) if ($i == "isa") {print $(i + 1); exit}}' <<<"$ours")
+        lanes=$(count "$ours" lanes) isa=$(count "$ours" isa)
         g1=$(rate "$ours" primary1) gp=$(rate "$ours" primaryP)
         e1=$(rate "$theirs" primary1) e8=$(rate "$theirs" primary8) e16=$(rate "$theirs" primary16)
         primary+=("| $name | $(count "$ours" primary1) | $g1 | $gp | $e1 | $e8 | $e16 | $(ratio "$g1" "$e1") | $(ratio "$gp" "$(best "$e1 $e8 $e16")") |")
