@@ -16,6 +16,7 @@ pub mod blocks;
 pub mod cwide;
 pub mod qwide;
 pub mod refit;
+pub mod spatial;
 pub mod wide;
 
 use glam::{Vec3, Vec3A};
@@ -23,6 +24,7 @@ use obvhs::{BvhBuildParams, aabb::Aabb, bvh2::Bvh2, ploc::PlocBuilder};
 
 use crate::gpu_types::{GpuNode, NODE_AXIS_SHIFT, TRAVERSAL_STACK};
 use crate::scene::Bounds;
+pub use spatial::Splittable;
 
 /// Most primitives a leaf may hold.
 pub const MAX_LEAF_PRIMS: u32 = 4;
@@ -31,7 +33,8 @@ pub const MAX_LEAF_PRIMS: u32 = 4;
 #[derive(Clone, Debug, Default)]
 pub struct FlatBvh {
     pub nodes: Vec<GpuNode>,
-    /// `order[i]` is the input index of the primitive stored at position `i`.
+    /// `order[i]` is the input index of the primitive stored at position `i`. A primitive
+    /// cut by spatial splits (`spatial`) is stored once for each leaf that holds it.
     pub order: Vec<u32>,
     /// Longest root-to-leaf path, in nodes.
     pub depth: usize,
@@ -101,24 +104,35 @@ impl Quality {
 /// 1 600, but its host builds quickly too, and every frame of a view gains.
 pub const HIGH_QUALITY_SAMPLES_PER_PRIM: u64 = 32;
 
-/// Builds a BVH over primitive bounds. An empty input gives an empty tree.
+/// Builds a BVH over primitive bounds, cutting none. An empty input gives an empty tree.
 pub fn build(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
-    build_with(aabbs.len(), |i| aabbs[i as usize], quality)
+    build_with(aabbs.len(), |i| aabbs[i as usize], quality, None)
 }
 
 /// Builds a BVH over `count` primitives whose bounds `aabb` gives by index: the bounds
 /// are worked out as they are needed, a group at a time, so that a large scene's are never
-/// held all at once (`pack` computes them from its primitives).
-pub fn build_with(count: usize, aabb: impl Fn(u32) -> Aabb, quality: Quality) -> FlatBvh {
+/// held all at once (`pack` computes them from its primitives). The high-quality build
+/// cuts the primitives `split` allows with spatial splits, where a group has any.
+pub fn build_with(
+    count: usize,
+    aabb: impl Fn(u32) -> Aabb,
+    quality: Quality,
+    split: Option<&dyn Splittable>,
+) -> FlatBvh {
     if count == 0 {
         return FlatBvh::default();
     }
     let chunk = build_chunk(count);
+    let split = split.filter(|_| quality == Quality::High);
     let flat = if count <= chunk {
         let aabbs: Vec<Aabb> = (0..count as u32).map(&aabb).collect();
-        build_group(&aabbs, quality)
+        build_group(
+            &aabbs,
+            quality,
+            split.map(|split| Local { split, ids: None }),
+        )
     } else {
-        median_split(count, &aabb, chunk, quality)
+        median_split(count, &aabb, chunk, quality, split)
     };
     if flat.depth < TRAVERSAL_STACK {
         flat
@@ -127,20 +141,40 @@ pub fn build_with(count: usize, aabb: impl Fn(u32) -> Aabb, quality: Quality) ->
     }
 }
 
-/// One group's tree: obvhs' build, or median splits where the boxes are mostly
-/// coincident.
-fn build_group(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
-    if mostly_coincident(aabbs) {
-        median_leaves(aabbs.len(), &|i| aabbs[i as usize])
-    } else {
-        flatten(&build_obvhs(aabbs, quality), aabbs)
+/// The primitives of a group that may be cut, by their index in the group (`ids`: the
+/// scene's index of each; `None`: the group is the scene).
+#[derive(Clone, Copy)]
+struct Local<'a> {
+    split: &'a dyn Splittable,
+    ids: Option<&'a [u32]>,
+}
+
+impl Splittable for Local<'_> {
+    fn corners(&self, prim: u32) -> Option<[Vec3A; 3]> {
+        let prim = self.ids.map_or(prim, |ids| ids[prim as usize]);
+        self.split.corners(prim)
     }
+}
+
+/// One group's tree: with spatial splits where `split` allows cutting any of its
+/// primitives, else obvhs' build; median splits where the boxes are mostly coincident.
+fn build_group(aabbs: &[Aabb], quality: Quality, split: Option<Local>) -> FlatBvh {
+    if mostly_coincident(aabbs) {
+        return median_leaves(aabbs.len(), &|i| aabbs[i as usize]);
+    }
+    let split = split.filter(|s| (0..aabbs.len() as u32).any(|i| s.corners(i).is_some()));
+    let mut bvh = match split {
+        Some(split) => spatial::build(aabbs, &split, MAX_LEAF_PRIMS as usize),
+        None => build_obvhs(aabbs, quality),
+    };
+    optimise(&mut bvh, quality);
+    flatten(&bvh, aabbs)
 }
 
 /// A balanced tree by object median splits all the way down to leaves.
 fn median_leaves(count: usize, aabb: &impl Fn(u32) -> Aabb) -> FlatBvh {
     // Groups of MAX_LEAF_PRIMS are leaves, so obvhs (and its quality) is never called.
-    median_split(count, aabb, MAX_LEAF_PRIMS as usize, Quality::Medium)
+    median_split(count, aabb, MAX_LEAF_PRIMS as usize, Quality::Medium, None)
 }
 
 /// Whether one box repeats a thousand times or more, judged on up to 1024 boxes spread
@@ -189,38 +223,50 @@ pub const BUILD_CHUNK_MAX: usize = 1 << 19;
 /// 0.29 s against 1.46 s on two cores).
 pub const THOROUGH_BUILD_MAX_PRIMS: usize = 20_000;
 
-fn build_obvhs(aabbs: &[Aabb], quality: Quality) -> Bvh2 {
-    let quality = match quality {
+/// obvhs' settings for `quality`, leaves of at most `MAX_LEAF_PRIMS`.
+fn params(quality: Quality) -> BvhBuildParams {
+    let preset = match quality {
         Quality::High => BvhBuildParams::very_slow_build(),
         Quality::Medium => BvhBuildParams::medium_build(),
     };
-    let params = BvhBuildParams {
+    BvhBuildParams {
         max_prims_per_leaf: MAX_LEAF_PRIMS,
-        // Spatial splits reference a primitive from several leaves, which would count a
-        // shadow ray's crossings more than once.
+        // obvhs' own splitting (early split clipping, before PLOC) cuts every large box
+        // whether or not it helps, transparent primitives too: measured worse
+        // (docs/bvh.md). `spatial` cuts where the SAH says so.
         pre_split: false,
-        ..quality
-    };
-    let mut bvh = PlocBuilder::with_capacity(aabbs.len()).build(
+        ..preset
+    }
+}
+
+/// obvhs' PLOC tree over `aabbs`.
+fn build_obvhs(aabbs: &[Aabb], quality: Quality) -> Bvh2 {
+    let params = params(quality);
+    PlocBuilder::with_capacity(aabbs.len()).build(
         params.ploc_search_distance,
         aabbs,
         (0..aabbs.len() as u32).collect(),
         params.sort_precision,
         params.search_depth_threshold,
-    );
+    )
+}
+
+/// obvhs' reinsertion (moving badly placed subtrees where the SAH says), then its
+/// collapse of subtrees into leaves, and a second reinsertion pass.
+fn optimise(bvh: &mut Bvh2, quality: Quality) {
+    let params = params(quality);
     let mut reinsertion = obvhs::bvh2::reinsertion::ReinsertionOptimizer::default();
-    reinsertion.run(&mut bvh, params.reinsertion_batch_ratio, None);
+    reinsertion.run(bvh, params.reinsertion_batch_ratio, None);
     obvhs::bvh2::leaf_collapser::collapse(
-        &mut bvh,
+        bvh,
         params.max_prims_per_leaf,
         params.collapse_traversal_cost,
     );
     reinsertion.run(
-        &mut bvh,
+        bvh,
         params.reinsertion_batch_ratio * params.post_collapse_reinsertion_batch_ratio_multiplier,
         None,
     );
-    bvh
 }
 
 /// The axis along which `b` lies most clearly after `a`, and whether it lies before.
@@ -252,10 +298,15 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
         };
         if n.prim_count > 0 {
             node.offset = out.order.len() as u32;
-            node.count_axis = n.prim_count;
             let first = n.first_index as usize;
-            out.order
-                .extend_from_slice(&bvh.primitive_indices[first..first + n.prim_count as usize]);
+            // The parts of a primitive cut by spatial splits may come together again in
+            // one leaf, which holds it once.
+            for &p in &bvh.primitive_indices[first..first + n.prim_count as usize] {
+                if !out.order[node.offset as usize..].contains(&p) {
+                    out.order.push(p);
+                }
+            }
+            node.count_axis = out.order.len() as u32 - node.offset;
             out.nodes.push(node);
         } else {
             let (mut c0, mut c1) = (n.first_index as usize, n.first_index as usize + 1);
@@ -273,18 +324,23 @@ fn flatten(bvh: &Bvh2, aabbs: &[Aabb]) -> FlatBvh {
 }
 
 /// A tree by object median on the widest centroid axis down to ranges of at most `chunk`
-/// primitives: leaves where `chunk` is `MAX_LEAF_PRIMS` (a balanced tree, depth <= log2(n)
-/// + 1), else subtrees built by obvhs, each over its own range.
+/// primitives: leaves where `chunk` is `MAX_LEAF_PRIMS` (a balanced tree, depth at most
+/// log2(n) + 1), else subtrees built by `build_group`, each over its own range. The ranges
+/// are reordered in place, unless a group's spatial splits (`split`) may store a primitive
+/// more than once: then the leaves' primitives are gathered in a second array, leaf by
+/// leaf.
 fn median_split(
     count: usize,
     aabb: &impl Fn(u32) -> Aabb,
     chunk: usize,
     quality: Quality,
+    split: Option<&dyn Splittable>,
 ) -> FlatBvh {
     let mut out = FlatBvh {
         order: (0..count as u32).collect(),
         ..FlatBvh::default()
     };
+    let mut gathered: Vec<u32> = Vec::new();
     // Each split's sort keys (twice the centre on the split axis, and the primitive),
     // worked out once a level rather than at every comparison: `aabb` computes bounds from
     // a primitive record, and the selection compares each several times. The buffer is
@@ -299,7 +355,18 @@ fn median_split(
         }
         if hi - lo > MAX_LEAF_PRIMS as usize && hi - lo <= chunk {
             keys = Vec::new();
-            append_subtree(&mut out, aabb, lo..hi, depth, quality);
+            let first = if split.is_some() { gathered.len() } else { lo };
+            let ids = out.order[lo..hi].to_vec();
+            let local = split.map(|split| Local {
+                split,
+                ids: Some(&ids),
+            });
+            let order = append_subtree(&mut out, aabb, &ids, first as u32, depth, quality, local);
+            if split.is_some() {
+                gathered.extend(order);
+            } else {
+                out.order[lo..hi].copy_from_slice(&order);
+            }
             continue;
         }
         out.depth = out.depth.max(depth);
@@ -318,6 +385,10 @@ fn median_split(
         };
         if hi - lo <= MAX_LEAF_PRIMS as usize {
             node.offset = lo as u32;
+            if split.is_some() {
+                node.offset = gathered.len() as u32;
+                gathered.extend_from_slice(&out.order[lo..hi]);
+            }
             node.count_axis = (hi - lo) as u32;
             out.nodes.push(node);
             continue;
@@ -338,37 +409,34 @@ fn median_split(
         stack.push((mid, hi, Some(here), depth + 1));
         stack.push((lo, mid, None, depth + 1));
     }
+    if split.is_some() {
+        out.order = gathered;
+    }
     out
 }
 
-/// Builds the primitives `out.order[range]` with obvhs and appends the flattened subtree
-/// at the end of `out.nodes` (its root at depth `depth`), reordering that range as its
-/// leaves hold them.
+/// Builds the group of primitives `ids` (`build_group`) and appends its flattened subtree
+/// at the end of `out.nodes` (its root at depth `depth`, its leaves' primitives counted
+/// from `first`); the primitives in the order its leaves hold them.
 fn append_subtree(
     out: &mut FlatBvh,
     aabb: &impl Fn(u32) -> Aabb,
-    range: std::ops::Range<usize>,
+    ids: &[u32],
+    first: u32,
     depth: usize,
     quality: Quality,
-) {
-    let ids = out.order[range.clone()].to_vec();
+    split: Option<Local>,
+) -> Vec<u32> {
     let sub_aabbs: Vec<Aabb> = ids.iter().map(|&i| aabb(i)).collect();
-    let sub = build_group(&sub_aabbs, quality);
+    let sub = build_group(&sub_aabbs, quality, split);
     drop(sub_aabbs);
     let base = out.nodes.len() as u32;
     out.nodes.extend(sub.nodes.iter().map(|n| GpuNode {
-        offset: n.offset
-            + if n.count() > 0 {
-                range.start as u32
-            } else {
-                base
-            },
+        offset: n.offset + if n.count() > 0 { first } else { base },
         ..*n
     }));
-    for (slot, &j) in out.order[range].iter_mut().zip(&sub.order) {
-        *slot = ids[j as usize];
-    }
     out.depth = out.depth.max(depth - 1 + sub.depth);
+    sub.order.iter().map(|&j| ids[j as usize]).collect()
 }
 
 #[cfg(test)]
@@ -459,7 +527,7 @@ mod tests {
     fn trees_built_in_groups_are_well_formed() {
         for (n, chunk) in [(5, 4), (1000, 64), (5000, 300), (4097, 4096)] {
             let b = unit_boxes(n);
-            let t = median_split(b.len(), &|i| b[i as usize], chunk, Quality::Medium);
+            let t = median_split(b.len(), &|i| b[i as usize], chunk, Quality::Medium, None);
             check(&t, &b);
             assert_eq!(t.depth, walked_depth(&t), "{n} boxes in groups of {chunk}");
             assert!(t.nodes.len() < 2 * n, "{} nodes", t.nodes.len());

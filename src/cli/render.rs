@@ -208,8 +208,12 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
             opts.shading.name()
         );
         eprintln!(
-            "scene       {} prims in BVH ({} nodes, depth {}), {} planes, {} lights",
+            "scene       {} prims in BVH{} ({} nodes, depth {}), {} planes, {} lights",
             buffers.prims.len(),
+            match buffers.copies {
+                0 => String::new(),
+                n => format!(", {n} of them copies by spatial splits"),
+            },
             buffers.node_count(),
             buffers.bvh_depth,
             buffers.planes.len(),

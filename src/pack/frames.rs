@@ -131,7 +131,7 @@ impl FramePacker {
             let (mut records, normals, uvs) = prims.into_records();
             let quality = Quality::chosen(records.len(), samples.saturating_mul(frames))
                 .map_err(Error::Render)?;
-            let mut tree = build_tree(&records, quality);
+            let mut tree = build_tree(&records, quality, None);
             permute(&mut records, std::mem::take(&mut tree.order));
             let still = Still {
                 records,
@@ -202,7 +202,7 @@ impl FramePacker {
         // Each part fits the walks' stack, but one more level may not: then the whole.
         if tree.depth >= TRAVERSAL_STACK {
             quality = Quality::chosen(records.len(), self.samples).map_err(Error::Render)?;
-            tree = build_tree(&records, quality);
+            tree = build_tree(&records, quality, None);
             permute(&mut records, std::mem::take(&mut tree.order));
             how = FrameTree::Whole;
         }
@@ -215,6 +215,7 @@ impl FramePacker {
             quality,
             bounds,
             textures: Some(self.textures.clone()),
+            copies: 0,
         };
         Ok((assemble(scene, packed)?, how))
     }
@@ -246,7 +247,7 @@ impl FramePacker {
             return Ok(FrameTree::Rebuilt);
         }
         let quality = Quality::chosen(records.len(), self.samples).map_err(Error::Render)?;
-        let tree = build_tree(records, quality);
+        let tree = build_tree(records, quality, None);
         permute(records, tree.order.clone());
         self.moving = Some(Moving {
             built_cost: cost(&tree.nodes),

@@ -38,8 +38,11 @@ pub struct SceneBuffers {
     /// Nodes of the binary tree as built, kept when `for_cpu_alone` drops them
     /// (`GpuGlobals::n_nodes`, `--stats`).
     node_count: usize,
-    /// Bounded primitives in BVH leaf order.
+    /// Bounded primitives in BVH leaf order: a primitive that spatial splits put in
+    /// several leaves (`bvh::spatial`) has a record in each.
     pub prims: Vec<GpuPrim>,
+    /// How many of `prims` are such copies.
+    pub copies: usize,
     pub tri_normals: Vec<GpuTriNormals>,
     /// Texture coordinates, which the shader reads after `tri_normals` (`surface_texels`).
     pub tri_uvs: Vec<GpuTriUvs>,
@@ -124,8 +127,20 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let (mut records, tri_normals, tri_uvs) = prims.into_records();
     let emitters = emitters::emitters(&records, &scene.materials);
     let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
-    let mut tree = build_tree(&records, quality);
-    permute(&mut records, std::mem::take(&mut tree.order));
+    let opaque: Vec<bool> = scene.materials.iter().map(|m| m.t <= 0.0).collect();
+    let split = OpaqueTriangles {
+        records: &records,
+        opaque: &opaque,
+    };
+    let mut tree = build_tree(&records, quality, Some(&split));
+    let order = std::mem::take(&mut tree.order);
+    let copies = order.len() - records.len();
+    if copies == 0 {
+        permute(&mut records, order);
+    } else {
+        // Spatial splits stored some triangles in several leaves: each leaf its own copy.
+        records = order.iter().map(|&i| records[i as usize]).collect();
+    }
     assemble(
         scene,
         Packed {
@@ -137,20 +152,44 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             quality,
             bounds,
             textures: None,
+            copies,
         },
     )
 }
 
 /// A tree over `records` (triangles by their corners), their bounds worked out a group at
-/// a time as the build needs them.
-fn build_tree(records: &[GpuPrim], quality: bvh::Quality) -> FlatBvh {
+/// a time as the build needs them; the high-quality build cuts those `split` allows.
+fn build_tree(
+    records: &[GpuPrim],
+    quality: bvh::Quality,
+    split: Option<&dyn bvh::Splittable>,
+) -> FlatBvh {
     let mut tree = bvh::build_with(
         records.len(),
         |i| bvh::aabb(flat::record_bounds(&records[i as usize])),
         quality,
+        split,
     );
     tree.nodes.shrink_to_fit();
     tree
+}
+
+/// The records' opaque triangles, which the high-quality build's spatial splits may store
+/// in several leaves (`bvh::spatial`): a ray meets such a triangle at the same point
+/// whichever leaf it tests it in, and a shadow ray stops at it, where a transparent one's
+/// transmission would be counted once a leaf.
+struct OpaqueTriangles<'a> {
+    records: &'a [GpuPrim],
+    /// Whether each material lets no light through (`t` of 0).
+    opaque: &'a [bool],
+}
+
+impl bvh::Splittable for OpaqueTriangles<'_> {
+    fn corners(&self, prim: u32) -> Option<[glam::Vec3A; 3]> {
+        let p = &self.records[prim as usize];
+        (p.kind() == PRIM_TRIANGLE && self.opaque[p.material() as usize])
+            .then(|| [p.p0, p.p1, p.p2].map(glam::Vec3A::from))
+    }
 }
 
 /// A scene's bounded primitives and their tree, as `assemble` takes them.
@@ -168,6 +207,8 @@ struct Packed {
     /// The textures packed already (a sequence packs them once for all its frames);
     /// `None`: packed from the scene's.
     textures: Option<Textures>,
+    /// Records that are copies, of primitives spatial splits put in several leaves.
+    copies: usize,
 }
 
 /// Textures' headers and texels, as `SceneBuffers` holds them.
@@ -200,6 +241,7 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
         quality,
         bounds,
         textures,
+        copies,
     } = packed;
     let too_big = |msg: String| Error::Scene {
         file: scene.name.clone(),
@@ -252,6 +294,7 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
     Ok(SceneBuffers {
         node_count: nodes.len(),
         nodes,
+        copies,
         prims: records,
         tri_normals,
         tri_uvs,

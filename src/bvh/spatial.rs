@@ -1,0 +1,663 @@
+//! The high-quality build's binary tree: top-down binned SAH with spatial splits (the
+//! SBVH of Stich, Friedrich and Dietrich 2009, "Spatial Splits in Bounding Volume
+//! Hierarchies"; Embree's `RTC_BUILD_QUALITY_HIGH` does the same). Where a node's best
+//! split by centroids leaves its two halves overlapping, a plane across space may cost
+//! less: a triangle straddling it then stands in both halves, each with the box of its part
+//! on that side, so the halves' boxes no longer overlap and a ray enters fewer of them.
+//!
+//! Only primitives that may stand in several leaves are cut (`Splittable::corners`): an
+//! opaque triangle, which a closest-hit ray meets at the same point whichever leaf tests
+//! it and a shadow ray stops at. A transparent one would have its transmission multiplied
+//! once a leaf; it and every other primitive go whole to one side of any plane.
+//!
+//! The cuts are bounded: at most `BUDGET` times the primitives more references, shared out
+//! between a node's halves by their sizes (so the tree is the same however the threads
+//! run), and only where a centroid split's halves overlap by more than `MIN_OVERLAP` of the
+//! root's area. The result is obvhs' `Bvh2` with leaves of up to `max_leaf` references, for
+//! the same reinsertion and leaf collapse as PLOC's tree.
+
+use glam::{DVec3, Vec3A};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH, node::Bvh2Node};
+
+/// Bins an axis, for centroid and spatial splits alike.
+const BINS: usize = 32;
+
+/// References spatial splits may add, as a fraction of the primitives: gears-4's mirror
+/// rays gained as much from 20% as from 50% or 100% (docs/bvh.md), and the records of the
+/// references are the scene's largest array.
+const BUDGET: f32 = 0.2;
+
+/// Overlap of a centroid split's halves (as a fraction of the root's surface area) from
+/// which a spatial split is weighed. Stich et al. take 1e-5; here 1e-3 made trees as good
+/// at a third of the build time.
+const MIN_OVERLAP: f32 = 1e-3;
+
+/// The SAH's cost of a node visit against one primitive's test: obvhs' leaf collapse's.
+const TRAVERSAL_COST: f32 = 3.0;
+
+/// Below this depth nodes split by the median centroid only: every level then halves the
+/// references, so no input, however its centroids are spread, makes the recursion deep.
+const MEDIAN_DEPTH: usize = 40;
+
+/// Nodes of more references than this build their halves on two threads.
+const PARALLEL_MIN: usize = 4096;
+
+/// Which primitives may be cut, and where their corners are.
+pub trait Splittable: Sync {
+    /// The corners of primitive `prim` where it may stand in several leaves, else `None`.
+    fn corners(&self, prim: u32) -> Option<[Vec3A; 3]>;
+}
+
+/// A primitive, or its part inside `b`.
+#[derive(Clone, Copy, Debug)]
+struct Ref {
+    b: Aabb,
+    prim: u32,
+}
+
+/// A split of a node's references and what the SAH makes of it.
+#[derive(Clone, Copy, Debug)]
+struct Split {
+    axis: usize,
+    /// Bin 0's start on `axis` and the bins' span: centroids for an object split, the
+    /// node's box for a spatial one.
+    lo: f32,
+    extent: f32,
+    /// The first bin of the right half: for a spatial split, the plane is its start.
+    bin: usize,
+    /// Surface area times references, summed over both halves.
+    cost: f32,
+    left: Aabb,
+    right: Aabb,
+    counts: (u32, u32),
+}
+
+impl Split {
+    fn plane(&self) -> f32 {
+        self.lo + self.extent * self.bin as f32 / BINS as f32
+    }
+}
+
+fn half_area(b: &Aabb) -> f32 {
+    if b.valid() { b.half_area() } else { 0.0 }
+}
+
+fn bounds(refs: &[Ref]) -> Aabb {
+    refs.iter().fold(Aabb::empty(), |a, r| a.union(&r.b))
+}
+
+/// A subtree as `Bvh2` nodes (its root first, an inner node's children at `first_index`
+/// and the next) and the primitives its leaves index.
+struct Subtree {
+    nodes: Vec<Bvh2Node>,
+    prims: Vec<u32>,
+    depth: usize,
+}
+
+/// The tree over `aabbs`, the primitives `split` allows cut with spatial splits, leaves of
+/// at most `max_leaf` references.
+pub fn build(aabbs: &[Aabb], split: &dyn Splittable, max_leaf: usize) -> Bvh2 {
+    let refs: Vec<Ref> = (0..aabbs.len() as u32)
+        .map(|prim| Ref {
+            b: aabbs[prim as usize],
+            prim,
+        })
+        .collect();
+    let b = Builder {
+        split,
+        min_overlap: MIN_OVERLAP * half_area(&bounds(&refs)),
+        max_leaf,
+    };
+    let budget = (aabbs.len() as f32 * BUDGET) as usize;
+    let tree = if refs.is_empty() {
+        Subtree {
+            nodes: Vec::new(),
+            prims: Vec::new(),
+            depth: 0,
+        }
+    } else {
+        b.subtree(refs, budget, 1)
+    };
+    Bvh2 {
+        nodes: tree.nodes,
+        primitive_indices: tree.prims,
+        max_depth: tree.depth.max(DEFAULT_MAX_STACK_DEPTH),
+        uses_spatial_splits: true,
+        ..Bvh2::default()
+    }
+}
+
+struct Builder<'a> {
+    split: &'a dyn Splittable,
+    /// `MIN_OVERLAP` of the root's half area.
+    min_overlap: f32,
+    max_leaf: usize,
+}
+
+impl Builder<'_> {
+    /// The subtree over `refs` at `depth`, adding at most `budget` references.
+    fn subtree(&self, refs: Vec<Ref>, budget: usize, depth: usize) -> Subtree {
+        if refs.len() < PARALLEL_MIN {
+            let mut out = Subtree {
+                nodes: vec![Bvh2Node::default()],
+                prims: Vec::with_capacity(refs.len()),
+                depth,
+            };
+            self.node(&mut out, 0, refs, budget, depth);
+            return out;
+        }
+        let bounds = bounds(&refs);
+        let Ok(((left, lb), (right, rb))) = self.split_node(refs, &bounds, budget, depth) else {
+            unreachable!("more than `max_leaf` references always split");
+        };
+        let (l, r) = rayon::join(
+            || self.subtree(left, lb, depth + 1),
+            || self.subtree(right, rb, depth + 1),
+        );
+        // [root, left's root, right's root, the rest of left's, the rest of right's]: a
+        // pair of children stays side by side.
+        let mut nodes = Vec::with_capacity(1 + l.nodes.len() + r.nodes.len());
+        nodes.push(Bvh2Node::new(bounds, 0, 1));
+        let moved = |n: &Bvh2Node, to: u32, first: u32| {
+            let mut n = *n;
+            n.first_index += if n.prim_count > 0 { first } else { to };
+            n
+        };
+        let (lshift, rshift) = (2, l.nodes.len() as u32 + 1);
+        let lprims = l.prims.len() as u32;
+        nodes.push(moved(&l.nodes[0], lshift, 0));
+        nodes.push(moved(&r.nodes[0], rshift, lprims));
+        nodes.extend(l.nodes[1..].iter().map(|n| moved(n, lshift, 0)));
+        nodes.extend(r.nodes[1..].iter().map(|n| moved(n, rshift, lprims)));
+        let mut prims = l.prims;
+        prims.extend(r.prims);
+        Subtree {
+            nodes,
+            prims,
+            depth: l.depth.max(r.depth),
+        }
+    }
+
+    /// Node `slot` of `out` over `refs`, its descendants appended.
+    fn node(&self, out: &mut Subtree, slot: usize, refs: Vec<Ref>, budget: usize, depth: usize) {
+        out.depth = out.depth.max(depth);
+        let bounds = bounds(&refs);
+        match self.split_node(refs, &bounds, budget, depth) {
+            Err(refs) => {
+                out.nodes[slot] = Bvh2Node::new(bounds, refs.len() as u32, out.prims.len() as u32);
+                out.prims.extend(refs.iter().map(|r| r.prim));
+            }
+            Ok(((left, lb), (right, rb))) => {
+                let first = out.nodes.len();
+                out.nodes.extend([Bvh2Node::default(); 2]);
+                out.nodes[slot] = Bvh2Node::new(bounds, 0, first as u32);
+                self.node(out, first, left, lb, depth + 1);
+                self.node(out, first + 1, right, rb, depth + 1);
+            }
+        }
+    }
+
+    /// `refs` (of box `bounds`) cut in two by the split the SAH prefers, with each half's
+    /// share of `budget`; `Err(refs)` where a leaf costs less.
+    #[allow(clippy::type_complexity)]
+    fn split_node(
+        &self,
+        refs: Vec<Ref>,
+        bounds: &Aabb,
+        budget: usize,
+        depth: usize,
+    ) -> Result<((Vec<Ref>, usize), (Vec<Ref>, usize)), Vec<Ref>> {
+        if refs.len() <= 1 {
+            return Err(refs);
+        }
+        if depth >= MEDIAN_DEPTH {
+            if refs.len() <= self.max_leaf {
+                return Err(refs);
+            }
+            let mut left = median(refs);
+            let right = left.split_off(left.len() / 2);
+            return Ok(((left, 0), (right, 0)));
+        }
+        let object = object_split(&refs);
+        let overlap = object.map_or(f32::INFINITY, |s| half_area(&s.left.intersection(&s.right)));
+        let spatial = (budget > 0 && overlap > self.min_overlap)
+            .then(|| self.spatial_split(&refs, bounds))
+            .flatten();
+        let spatial = spatial.filter(|s| object.is_none_or(|o| s.cost < o.cost));
+        let cost = spatial.or(object).map_or(f32::INFINITY, |s| s.cost);
+        let area = half_area(bounds);
+        if refs.len() <= self.max_leaf && refs.len() as f32 * area <= TRAVERSAL_COST * area + cost {
+            return Err(refs);
+        }
+        let (left, right, used) = match (spatial, object) {
+            (Some(s), _) => self.cut(refs, &s, budget),
+            (None, Some(o)) => {
+                let (l, r) = partition_objects(refs, &o);
+                (l, r, 0)
+            }
+            (None, None) => {
+                // Every centroid in one place and no plane between them: halves.
+                let mut l = refs;
+                let r = l.split_off(l.len() / 2);
+                (l, r, 0)
+            }
+        };
+        let rest = budget - used;
+        let lb = rest * left.len() / (left.len() + right.len());
+        Ok(((left, lb), (right, rest - lb)))
+    }
+
+    /// The cheapest plane between the bins of `bounds` on any axis, each reference's part
+    /// in each bin it crosses bounded on its own (Stich et al.'s chopped binning).
+    fn spatial_split(&self, refs: &[Ref], bounds: &Aabb) -> Option<Split> {
+        let corners: Vec<Option<[Vec3A; 3]>> =
+            refs.iter().map(|r| self.split.corners(r.prim)).collect();
+        let mut best: Option<Split> = None;
+        for axis in 0..3 {
+            let (lo, extent) = (bounds.min[axis], bounds.max[axis] - bounds.min[axis]);
+            if extent <= 0.0 {
+                continue;
+            }
+            let scale = BINS as f32 / extent;
+            let bin = |x: f32| (((x - lo) * scale) as usize).min(BINS - 1);
+            let plane = |k: usize| lo + extent * k as f32 / BINS as f32;
+            let mut boxes = [Aabb::empty(); BINS];
+            let (mut entry, mut exit) = ([0u32; BINS], [0u32; BINS]);
+            for (r, v) in refs.iter().zip(&corners) {
+                let Some(v) = v else {
+                    // Whole, on its centroid's side (as `cut` puts it).
+                    let k = bin(r.b.center_axis(axis));
+                    boxes[k] = boxes[k].union(&r.b);
+                    entry[k] += 1;
+                    exit[k] += 1;
+                    continue;
+                };
+                let (b0, b1) = (bin(r.b.min[axis]), bin(r.b.max[axis]));
+                entry[b0] += 1;
+                exit[b1] += 1;
+                let mut rest = r.b;
+                for (k, bx) in boxes.iter_mut().enumerate().take(b1).skip(b0) {
+                    let (part, right) = chop(v, &rest, axis, plane(k + 1));
+                    *bx = bx.union(&part);
+                    rest = right;
+                }
+                boxes[b1] = boxes[b1].union(&rest);
+            }
+            sweep(&mut best, axis, lo, extent, &boxes, &entry, &exit);
+        }
+        best
+    }
+
+    /// The references on each side of spatial split `s`, and how many it added: those
+    /// across the plane cut in two, or kept whole on one side where that costs less
+    /// (Stich et al.'s reference unsplitting), or where `budget` is spent.
+    fn cut(&self, refs: Vec<Ref>, s: &Split, budget: usize) -> (Vec<Ref>, Vec<Ref>, usize) {
+        let (axis, pos) = (s.axis, s.plane());
+        let (mut lb, mut rb) = (s.left, s.right);
+        let (mut nl, mut nr) = (s.counts.0 as f32, s.counts.1 as f32);
+        let (mut left, mut right) = (Vec::new(), Vec::new());
+        let mut added = 0;
+        for r in refs {
+            if r.b.max[axis] <= pos {
+                left.push(r);
+                continue;
+            }
+            if r.b.min[axis] >= pos {
+                right.push(r);
+                continue;
+            }
+            let Some(v) = self.split.corners(r.prim) else {
+                if r.b.center_axis(axis) < pos {
+                    left.push(r);
+                } else {
+                    right.push(r);
+                }
+                continue;
+            };
+            let both = half_area(&lb) * nl + half_area(&rb) * nr;
+            let (lw, rw) = (lb.union(&r.b), rb.union(&r.b));
+            let only_left = half_area(&lw) * nl + half_area(&rb) * (nr - 1.0);
+            let only_right = half_area(&lb) * (nl - 1.0) + half_area(&rw) * nr;
+            let (l, rt) = cut_triangle(&v, &r.b, axis, pos);
+            if !rt.valid() || !l.valid() {
+                // Its part of `r.b` lies on one side only (the box was loose).
+                let part = Ref {
+                    b: if l.valid() { l } else { rt },
+                    prim: r.prim,
+                };
+                if l.valid() {
+                    left.push(part);
+                } else {
+                    right.push(part);
+                }
+            } else if only_left < both && only_left <= only_right {
+                left.push(r);
+                (lb, nr) = (lw, nr - 1.0);
+            } else if only_right < both || added == budget {
+                right.push(r);
+                (rb, nl) = (rw, nl - 1.0);
+            } else {
+                added += 1;
+                left.push(Ref { b: l, prim: r.prim });
+                right.push(Ref {
+                    b: rt,
+                    prim: r.prim,
+                });
+            }
+        }
+        if left.is_empty() || right.is_empty() {
+            // Every reference ended on one side (all kept whole): halves by centroid.
+            let mut all = median(if left.is_empty() { right } else { left });
+            let r = all.split_off(all.len() / 2);
+            return (all, r, added);
+        }
+        (left, right, added)
+    }
+}
+
+/// `refs` ordered so that the first half's centroids lie below the second's on the axis
+/// where they spread widest.
+fn median(mut refs: Vec<Ref>) -> Vec<Ref> {
+    let c = refs.iter().fold(Aabb::empty(), |a, r| {
+        a.union(&Aabb::from_point(r.b.center()))
+    });
+    let axis = c.largest_axis();
+    let mid = refs.len() / 2;
+    if mid > 0 {
+        refs.select_nth_unstable_by(mid, |a, b| {
+            a.b.center_axis(axis).total_cmp(&b.b.center_axis(axis))
+        });
+    }
+    refs
+}
+
+/// The cheapest split of `refs` by centroid into two non-empty halves, binned on each
+/// axis; `None` where every centroid is in one place.
+fn object_split(refs: &[Ref]) -> Option<Split> {
+    let c = refs.iter().fold(Aabb::empty(), |a, r| {
+        a.union(&Aabb::from_point(r.b.center()))
+    });
+    let mut best: Option<Split> = None;
+    for axis in 0..3 {
+        let (lo, extent) = (c.min[axis], c.max[axis] - c.min[axis]);
+        if extent <= 0.0 {
+            continue;
+        }
+        let scale = BINS as f32 / extent;
+        let mut boxes = [Aabb::empty(); BINS];
+        let mut counts = [0u32; BINS];
+        for r in refs {
+            let k = (((r.b.center_axis(axis) - lo) * scale) as usize).min(BINS - 1);
+            boxes[k] = boxes[k].union(&r.b);
+            counts[k] += 1;
+        }
+        sweep(&mut best, axis, lo, extent, &boxes, &counts, &counts);
+    }
+    best
+}
+
+/// `best` replaced by the cheapest split between the bins `boxes` on `axis` where it is
+/// cheaper: `entry[k]` references start in bin `k`, `exit[k]` end there.
+fn sweep(
+    best: &mut Option<Split>,
+    axis: usize,
+    lo: f32,
+    extent: f32,
+    boxes: &[Aabb; BINS],
+    entry: &[u32; BINS],
+    exit: &[u32; BINS],
+) {
+    let mut right = [(Aabb::empty(), 0u32); BINS];
+    let (mut rb, mut rc) = (Aabb::empty(), 0);
+    for k in (1..BINS).rev() {
+        rb = rb.union(&boxes[k]);
+        rc += exit[k];
+        right[k] = (rb, rc);
+    }
+    let (mut lb, mut lc) = (Aabb::empty(), 0);
+    for k in 1..BINS {
+        lb = lb.union(&boxes[k - 1]);
+        lc += entry[k - 1];
+        let (rb, rc) = right[k];
+        if lc == 0 || rc == 0 {
+            continue;
+        }
+        let cost = half_area(&lb) * lc as f32 + half_area(&rb) * rc as f32;
+        if best.is_none_or(|b| cost < b.cost) {
+            *best = Some(Split {
+                axis,
+                lo,
+                extent,
+                bin: k,
+                cost,
+                left: lb,
+                right: rb,
+                counts: (lc, rc),
+            });
+        }
+    }
+}
+
+/// `refs` on each side of centroid split `s`, binned as `object_split` binned them.
+fn partition_objects(refs: Vec<Ref>, s: &Split) -> (Vec<Ref>, Vec<Ref>) {
+    let scale = BINS as f32 / s.extent;
+    refs.into_iter().partition(|r| {
+        let k = (((r.b.center_axis(s.axis) - s.lo) * scale) as usize).min(BINS - 1);
+        k < s.bin
+    })
+}
+
+/// The boxes of triangle `v`'s parts inside `b` below and above `pos` on `axis`, in f32:
+/// what the binning weighs (`cut_triangle` makes the cut itself).
+#[inline]
+fn chop(v: &[Vec3A; 3], b: &Aabb, axis: usize, pos: f32) -> (Aabb, Aabb) {
+    let (mut l, mut r) = (Aabb::empty(), Aabb::empty());
+    for i in 0..3 {
+        let (a, c) = (v[i], v[(i + 1) % 3]);
+        if a[axis] <= pos {
+            l.extend(a);
+        }
+        if a[axis] >= pos {
+            r.extend(a);
+        }
+        if (a[axis] - pos) * (c[axis] - pos) < 0.0 {
+            let x = a + (c - a) * ((pos - a[axis]) / (c[axis] - a[axis]));
+            l.extend(x);
+            r.extend(x);
+        }
+    }
+    let (mut lb, mut rb) = (*b, *b);
+    lb.max[axis] = lb.max[axis].min(pos);
+    rb.min[axis] = rb.min[axis].max(pos);
+    (l.intersection(&lb), r.intersection(&rb))
+}
+
+/// The boxes of triangle `v`'s parts inside `b` below and above `pos` on `axis`, each
+/// sure to hold its part: the crossings of the plane are worked out in f64 and each box
+/// widened by 16 ulps of the triangle's largest coordinate before it is cut to `b` and the
+/// plane (an invalid box where no part lies on that side).
+fn cut_triangle(v: &[Vec3A; 3], b: &Aabb, axis: usize, pos: f32) -> (Aabb, Aabb) {
+    let v = v.map(|p| p.as_dvec3());
+    let p = f64::from(pos);
+    let (mut lmin, mut lmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let (mut rmin, mut rmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut size = 0.0f64;
+    for i in 0..3 {
+        let (a, c) = (v[i], v[(i + 1) % 3]);
+        size = size.max(a.abs().max_element());
+        if a[axis] <= p {
+            (lmin, lmax) = (lmin.min(a), lmax.max(a));
+        }
+        if a[axis] >= p {
+            (rmin, rmax) = (rmin.min(a), rmax.max(a));
+        }
+        if (a[axis] < p && c[axis] > p) || (a[axis] > p && c[axis] < p) {
+            let mut x = a + (c - a) * ((p - a[axis]) / (c[axis] - a[axis]));
+            x[axis] = p;
+            (lmin, lmax) = (lmin.min(x), lmax.max(x));
+            (rmin, rmax) = (rmin.min(x), rmax.max(x));
+        }
+    }
+    let w = DVec3::splat(size * f64::from(f32::EPSILON) * 16.0);
+    let part = |min: DVec3, max: DVec3, side: Aabb| {
+        if min.x > max.x {
+            return Aabb::empty();
+        }
+        let widened = Aabb::new(
+            Vec3A::from((min - w).as_vec3()),
+            Vec3A::from((max + w).as_vec3()),
+        );
+        widened.intersection(&side)
+    };
+    let (mut below, mut above) = (*b, *b);
+    below.max[axis] = below.max[axis].min(pos);
+    above.min[axis] = above.min[axis].max(pos);
+    (part(lmin, lmax, below), part(rmin, rmax, above))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{FlatBvh, Quality, build_with};
+
+    /// Triangles, and whether each may be cut.
+    struct Triangles(Vec<[Vec3A; 3]>, Vec<bool>);
+
+    impl Splittable for Triangles {
+        fn corners(&self, prim: u32) -> Option<[Vec3A; 3]> {
+            self.1[prim as usize].then(|| self.0[prim as usize])
+        }
+    }
+
+    impl Triangles {
+        fn aabbs(&self) -> Vec<Aabb> {
+            self.0.iter().map(|v| Aabb::from_points(v)).collect()
+        }
+    }
+
+    /// A small deterministic generator of floats in [0, 1).
+    fn random(seed: u64) -> impl FnMut() -> f32 {
+        let mut s = seed;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    /// Points over triangle `v`, worked out in f64: its corners, points along its edges and
+    /// inside.
+    fn samples(v: &[Vec3A; 3]) -> Vec<DVec3> {
+        let [a, b, c] = v.map(|p| p.as_dvec3());
+        let n = 8;
+        let mut out = Vec::new();
+        for i in 0..=n {
+            for j in 0..=n - i {
+                let (u, w) = (i as f64 / n as f64, j as f64 / n as f64);
+                out.push(a + (b - a) * u + (c - a) * w);
+            }
+        }
+        out
+    }
+
+    fn holds(b: &Aabb, q: DVec3) -> bool {
+        (0..3).all(|k| f64::from(b.min[k]) <= q[k] && q[k] <= f64::from(b.max[k]))
+    }
+
+    /// Long, thin triangles at every angle across a few units, every seventh `far` from
+    /// the origin: the slivers spatial splits are for.
+    fn slivers(n: usize, seed: u64, far: f32) -> Vec<[Vec3A; 3]> {
+        let mut r = random(seed);
+        (0..n)
+            .map(|i| {
+                let offset = if i % 7 == 0 { far } else { 0.0 };
+                let mut p = || Vec3A::new(r(), r(), r()) * 4.0 + Vec3A::splat(offset);
+                let (a, b) = (p(), p());
+                let thin = (b - a).cross(Vec3A::Z).normalize_or(Vec3A::X) * 0.01;
+                [a, b, a + thin]
+            })
+            .collect()
+    }
+
+    /// Each part `cut_triangle` makes holds every point of the triangle inside the box it
+    /// cuts and on its side of the plane, cut after cut.
+    #[test]
+    fn cut_parts_hold_their_points() {
+        let mut r = random(7);
+        for v in slivers(2000, 11, 1e4) {
+            let mut b = Aabb::from_points(&v);
+            for _ in 0..3 {
+                let axis = (r() * 3.0) as usize % 3;
+                let pos = b.min[axis] + (b.max[axis] - b.min[axis]) * r();
+                let (l, rt) = cut_triangle(&v, &b, axis, pos);
+                for q in samples(&v).into_iter().filter(|&q| holds(&b, q)) {
+                    let x = q[axis];
+                    assert!(
+                        x > f64::from(pos) || holds(&l, q),
+                        "{v:?} {axis} {pos}: {q}"
+                    );
+                    assert!(
+                        x < f64::from(pos) || holds(&rt, q),
+                        "{v:?} {axis} {pos}: {q}"
+                    );
+                }
+                b = if r() < 0.5 && l.valid() { l } else { rt };
+                if !b.valid() {
+                    break;
+                }
+            }
+        }
+    }
+
+    /// The whole build with spatial splits: every point of every triangle lies in the box of
+    /// a leaf that holds it and of every node above that leaf; a triangle that may not be
+    /// cut is in one leaf only; the references added stay within the budget, and some
+    /// triangles are cut.
+    #[test]
+    fn split_trees_cover_every_triangle_and_cut_only_what_may_be() {
+        let corners = slivers(3000, 5, 0.0);
+        let cut: Vec<bool> = (0..corners.len()).map(|i| i % 5 != 0).collect();
+        let tris = Triangles(corners, cut);
+        let aabbs = tris.aabbs();
+        let tree: FlatBvh = build_with(
+            aabbs.len(),
+            |i| aabbs[i as usize],
+            Quality::High,
+            Some(&tris),
+        );
+        // Each leaf's box with the boxes of the nodes above it, by primitive.
+        let mut leaves: Vec<Vec<Vec<Aabb>>> = vec![Vec::new(); aabbs.len()];
+        let mut stack = vec![(0usize, Vec::<Aabb>::new())];
+        while let Some((i, mut path)) = stack.pop() {
+            let n = &tree.nodes[i];
+            path.push(Aabb::new(n.min.into(), n.max.into()));
+            if n.count() > 0 {
+                for k in n.offset..n.offset + n.count() {
+                    leaves[tree.order[k as usize] as usize].push(path.clone());
+                }
+            } else {
+                stack.push((i + 1, path.clone()));
+                stack.push((n.offset as usize, path));
+            }
+        }
+        let mut cut = 0;
+        for (p, paths) in leaves.iter().enumerate() {
+            assert!(!paths.is_empty(), "primitive {p} in no leaf");
+            if !tris.1[p] {
+                assert_eq!(paths.len(), 1, "primitive {p} may not be cut");
+            }
+            cut += (paths.len() > 1) as usize;
+            for q in samples(&tris.0[p]) {
+                assert!(
+                    paths.iter().any(|path| path.iter().all(|b| holds(b, q))),
+                    "primitive {p}: {q} outside every leaf that holds it"
+                );
+            }
+        }
+        let added = tree.order.len() - aabbs.len();
+        assert!(added as f32 <= BUDGET * aabbs.len() as f32, "{added} added");
+        assert!(cut > 20, "{cut} primitives cut ({added} references added)");
+    }
+}
