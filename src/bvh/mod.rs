@@ -112,7 +112,8 @@ pub fn build(aabbs: &[Aabb], quality: Quality) -> FlatBvh {
 /// Builds a BVH over `count` primitives whose bounds `aabb` gives by index: the bounds
 /// are worked out as they are needed, a group at a time, so that a large scene's are never
 /// held all at once (`pack` computes them from its primitives). The high-quality build
-/// cuts the primitives `split` allows with spatial splits, where a group has any.
+/// cuts the primitives `split` allows with spatial splits, in groups that are mostly
+/// such primitives (`build_group`).
 pub fn build_with(
     count: usize,
     aabb: impl Fn(u32) -> Aabb,

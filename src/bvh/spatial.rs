@@ -29,8 +29,9 @@ const BINS: usize = 32;
 const BUDGET: f32 = 0.2;
 
 /// Overlap of a centroid split's halves (as a fraction of the root's surface area) from
-/// which a spatial split is weighed. Stich et al. take 1e-5; here 1e-3 made trees as good
-/// at a third of the build time.
+/// which a spatial split is weighed. Stich et al. take 1e-5; on gears-4 1e-3 made a tree
+/// that fetches as few nodes a ray (secondary rays 813 bytes against 821) in 30% less
+/// build time. 1e-2 cut less (839).
 const MIN_OVERLAP: f32 = 1e-3;
 
 /// The SAH's cost of a node visit against one primitive's test: obvhs' leaf collapse's.
