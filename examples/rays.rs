@@ -316,8 +316,15 @@ fn main() -> anyhow::Result<()> {
         };
         let count = |w: &mut dyn Write, n: usize| w.write_all(&(n as u32).to_le_bytes());
         let of = |kind| buffers.prims.iter().filter(move |p| p.kind() == kind);
-        count(&mut w, of(PRIM_TRIANGLE).count())?;
-        for p in of(PRIM_TRIANGLE) {
+        // The scene's triangles once each: a triangle that spatial splits put in several
+        // leaves has a record in each (`SceneBuffers::copies`), which Embree, building its
+        // own tree, should not have to trace.
+        let mut seen = std::collections::HashSet::new();
+        let triangles: Vec<&GpuPrim> = of(PRIM_TRIANGLE)
+            .filter(|p| buffers.copies == 0 || seen.insert(bytemuck::bytes_of(*p)))
+            .collect();
+        count(&mut w, triangles.len())?;
+        for p in triangles {
             // Triangles are stored as a vertex and two edges.
             let (v1, v2) = (p.p0 + p.p1, p.p0 + p.p2);
             floats(
