@@ -152,7 +152,7 @@ impl Builder<'_> {
         let Ok(((left, lb), (right, rb))) = self.split_node(refs, &bounds, budget, depth) else {
             unreachable!("more than `max_leaf` references always split");
         };
-        let (l, r) = rayon::join(
+        let (l, r) = join(
             || self.subtree(left, lb, depth + 1),
             || self.subtree(right, rb, depth + 1),
         );
@@ -355,6 +355,15 @@ impl Builder<'_> {
         }
         (left, right, added)
     }
+}
+
+/// `a` and `b` on two threads where the crate has them (`native`), else one after the
+/// other (the browser's build).
+fn join<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + Send) -> (A, B) {
+    #[cfg(feature = "native")]
+    return rayon::join(a, b);
+    #[cfg(not(feature = "native"))]
+    (a(), b())
 }
 
 /// `refs` ordered so that the first half's centroids lie below the second's on the axis
