@@ -13,6 +13,7 @@
 //! depth is at most log2(n) + 1 and so always fits.
 
 pub mod blocks;
+mod clip;
 pub mod cwide;
 pub mod qwide;
 pub mod refit;

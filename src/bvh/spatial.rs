@@ -16,9 +16,11 @@
 //! root's area. The result is obvhs' `Bvh2` with leaves of up to `max_leaf` references, for
 //! the same reinsertion and leaf collapse as PLOC's tree.
 
-use glam::{DVec3, Vec3A};
+use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH, node::Bvh2Node};
+
+use super::clip::{chop, cut_triangle};
 
 /// Bins an axis, for centroid and spatial splits alike.
 const BINS: usize = 32;
@@ -57,14 +59,42 @@ struct Ref {
     prim: u32,
 }
 
+/// `BINS` equal bins along `axis` from `lo` over `extent`: over the centroids for an
+/// object split, over the node's box for a spatial one.
+#[derive(Clone, Copy, Debug)]
+struct Bins {
+    axis: usize,
+    lo: f32,
+    extent: f32,
+}
+
+impl Bins {
+    /// The bins over `b` on each axis where it has an extent.
+    fn over(b: &Aabb) -> impl Iterator<Item = Bins> + '_ {
+        (0..3)
+            .map(|axis| Bins {
+                axis,
+                lo: b.min[axis],
+                extent: b.max[axis] - b.min[axis],
+            })
+            .filter(|bins| bins.extent > 0.0)
+    }
+
+    /// The bin of coordinate `x` (the last holds `lo + extent` itself).
+    fn index(&self, x: f32) -> usize {
+        (((x - self.lo) * (BINS as f32 / self.extent)) as usize).min(BINS - 1)
+    }
+
+    /// Where bin `k` starts.
+    fn plane(&self, k: usize) -> f32 {
+        self.lo + self.extent * k as f32 / BINS as f32
+    }
+}
+
 /// A split of a node's references and what the SAH makes of it.
 #[derive(Clone, Copy, Debug)]
 struct Split {
-    axis: usize,
-    /// Bin 0's start on `axis` and the bins' span: centroids for an object split, the
-    /// node's box for a spatial one.
-    lo: f32,
-    extent: f32,
+    bins: Bins,
     /// The first bin of the right half: for a spatial split, the plane is its start.
     bin: usize,
     /// Surface area times references, summed over both halves.
@@ -76,8 +106,15 @@ struct Split {
 
 impl Split {
     fn plane(&self) -> f32 {
-        self.lo + self.extent * self.bin as f32 / BINS as f32
+        self.bins.plane(self.bin)
     }
+}
+
+/// The box around the references' centroids.
+fn centroid_bounds(refs: &[Ref]) -> Aabb {
+    refs.iter().fold(Aabb::empty(), |a, r| {
+        a.union(&Aabb::from_point(r.b.center()))
+    })
 }
 
 fn half_area(b: &Aabb) -> f32 {
@@ -255,37 +292,31 @@ impl Builder<'_> {
         let corners: Vec<Option<[Vec3A; 3]>> =
             refs.iter().map(|r| self.split.corners(r.prim)).collect();
         let mut best: Option<Split> = None;
-        for axis in 0..3 {
-            let (lo, extent) = (bounds.min[axis], bounds.max[axis] - bounds.min[axis]);
-            if extent <= 0.0 {
-                continue;
-            }
-            let scale = BINS as f32 / extent;
-            let bin = |x: f32| (((x - lo) * scale) as usize).min(BINS - 1);
-            let plane = |k: usize| lo + extent * k as f32 / BINS as f32;
+        for bins in Bins::over(bounds) {
+            let axis = bins.axis;
             let mut boxes = [Aabb::empty(); BINS];
             let (mut entry, mut exit) = ([0u32; BINS], [0u32; BINS]);
             for (r, v) in refs.iter().zip(&corners) {
                 let Some(v) = v else {
                     // Whole, on its centroid's side (as `cut` puts it).
-                    let k = bin(r.b.center_axis(axis));
+                    let k = bins.index(r.b.center_axis(axis));
                     boxes[k] = boxes[k].union(&r.b);
                     entry[k] += 1;
                     exit[k] += 1;
                     continue;
                 };
-                let (b0, b1) = (bin(r.b.min[axis]), bin(r.b.max[axis]));
+                let (b0, b1) = (bins.index(r.b.min[axis]), bins.index(r.b.max[axis]));
                 entry[b0] += 1;
                 exit[b1] += 1;
                 let mut rest = r.b;
                 for (k, bx) in boxes.iter_mut().enumerate().take(b1).skip(b0) {
-                    let (part, right) = chop(v, &rest, axis, plane(k + 1));
+                    let (part, right) = chop(v, &rest, axis, bins.plane(k + 1));
                     *bx = bx.union(&part);
                     rest = right;
                 }
                 boxes[b1] = boxes[b1].union(&rest);
             }
-            sweep(&mut best, axis, lo, extent, &boxes, &entry, &exit);
+            sweep(&mut best, bins, &boxes, &entry, &exit);
         }
         best
     }
@@ -294,7 +325,7 @@ impl Builder<'_> {
     /// across the plane cut in two, or kept whole on one side where that costs less
     /// (Stich et al.'s reference unsplitting), or where `budget` is spent.
     fn cut(&self, refs: Vec<Ref>, s: &Split, budget: usize) -> (Vec<Ref>, Vec<Ref>, usize) {
-        let (axis, pos) = (s.axis, s.plane());
+        let (axis, pos) = (s.bins.axis, s.plane());
         let (mut lb, mut rb) = (s.left, s.right);
         let (mut nl, mut nr) = (s.counts.0 as f32, s.counts.1 as f32);
         let (mut left, mut right) = (Vec::new(), Vec::new());
@@ -369,10 +400,7 @@ fn join<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + 
 /// `refs` ordered so that the first half's centroids lie below the second's on the axis
 /// where they spread widest.
 fn median(mut refs: Vec<Ref>) -> Vec<Ref> {
-    let c = refs.iter().fold(Aabb::empty(), |a, r| {
-        a.union(&Aabb::from_point(r.b.center()))
-    });
-    let axis = c.largest_axis();
+    let axis = centroid_bounds(&refs).largest_axis();
     let mid = refs.len() / 2;
     if mid > 0 {
         refs.select_nth_unstable_by(mid, |a, b| {
@@ -385,35 +413,25 @@ fn median(mut refs: Vec<Ref>) -> Vec<Ref> {
 /// The cheapest split of `refs` by centroid into two non-empty halves, binned on each
 /// axis; `None` where every centroid is in one place.
 fn object_split(refs: &[Ref]) -> Option<Split> {
-    let c = refs.iter().fold(Aabb::empty(), |a, r| {
-        a.union(&Aabb::from_point(r.b.center()))
-    });
     let mut best: Option<Split> = None;
-    for axis in 0..3 {
-        let (lo, extent) = (c.min[axis], c.max[axis] - c.min[axis]);
-        if extent <= 0.0 {
-            continue;
-        }
-        let scale = BINS as f32 / extent;
+    for bins in Bins::over(&centroid_bounds(refs)) {
         let mut boxes = [Aabb::empty(); BINS];
         let mut counts = [0u32; BINS];
         for r in refs {
-            let k = (((r.b.center_axis(axis) - lo) * scale) as usize).min(BINS - 1);
+            let k = bins.index(r.b.center_axis(bins.axis));
             boxes[k] = boxes[k].union(&r.b);
             counts[k] += 1;
         }
-        sweep(&mut best, axis, lo, extent, &boxes, &counts, &counts);
+        sweep(&mut best, bins, &boxes, &counts, &counts);
     }
     best
 }
 
-/// `best` replaced by the cheapest split between the bins `boxes` on `axis` where it is
-/// cheaper: `entry[k]` references start in bin `k`, `exit[k]` end there.
+/// `best` replaced by the cheapest split between the `bins` (their boxes `boxes`) where it
+/// is cheaper: `entry[k]` references start in bin `k`, `exit[k]` end there.
 fn sweep(
     best: &mut Option<Split>,
-    axis: usize,
-    lo: f32,
-    extent: f32,
+    bins: Bins,
     boxes: &[Aabb; BINS],
     entry: &[u32; BINS],
     exit: &[u32; BINS],
@@ -436,9 +454,7 @@ fn sweep(
         let cost = half_area(&lb) * lc as f32 + half_area(&rb) * rc as f32;
         if best.is_none_or(|b| cost < b.cost) {
             *best = Some(Split {
-                axis,
-                lo,
-                extent,
+                bins,
                 bin: k,
                 cost,
                 left: lb,
@@ -451,84 +467,14 @@ fn sweep(
 
 /// `refs` on each side of centroid split `s`, binned as `object_split` binned them.
 fn partition_objects(refs: Vec<Ref>, s: &Split) -> (Vec<Ref>, Vec<Ref>) {
-    let scale = BINS as f32 / s.extent;
-    refs.into_iter().partition(|r| {
-        let k = (((r.b.center_axis(s.axis) - s.lo) * scale) as usize).min(BINS - 1);
-        k < s.bin
-    })
-}
-
-/// The boxes of triangle `v`'s parts inside `b` below and above `pos` on `axis`, in f32:
-/// what the binning weighs (`cut_triangle` makes the cut itself).
-#[inline]
-fn chop(v: &[Vec3A; 3], b: &Aabb, axis: usize, pos: f32) -> (Aabb, Aabb) {
-    let (mut l, mut r) = (Aabb::empty(), Aabb::empty());
-    for i in 0..3 {
-        let (a, c) = (v[i], v[(i + 1) % 3]);
-        if a[axis] <= pos {
-            l.extend(a);
-        }
-        if a[axis] >= pos {
-            r.extend(a);
-        }
-        if (a[axis] - pos) * (c[axis] - pos) < 0.0 {
-            let x = a + (c - a) * ((pos - a[axis]) / (c[axis] - a[axis]));
-            l.extend(x);
-            r.extend(x);
-        }
-    }
-    let (mut lb, mut rb) = (*b, *b);
-    lb.max[axis] = lb.max[axis].min(pos);
-    rb.min[axis] = rb.min[axis].max(pos);
-    (l.intersection(&lb), r.intersection(&rb))
-}
-
-/// The boxes of triangle `v`'s parts inside `b` below and above `pos` on `axis`, each
-/// sure to hold its part: the crossings of the plane are worked out in f64 and each box
-/// widened by 16 ulps of the triangle's largest coordinate before it is cut to `b` and the
-/// plane (an invalid box where no part lies on that side).
-fn cut_triangle(v: &[Vec3A; 3], b: &Aabb, axis: usize, pos: f32) -> (Aabb, Aabb) {
-    let v = v.map(|p| p.as_dvec3());
-    let p = f64::from(pos);
-    let (mut lmin, mut lmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let (mut rmin, mut rmax) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let mut size = 0.0f64;
-    for i in 0..3 {
-        let (a, c) = (v[i], v[(i + 1) % 3]);
-        size = size.max(a.abs().max_element());
-        if a[axis] <= p {
-            (lmin, lmax) = (lmin.min(a), lmax.max(a));
-        }
-        if a[axis] >= p {
-            (rmin, rmax) = (rmin.min(a), rmax.max(a));
-        }
-        if (a[axis] < p && c[axis] > p) || (a[axis] > p && c[axis] < p) {
-            let mut x = a + (c - a) * ((p - a[axis]) / (c[axis] - a[axis]));
-            x[axis] = p;
-            (lmin, lmax) = (lmin.min(x), lmax.max(x));
-            (rmin, rmax) = (rmin.min(x), rmax.max(x));
-        }
-    }
-    let w = DVec3::splat(size * f64::from(f32::EPSILON) * 16.0);
-    let part = |min: DVec3, max: DVec3, side: Aabb| {
-        if min.x > max.x {
-            return Aabb::empty();
-        }
-        let widened = Aabb::new(
-            Vec3A::from((min - w).as_vec3()),
-            Vec3A::from((max + w).as_vec3()),
-        );
-        widened.intersection(&side)
-    };
-    let (mut below, mut above) = (*b, *b);
-    below.max[axis] = below.max[axis].min(pos);
-    above.min[axis] = above.min[axis].max(pos);
-    (part(lmin, lmax, below), part(rmin, rmax, above))
+    refs.into_iter()
+        .partition(|r| s.bins.index(r.b.center_axis(s.bins.axis)) < s.bin)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::bvh::clip::tests::{holds, samples, slivers};
     use crate::bvh::{FlatBvh, Quality, build_with};
 
     /// Triangles, and whether each may be cut.
@@ -543,81 +489,6 @@ mod tests {
     impl Triangles {
         fn aabbs(&self) -> Vec<Aabb> {
             self.0.iter().map(|v| Aabb::from_points(v)).collect()
-        }
-    }
-
-    /// A small deterministic generator of floats in [0, 1).
-    fn random(seed: u64) -> impl FnMut() -> f32 {
-        let mut s = seed;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
-
-    /// Points over triangle `v`, worked out in f64: its corners, points along its edges and
-    /// inside.
-    fn samples(v: &[Vec3A; 3]) -> Vec<DVec3> {
-        let [a, b, c] = v.map(|p| p.as_dvec3());
-        let n = 8;
-        let mut out = Vec::new();
-        for i in 0..=n {
-            for j in 0..=n - i {
-                let (u, w) = (i as f64 / n as f64, j as f64 / n as f64);
-                out.push(a + (b - a) * u + (c - a) * w);
-            }
-        }
-        out
-    }
-
-    fn holds(b: &Aabb, q: DVec3) -> bool {
-        (0..3).all(|k| f64::from(b.min[k]) <= q[k] && q[k] <= f64::from(b.max[k]))
-    }
-
-    /// Long, thin triangles at every angle across a few units, every seventh `far` from
-    /// the origin: the slivers spatial splits are for.
-    fn slivers(n: usize, seed: u64, far: f32) -> Vec<[Vec3A; 3]> {
-        let mut r = random(seed);
-        (0..n)
-            .map(|i| {
-                let offset = if i % 7 == 0 { far } else { 0.0 };
-                let mut p = || Vec3A::new(r(), r(), r()) * 4.0 + Vec3A::splat(offset);
-                let (a, b) = (p(), p());
-                let thin = (b - a).cross(Vec3A::Z).normalize_or(Vec3A::X) * 0.01;
-                [a, b, a + thin]
-            })
-            .collect()
-    }
-
-    /// Each part `cut_triangle` makes holds every point of the triangle inside the box it
-    /// cuts and on its side of the plane, cut after cut.
-    #[test]
-    fn cut_parts_hold_their_points() {
-        let mut r = random(7);
-        for v in slivers(2000, 11, 1e4) {
-            let mut b = Aabb::from_points(&v);
-            for _ in 0..3 {
-                let axis = (r() * 3.0) as usize % 3;
-                let pos = b.min[axis] + (b.max[axis] - b.min[axis]) * r();
-                let (l, rt) = cut_triangle(&v, &b, axis, pos);
-                for q in samples(&v).into_iter().filter(|&q| holds(&b, q)) {
-                    let x = q[axis];
-                    assert!(
-                        x > f64::from(pos) || holds(&l, q),
-                        "{v:?} {axis} {pos}: {q}"
-                    );
-                    assert!(
-                        x < f64::from(pos) || holds(&rt, q),
-                        "{v:?} {axis} {pos}: {q}"
-                    );
-                }
-                b = if r() < 0.5 && l.valid() { l } else { rt };
-                if !b.valid() {
-                    break;
-                }
-            }
         }
     }
 
