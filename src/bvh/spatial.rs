@@ -474,8 +474,9 @@ fn partition_objects(refs: Vec<Ref>, s: &Split) -> (Vec<Ref>, Vec<Ref>) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::clip::tests::{holds, samples, slivers};
+    use crate::bvh::clip::tests::{holds, random, samples, slivers};
     use crate::bvh::{FlatBvh, Quality, build_with};
+    use crate::gpu_types::TRAVERSAL_STACK;
 
     /// Triangles, and whether each may be cut.
     struct Triangles(Vec<[Vec3A; 3]>, Vec<bool>);
@@ -492,22 +493,19 @@ mod tests {
         }
     }
 
-    /// The whole build with spatial splits: every point of every triangle lies in the box of
-    /// a leaf that holds it and of every node above that leaf; a triangle that may not be
-    /// cut is in one leaf only; the references added stay within the budget, and some
-    /// triangles are cut.
-    #[test]
-    fn split_trees_cover_every_triangle_and_cut_only_what_may_be() {
-        let corners = slivers(3000, 5, 0.0);
-        let cut: Vec<bool> = (0..corners.len()).map(|i| i % 5 != 0).collect();
-        let tris = Triangles(corners, cut);
+    /// The tree with spatial splits over `tris`, checked: every point of every triangle
+    /// lies in the box of a leaf that holds it and of every node above that leaf, a
+    /// triangle that may not be cut is in one leaf only, the tree fits the walks' stack and
+    /// the references added stay within the budget. How many triangles were cut.
+    fn build_and_check(tris: &Triangles) -> usize {
         let aabbs = tris.aabbs();
         let tree: FlatBvh = build_with(
             aabbs.len(),
             |i| aabbs[i as usize],
             Quality::High,
-            Some(&tris),
+            Some(tris),
         );
+        assert!(tree.depth < TRAVERSAL_STACK, "depth {}", tree.depth);
         // Each leaf's box with the boxes of the nodes above it, by primitive.
         let mut leaves: Vec<Vec<Vec<Aabb>>> = vec![Vec::new(); aabbs.len()];
         let mut stack = vec![(0usize, Vec::<Aabb>::new())];
@@ -539,6 +537,68 @@ mod tests {
         }
         let added = tree.order.len() - aabbs.len();
         assert!(added as f32 <= BUDGET * aabbs.len() as f32, "{added} added");
-        assert!(cut > 20, "{cut} primitives cut ({added} references added)");
+        cut
+    }
+
+    /// Long, thin triangles, four in five of which may be cut: the tree holds them all,
+    /// and spatial splits do cut some.
+    #[test]
+    fn split_trees_cover_every_triangle_and_cut_only_what_may_be() {
+        let corners = slivers(3000, 5, 0.0);
+        let cut: Vec<bool> = (0..corners.len()).map(|i| i % 5 != 0).collect();
+        let cut = build_and_check(&Triangles(corners, cut));
+        assert!(cut > 20, "{cut} primitives cut");
+    }
+
+    /// Inputs that leave the binning nothing to divide: one triangle many times over,
+    /// triangles flat in one plane, slivers of no area, a fan of triangles sharing a
+    /// corner, and scenes a millionth and a million units across.
+    #[test]
+    fn degenerate_triangles_build_trees_that_hold_them() {
+        let one = [Vec3A::ZERO, Vec3A::X, Vec3A::Y];
+        let mut r = random(3);
+        let flat: Vec<[Vec3A; 3]> = (0..2000)
+            .map(|_| {
+                let mut p = || Vec3A::new(r() * 10.0, r() * 10.0, 0.0);
+                [p(), p(), p()]
+            })
+            .collect();
+        let lines: Vec<[Vec3A; 3]> = (0..2000)
+            .map(|i| {
+                let a = Vec3A::splat(i as f32 * 1e-3);
+                [
+                    a,
+                    a + Vec3A::new(5.0, 1.0, 0.5),
+                    a + Vec3A::new(10.0, 2.0, 1.0),
+                ]
+            })
+            .collect();
+        let fan: Vec<[Vec3A; 3]> = (0..2000)
+            .map(|i| {
+                let (s, c) = (i as f32 * 0.003).sin_cos();
+                [
+                    Vec3A::ZERO,
+                    Vec3A::new(c, s, 0.1) * 50.0,
+                    Vec3A::new(c, s, -0.1) * 50.0,
+                ]
+            })
+            .collect();
+        let scaled = |k: f32| {
+            slivers(2000, 9, 0.0)
+                .into_iter()
+                .map(move |v| v.map(|p| p * k))
+        };
+        let sets: [Vec<[Vec3A; 3]>; 6] = [
+            vec![one; 2000],
+            flat,
+            lines,
+            fan,
+            scaled(1e-6).collect(),
+            scaled(1e6).collect(),
+        ];
+        for corners in sets {
+            let cut = vec![true; corners.len()];
+            build_and_check(&Triangles(corners, cut));
+        }
     }
 }
