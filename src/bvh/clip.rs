@@ -25,10 +25,21 @@ pub(super) fn chop(v: &[Vec3A; 3], b: &Aabb, axis: usize, pos: f32) -> (Aabb, Aa
             r.extend(x);
         }
     }
-    let (mut lb, mut rb) = (*b, *b);
-    lb.max[axis] = lb.max[axis].min(pos);
-    rb.min[axis] = rb.min[axis].max(pos);
-    (l.intersection(&lb), r.intersection(&rb))
+    // `b` below and above the plane, cut in vector registers: writing one lane of a box
+    // in place and reading the box back whole made a load wait for the store to retire,
+    // a fifth of the binning's time.
+    let on_axis = Vec3A::AXES[axis].cmpeq(Vec3A::ONE);
+    let plane = Vec3A::splat(pos);
+    let below = Aabb::new(
+        b.min,
+        b.max.min(Vec3A::select(on_axis, plane, Vec3A::INFINITY)),
+    );
+    let above = Aabb::new(
+        b.min
+            .max(Vec3A::select(on_axis, plane, Vec3A::NEG_INFINITY)),
+        b.max,
+    );
+    (l.intersection(&below), r.intersection(&above))
 }
 
 /// The boxes of triangle `v`'s parts inside `b` below and above `pos` on `axis`, each
