@@ -17,9 +17,9 @@ use crate::scene::flat::{self, Flat, FlatScene};
 use crate::scene::{Bounds, Sink};
 use crate::util::error::{Error, Result};
 
+use super::build::{build_tree, permute};
 use super::{
-    Packed, SceneBuffers, Textures, assemble, build_tree, check_surfaces, emitters, pack_flat,
-    pack_textures, permute,
+    Packed, SceneBuffers, Textures, assemble, check_surfaces, emitters, pack_flat, pack_textures,
 };
 
 /// How each frame's tree is made (`GPURT_FRAME_TREE`; `Auto` where unset).

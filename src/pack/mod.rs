@@ -15,6 +15,7 @@ use crate::scene::{Bounds, Camera, Light, Scene, Sink, Texture, Wrap};
 use crate::util::error::{Error, Result};
 use crate::util::limits::{DEFAULT_SPP, MAX_DEPTH, MAX_TEXELS};
 
+mod build;
 mod check;
 mod emitters;
 pub mod frames;
@@ -118,20 +119,7 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
     let (mut records, tri_normals, tri_uvs) = prims.into_records();
     let emitters = emitters::emitters(&records, &scene.materials);
     let quality = bvh::Quality::chosen(records.len(), samples).map_err(Error::Render)?;
-    let opaque: Vec<bool> = scene.materials.iter().map(|m| m.t <= 0.0).collect();
-    let split = OpaqueTriangles {
-        records: &records,
-        opaque: &opaque,
-    };
-    let mut tree = build_tree(&records, quality, Some(&split));
-    let order = std::mem::take(&mut tree.order);
-    let copies = order.len() - records.len();
-    if copies == 0 {
-        permute(&mut records, order);
-    } else {
-        // Spatial splits stored some triangles in several leaves: each leaf its own copy.
-        records = order.iter().map(|&i| records[i as usize]).collect();
-    }
+    let (tree, copies) = build::build_in_leaf_order(&mut records, &scene.materials, quality);
     assemble(
         scene,
         Packed {
@@ -146,41 +134,6 @@ pub fn pack_flat(flat: FlatScene, samples: u64) -> Result<SceneBuffers> {
             copies,
         },
     )
-}
-
-/// A tree over `records` (triangles by their corners), their bounds worked out a group at
-/// a time as the build needs them; the high-quality build cuts those `split` allows.
-fn build_tree(
-    records: &[GpuPrim],
-    quality: bvh::Quality,
-    split: Option<&dyn bvh::Splittable>,
-) -> FlatBvh {
-    let mut tree = bvh::build_with(
-        records.len(),
-        |i| bvh::aabb(flat::record_bounds(&records[i as usize])),
-        quality,
-        split,
-    );
-    tree.nodes.shrink_to_fit();
-    tree
-}
-
-/// The records' opaque triangles, which the high-quality build's spatial splits may store
-/// in several leaves (`bvh::spatial`): a ray meets such a triangle at the same point
-/// whichever leaf it tests it in, and a shadow ray stops at it, where a transparent one's
-/// transmission would be counted once a leaf.
-struct OpaqueTriangles<'a> {
-    records: &'a [GpuPrim],
-    /// Whether each material lets no light through (`t` of 0).
-    opaque: &'a [bool],
-}
-
-impl bvh::Splittable for OpaqueTriangles<'_> {
-    fn corners(&self, prim: u32) -> Option<[glam::Vec3A; 3]> {
-        let p = &self.records[prim as usize];
-        (p.kind() == PRIM_TRIANGLE && self.opaque[p.material() as usize])
-            .then(|| [p.p0, p.p1, p.p2].map(glam::Vec3A::from))
-    }
 }
 
 /// A scene's bounded primitives and their tree, as `assemble` takes them.
@@ -309,31 +262,6 @@ fn assemble(scene: Scene, packed: Packed) -> Result<SceneBuffers> {
         gpu_cwide: OnceLock::new(),
         gpu_qwide: OnceLock::new(),
     })
-}
-
-/// Puts `v` in the order `order` gives (`v[i]` becomes the old `v[order[i]]`) in place,
-/// cycle by cycle, using `order` itself to mark the positions done: a second copy of the
-/// primitives would double the peak of the largest scenes.
-fn permute<T: Copy>(v: &mut [T], mut order: Vec<u32>) {
-    const DONE: u32 = u32::MAX;
-    debug_assert_eq!(v.len(), order.len());
-    for start in 0..v.len() {
-        if order[start] == DONE {
-            continue;
-        }
-        let first = v[start];
-        let mut i = start;
-        loop {
-            let from = order[i] as usize;
-            order[i] = DONE;
-            if from == start {
-                v[i] = first;
-                break;
-            }
-            v[i] = v[from];
-            i = from;
-        }
-    }
 }
 
 /// `SceneBuffers::trace_stack` for a scene's materials; the CPU twin checks its own

@@ -1,6 +1,7 @@
-//! The trees each walk reads, derived from the binary tree `pack` builds and kept with
-//! the scene: the CPU renderer's eight-wide tree and its triangle blocks, and the GPU's
-//! four-wide, quantised and compressed trees, each built the first time its walk asks.
+//! The trees each walk reads, derived from the binary tree `pack` builds (`build`) and
+//! kept with the scene: the CPU renderer's eight-wide tree and its triangle blocks, and
+//! the GPU's four-wide, quantised and compressed trees, each built the first time its walk
+//! asks.
 
 use super::SceneBuffers;
 use crate::bvh::blocks::Blocks;
