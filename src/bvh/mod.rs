@@ -12,6 +12,7 @@
 //! size (`TRAVERSAL_STACK`); a tree deeper than that is rebuilt with a median split, whose
 //! depth is at most log2(n) + 1 and so always fits.
 
+mod binning;
 pub mod blocks;
 mod clip;
 pub mod cwide;

@@ -20,10 +20,10 @@ use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::{Bvh2, DEFAULT_MAX_STACK_DEPTH, node::Bvh2Node};
 
+use super::binning::{
+    BINS, Bins, Ref, Split, bounds, half_area, median, object_split, partition_objects, sweep,
+};
 use super::clip::{chop, cut_triangle};
-
-/// Bins an axis, for centroid and spatial splits alike.
-const BINS: usize = 32;
 
 /// References spatial splits may add, as a fraction of the primitives: gears-4's mirror
 /// rays gained as much from 20% as from 50% or 100% (docs/bvh.md), and the records of the
@@ -50,79 +50,6 @@ const PARALLEL_MIN: usize = 4096;
 pub trait Splittable: Sync {
     /// The corners of primitive `prim` where it may stand in several leaves, else `None`.
     fn corners(&self, prim: u32) -> Option<[Vec3A; 3]>;
-}
-
-/// A primitive, or its part inside `b`.
-#[derive(Clone, Copy, Debug)]
-struct Ref {
-    b: Aabb,
-    prim: u32,
-}
-
-/// `BINS` equal bins along `axis` from `lo` over `extent`: over the centroids for an
-/// object split, over the node's box for a spatial one.
-#[derive(Clone, Copy, Debug)]
-struct Bins {
-    axis: usize,
-    lo: f32,
-    extent: f32,
-}
-
-impl Bins {
-    /// The bins over `b` on each axis where it has an extent.
-    fn over(b: &Aabb) -> impl Iterator<Item = Bins> + '_ {
-        (0..3)
-            .map(|axis| Bins {
-                axis,
-                lo: b.min[axis],
-                extent: b.max[axis] - b.min[axis],
-            })
-            .filter(|bins| bins.extent > 0.0)
-    }
-
-    /// The bin of coordinate `x` (the last holds `lo + extent` itself).
-    fn index(&self, x: f32) -> usize {
-        (((x - self.lo) * (BINS as f32 / self.extent)) as usize).min(BINS - 1)
-    }
-
-    /// Where bin `k` starts.
-    fn plane(&self, k: usize) -> f32 {
-        self.lo + self.extent * k as f32 / BINS as f32
-    }
-}
-
-/// A split of a node's references and what the SAH makes of it.
-#[derive(Clone, Copy, Debug)]
-struct Split {
-    bins: Bins,
-    /// The first bin of the right half: for a spatial split, the plane is its start.
-    bin: usize,
-    /// Surface area times references, summed over both halves.
-    cost: f32,
-    left: Aabb,
-    right: Aabb,
-    counts: (u32, u32),
-}
-
-impl Split {
-    fn plane(&self) -> f32 {
-        self.bins.plane(self.bin)
-    }
-}
-
-/// The box around the references' centroids.
-fn centroid_bounds(refs: &[Ref]) -> Aabb {
-    refs.iter().fold(Aabb::empty(), |a, r| {
-        a.union(&Aabb::from_point(r.b.center()))
-    })
-}
-
-fn half_area(b: &Aabb) -> f32 {
-    if b.valid() { b.half_area() } else { 0.0 }
-}
-
-fn bounds(refs: &[Ref]) -> Aabb {
-    refs.iter().fold(Aabb::empty(), |a, r| a.union(&r.b))
 }
 
 /// A subtree as `Bvh2` nodes (its root first, an inner node's children at `first_index`
@@ -395,80 +322,6 @@ fn join<A: Send, B: Send>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B + 
     return rayon::join(a, b);
     #[cfg(not(feature = "native"))]
     (a(), b())
-}
-
-/// `refs` ordered so that the first half's centroids lie below the second's on the axis
-/// where they spread widest.
-fn median(mut refs: Vec<Ref>) -> Vec<Ref> {
-    let axis = centroid_bounds(&refs).largest_axis();
-    let mid = refs.len() / 2;
-    if mid > 0 {
-        refs.select_nth_unstable_by(mid, |a, b| {
-            a.b.center_axis(axis).total_cmp(&b.b.center_axis(axis))
-        });
-    }
-    refs
-}
-
-/// The cheapest split of `refs` by centroid into two non-empty halves, binned on each
-/// axis; `None` where every centroid is in one place.
-fn object_split(refs: &[Ref]) -> Option<Split> {
-    let mut best: Option<Split> = None;
-    for bins in Bins::over(&centroid_bounds(refs)) {
-        let mut boxes = [Aabb::empty(); BINS];
-        let mut counts = [0u32; BINS];
-        for r in refs {
-            let k = bins.index(r.b.center_axis(bins.axis));
-            boxes[k] = boxes[k].union(&r.b);
-            counts[k] += 1;
-        }
-        sweep(&mut best, bins, &boxes, &counts, &counts);
-    }
-    best
-}
-
-/// `best` replaced by the cheapest split between the `bins` (their boxes `boxes`) where it
-/// is cheaper: `entry[k]` references start in bin `k`, `exit[k]` end there.
-fn sweep(
-    best: &mut Option<Split>,
-    bins: Bins,
-    boxes: &[Aabb; BINS],
-    entry: &[u32; BINS],
-    exit: &[u32; BINS],
-) {
-    let mut right = [(Aabb::empty(), 0u32); BINS];
-    let (mut rb, mut rc) = (Aabb::empty(), 0);
-    for k in (1..BINS).rev() {
-        rb = rb.union(&boxes[k]);
-        rc += exit[k];
-        right[k] = (rb, rc);
-    }
-    let (mut lb, mut lc) = (Aabb::empty(), 0);
-    for k in 1..BINS {
-        lb = lb.union(&boxes[k - 1]);
-        lc += entry[k - 1];
-        let (rb, rc) = right[k];
-        if lc == 0 || rc == 0 {
-            continue;
-        }
-        let cost = half_area(&lb) * lc as f32 + half_area(&rb) * rc as f32;
-        if best.is_none_or(|b| cost < b.cost) {
-            *best = Some(Split {
-                bins,
-                bin: k,
-                cost,
-                left: lb,
-                right: rb,
-                counts: (lc, rc),
-            });
-        }
-    }
-}
-
-/// `refs` on each side of centroid split `s`, binned as `object_split` binned them.
-fn partition_objects(refs: Vec<Ref>, s: &Split) -> (Vec<Ref>, Vec<Ref>) {
-    refs.into_iter()
-        .partition(|r| s.bins.index(r.b.center_axis(s.bins.axis)) < s.bin)
 }
 
 #[cfg(test)]
