@@ -1,6 +1,7 @@
 //! Which of x86-64's instruction sets this processor has, found once: the packet kernels
-//! (`packet::x86`) and the single-ray walks (`traverse`) each have a copy compiled for
-//! x86-64-v3 (AVX2, FMA, BMI) and take it where these say so.
+//! (`packet::x86`) and the single-ray walks (`wide_ray`) each have a copy compiled for
+//! x86-64-v3 (AVX2, FMA, BMI), and the walks one for x86-64-v4 (AVX-512), and take them
+//! where these say so.
 
 use std::sync::LazyLock;
 
@@ -21,4 +22,26 @@ pub fn x86_64_v3() -> bool {
 /// x86-64-v3 and AVX-512 Foundation, the features of the sixteen-lane packet kernels.
 pub fn x86_64_v4() -> bool {
     x86_64_v3() && is_x86_feature_detected!("avx512f")
+}
+
+/// Whether the single-ray walks take their x86-64-v4 copies (`wide_ray`: v3 and AVX-512
+/// F, VL, BW, DQ and CD): where the processor has those features, unless `GPURT_SIMD`
+/// holds the renderer to a narrower set (`avx2`, `sse`, `portable`; the packet kernels'
+/// choice, `packet::Kernels::from_env`), so that a run held to AVX2 is that throughout.
+/// Read once.
+pub fn single_ray_v4() -> bool {
+    static V4: LazyLock<bool> = LazyLock::new(|| {
+        let narrower = matches!(
+            std::env::var("GPURT_SIMD").as_deref(),
+            Ok("avx2" | "sse" | "portable")
+        );
+        !narrower
+            && x86_64_v3()
+            && is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512vl")
+            && is_x86_feature_detected!("avx512bw")
+            && is_x86_feature_detected!("avx512dq")
+            && is_x86_feature_detected!("avx512cd")
+    });
+    *V4
 }
