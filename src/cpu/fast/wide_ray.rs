@@ -230,19 +230,20 @@ fn transmission_wide_v4(
     transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(test)]
 mod tests {
-    use std::path::Path;
-
-    use super::*;
-    use crate::frame::{RenderOptions, globals};
-
     /// The v4 copies find the v3 copies' hits to the bit (distance, primitive,
     /// barycentrics, nodes fetched) and let the same light through, blocked by the same
     /// primitive, on rays from all over the bundled scenes of mirrors, glass, cones and
-    /// meshes, both trees. Skipped, saying so, where the processor has no AVX-512.
+    /// meshes. Skipped, saying so, where the processor has no AVX-512.
+    #[cfg(target_arch = "x86_64")]
     #[test]
     fn the_v4_walks_answer_as_the_v3_walks() {
+        use std::path::Path;
+
+        use super::*;
+        use crate::frame::{RenderOptions, globals};
+
         if !isa::single_ray_v4() {
             eprintln!("skipped: this processor has no AVX-512 (or GPURT_SIMD holds it back)");
             return;
