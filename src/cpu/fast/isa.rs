@@ -36,8 +36,7 @@ pub fn single_ray_v4() -> bool {
             Ok("avx2" | "sse" | "portable")
         );
         !narrower
-            && x86_64_v3()
-            && is_x86_feature_detected!("avx512f")
+            && x86_64_v4()
             && is_x86_feature_detected!("avx512vl")
             && is_x86_feature_detected!("avx512bw")
             && is_x86_feature_detected!("avx512dq")
