@@ -118,48 +118,6 @@ fn closest_wide(
     }
 }
 
-/// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
-/// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
-/// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
-/// result: the hits are the baseline's to the bit (the boxes overlapped too, but for
-/// `SlabsAvx`'s one case of a box more).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn closest_wide_v3(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    tmin: f32,
-    planes: (f32, u32),
-) -> Hit {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: the function's features include AVX2.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
-}
-
-/// `closest_wide_v3` compiled for x86-64-v4 (`isa::single_ray_v4`): the same walk in
-/// AVX's widths, with AVX-512's 32 vector registers (AVX2 has 16, and the v3 walk keeps
-/// some of the ray's constants on the stack) and its encodings. The same operations, so
-/// the same hits to the bit (`tests`). Mirror rays 2 to 13% faster, shadow rays 3 to 10%
-/// (docs/bvh.md).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(
-    enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq,avx512cd"
-)]
-fn closest_wide_v4(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    tmin: f32,
-    planes: (f32, u32),
-) -> Hit {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: the function's features include AVX2.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
-}
-
 /// `transmission` through the eight-wide tree, the planes' factor `light` done; inlined
 /// as `closest_wide` is.
 #[inline(always)]
@@ -196,39 +154,65 @@ fn transmission_wide(
     }
 }
 
-/// `transmission_wide` compiled for x86-64-v3, as `closest_wide_v3` is.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-fn transmission_wide_v3(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
-    light: Vec3,
-) -> Vec3 {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: as in `closest_wide_v3`.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
+/// The copies of `closest_wide` and `transmission_wide` compiled for one instruction set,
+/// `$features`, whose test is `wide::SlabsAvx` (AVX2 or wider); `$doc` says which and why.
+macro_rules! compiled_for {
+    ($(#[doc = $doc:literal])* $closest:ident, $transmission:ident, $features:literal) => {
+        $(#[doc = $doc])*
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        fn $closest(
+            b: &Bindings,
+            wide: &[WideNode],
+            ray: &Ray,
+            tmin: f32,
+            planes: (f32, u32),
+        ) -> Hit {
+            let inv_dir = intersect::safe_inverse(ray.dir);
+            // SAFETY: the function's features include AVX2.
+            let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+            closest_wide(b, wide, ray, (inv_dir, &slabs), tmin, planes)
+        }
+
+        /// `transmission_wide` compiled as the closest-hit copy beside it is.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        fn $transmission(
+            b: &Bindings,
+            wide: &[WideNode],
+            ray: &Ray,
+            (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
+            light: Vec3,
+        ) -> Vec3 {
+            let inv_dir = intersect::safe_inverse(ray.dir);
+            // SAFETY: as above.
+            let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
+            transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
+        }
+    };
 }
 
-/// `transmission_wide` compiled for x86-64-v4, as `closest_wide_v4` is.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(
-    enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq,avx512cd"
-)]
-fn transmission_wide_v4(
-    b: &Bindings,
-    wide: &[WideNode],
-    ray: &Ray,
-    (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
-    light: Vec3,
-) -> Vec3 {
-    let inv_dir = intersect::safe_inverse(ray.dir);
-    // SAFETY: as in `closest_wide_v3`.
-    let slabs = unsafe { wide::SlabsAvx::new(Slabs::new(ray.origin, inv_dir)) };
-    transmission_wide(b, wide, ray, (inv_dir, &slabs), (tmax, nodes, hint), light)
-}
+compiled_for!(
+    /// `closest_wide` compiled for x86-64-v3 (`isa::x86_64_v3`), eight boxes in one AVX
+    /// register (`wide::SlabsAvx`) and the rest in three-operand VEX form: 7 to 10% fewer
+    /// instructions a walk. Rust never fuses a multiply and an add, so FMA changes no
+    /// result: the hits are the baseline's to the bit (the boxes overlapped too, but for
+    /// `SlabsAvx`'s one case of a box more).
+    closest_wide_v3,
+    transmission_wide_v3,
+    "avx2,fma,bmi1,bmi2,lzcnt,popcnt"
+);
+
+compiled_for!(
+    /// `closest_wide_v3` compiled for x86-64-v4 (`isa::single_ray_v4`): the same walk in
+    /// AVX's widths, with AVX-512's 32 vector registers (AVX2 has 16, and the v3 walk keeps
+    /// some of the ray's constants on the stack) and its encodings. The same operations, so
+    /// the same hits to the bit (`tests`). Mirror rays 2 to 13% faster, shadow rays 3 to 10%
+    /// (docs/bvh.md).
+    closest_wide_v4,
+    transmission_wide_v4,
+    "avx2,fma,bmi1,bmi2,lzcnt,popcnt,avx512f,avx512vl,avx512bw,avx512dq,avx512cd"
+);
 
 #[cfg(test)]
 mod tests {
