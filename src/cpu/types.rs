@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::bvh::blocks::Blocks;
-use crate::bvh::wide::WideNode;
+use crate::bvh::wide::Tree;
 use crate::counters::Counters;
 use crate::gpu_types::*;
 use crate::pack::SceneBuffers;
@@ -29,7 +29,7 @@ pub struct Bindings<'a> {
     pub emitter_triangles: &'a [GpuLight],
     /// The eight-wide tree (`bvh::wide`) the CPU walks (`wide.rs`) instead of `nodes` when
     /// given; `None` walks `nodes` as the shader does (`GpuGlobals::traversal`).
-    pub wide: Option<&'a [WideNode]>,
+    pub wide: Option<&'a Tree>,
     /// The triangle leaves in blocks of four (`bvh::blocks`) for the single-ray walk of
     /// `wide`, when given.
     pub blocks: Option<&'a Blocks>,

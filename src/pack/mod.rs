@@ -7,7 +7,7 @@ use std::sync::{Arc, OnceLock};
 use glam::Vec3;
 
 use crate::bvh::blocks::Blocks;
-use crate::bvh::wide::{self, WideNode};
+use crate::bvh::wide;
 use crate::bvh::{self, FlatBvh};
 use crate::gpu_types::*;
 use crate::scene::flat::{self, FlatScene};
@@ -76,7 +76,7 @@ pub struct SceneBuffers {
     pub ambient: Option<Vec3>,
     /// The CPU renderer's eight-wide copy of `nodes`, built on its first render
     /// (`wide_nodes`): a scene rendered only on the GPU never pays for it.
-    wide: OnceLock<Vec<WideNode>>,
+    wide: OnceLock<wide::Tree>,
     /// The CPU renderer's triangle leaves in blocks of up to four (`bvh::blocks`), built from
     /// `wide`'s leaves.
     blocks: OnceLock<Blocks>,

@@ -5,7 +5,7 @@
 
 use super::SceneBuffers;
 use crate::bvh::blocks::Blocks;
-use crate::bvh::wide::{self, WideNode};
+use crate::bvh::wide::{self, Tree};
 use crate::bvh::{cwide, qwide};
 use crate::gpu_types::*;
 
@@ -22,7 +22,7 @@ pub struct GpuCwide {
 impl SceneBuffers {
     /// `nodes` collapsed eight wide for the CPU renderer (`bvh::wide`), built the first
     /// time it is asked for: `nodes` must not change after that.
-    pub fn wide_nodes(&self) -> &[WideNode] {
+    pub fn wide_nodes(&self) -> &Tree {
         self.wide.get_or_init(|| wide::build(&self.nodes))
     }
 

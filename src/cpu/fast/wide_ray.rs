@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::isa;
 use super::leaf::{blocks, closest_in_leaf, transmit_leaf};
 use super::wide::{self, Slabs};
-use crate::bvh::wide::WideNode;
+use crate::bvh::wide::Tree;
 use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::cpu::{intersect, traverse};
 
@@ -77,7 +77,7 @@ pub fn transmission(
 #[inline(always)]
 fn closest_wide(
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     ray: &Ray,
     (inv_dir, slabs): (Vec3, &impl wide::Boxes),
     tmin: f32,
@@ -123,7 +123,7 @@ fn closest_wide(
 #[inline(always)]
 fn transmission_wide(
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     ray: &Ray,
     (inv_dir, slabs): (Vec3, &impl wide::Boxes),
     (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
@@ -163,7 +163,7 @@ macro_rules! compiled_for {
         #[target_feature(enable = $features)]
         fn $closest(
             b: &Bindings,
-            wide: &[WideNode],
+            wide: &Tree,
             ray: &Ray,
             tmin: f32,
             planes: (f32, u32),
@@ -179,7 +179,7 @@ macro_rules! compiled_for {
         #[target_feature(enable = $features)]
         fn $transmission(
             b: &Bindings,
-            wide: &[WideNode],
+            wide: &Tree,
             ray: &Ray,
             (tmax, nodes, hint): (f32, &mut u32, &mut Option<u32>),
             light: Vec3,

@@ -112,25 +112,19 @@ mod tests {
     use super::super::rays::Rows;
     use super::super::walk::child_slab;
     use super::*;
-    use crate::bvh::wide::EMPTY;
     use crate::cpu::intersect::lanes_of;
     use glam::Vec3;
 
     /// A node of eight random boxes (some empty) around the origin.
     fn node(rand: &mut impl FnMut() -> f32) -> WideNode {
-        let mut n = WideNode {
-            lo: [[Vec4::INFINITY; 2]; 3],
-            hi: [[Vec4::NEG_INFINITY; 2]; 3],
-            child: [0; WIDTH],
-            count: [EMPTY; WIDTH],
-        };
+        let mut n = WideNode::empty();
         for l in 0..WIDTH - 1 {
             for a in 0..3 {
                 let (c, r) = (rand() * 10.0, rand().abs() * 3.0);
                 n.lo[a][l / 4][l % 4] = c - r;
                 n.hi[a][l / 4][l % 4] = c + r;
             }
-            n.count[l] = 1;
+            n.set_leaf(l, 0, 1);
         }
         n
     }

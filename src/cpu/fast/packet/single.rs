@@ -8,7 +8,7 @@
 use glam::Vec3;
 
 use super::rays::Occluded;
-use crate::bvh::wide::WideNode;
+use crate::bvh::wide::{Link, Tree};
 use crate::cpu::fast::leaf::{leaf_crossings, leaf_triangles4};
 use crate::cpu::fast::wide::{self, Slabs};
 use crate::cpu::intersect;
@@ -42,11 +42,11 @@ impl LaneHit {
 #[allow(clippy::too_many_arguments)]
 pub fn closest_from(
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     ray: &Ray,
     inv_dir: Vec3,
     (tmin, t0): (f32, f32),
-    node: u32,
+    node: Link,
     h: &mut LaneHit,
     nodes: &mut u32,
 ) {
@@ -73,11 +73,11 @@ pub fn closest_from(
 #[allow(clippy::too_many_arguments)]
 pub fn occluded_from(
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     ray: &Ray,
     inv_dir: Vec3,
     tmax: f32,
-    node: u32,
+    node: Link,
     lane: usize,
     out: &mut Occluded,
 ) {

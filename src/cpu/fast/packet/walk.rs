@@ -28,7 +28,7 @@ use super::lanes::Lanes;
 use super::leaf::{self, Best};
 use super::rays::{Found, Occluded, Rays, Rows};
 use super::single::{self, LaneHit};
-use crate::bvh::wide::{EMPTY, WIDTH, WideNode};
+use crate::bvh::wide::{EMPTY, Link, Tree, WIDTH, WideNode};
 use crate::cpu::fast::wide::lane;
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::Bindings;
@@ -54,8 +54,7 @@ fn alone_occluded<L: Lanes>() -> u32 {
 /// the lanes (a bit each), which keeps its stack a tenth of the size.
 #[derive(Clone, Copy)]
 struct Entry<R> {
-    child: u32,
-    count: u32,
+    link: Link,
     reach: R,
 }
 
@@ -197,7 +196,7 @@ impl<R> Drop for Stack<'_, R> {
 pub fn closest<L: Lanes>(
     l: L,
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     rows: &Rows,
     lanes: u32,
     found: &mut Found,
@@ -218,7 +217,7 @@ pub fn closest<L: Lanes>(
 fn closest_tree<L: Lanes>(
     l: L,
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     rows: &Rows,
     packet: u32,
     r: &Rays<L>,
@@ -232,17 +231,17 @@ fn closest_tree<L: Lanes>(
     let mut tmax_hi = l.max_of(best.t, packet);
     let mut stack = Stack::new();
     let mut next = Some(Entry {
-        child: 0,
-        count: 0,
+        link: Link::ROOT,
         reach: l.select(l.mask(packet), r.tmin, inf),
     });
     while let Some(e) = next {
         let lanes = l.bits(l.le(e.reach, l.mul(best.t, widen)));
         if lanes == 0 {
-        } else if e.count > 0 {
+        } else if e.link.count() > 0 {
             // An empty lane leads nowhere (reached only through NaN distances).
-            if e.count != EMPTY {
-                leaf::closest(l, b, r, rows, (e.child, e.count), lanes, best);
+            if e.link.count() != EMPTY {
+                let leaf = (e.link.first(), e.link.count());
+                leaf::closest(l, b, r, rows, leaf, lanes, best);
                 tmax_hi = l.max_of(best.t, packet);
             }
         } else if lanes.count_ones() <= alone::<L>() {
@@ -263,7 +262,7 @@ fn closest_tree<L: Lanes>(
                     &ray,
                     inv,
                     interval,
-                    e.child,
+                    e.link,
                     &mut h,
                     &mut found.nodes,
                 );
@@ -273,7 +272,9 @@ fn closest_tree<L: Lanes>(
             best.reload(l, found);
             tmax_hi = l.max_of(best.t, packet);
         } else {
-            let n = &wide[e.child as usize];
+            // SAFETY: `e` is the root of a tree that is not empty (above) or came from one of
+            // its nodes, and leads to an inner child.
+            let n = unsafe { e.link.node(wide) };
             found.nodes += 1;
             let (children, keys) = frustum.cull(n, tmin_lo, tmax_hi);
             let active = l.mask(lanes);
@@ -284,8 +285,7 @@ fn closest_tree<L: Lanes>(
                 let hit = l.and(hit, active);
                 if l.bits(hit) != 0 {
                     let entry = Entry {
-                        child: n.child[c],
-                        count: n.count[c],
+                        link: n.link(c),
                         reach: l.select(hit, near, inf),
                     };
                     stack.push_sorted(base, &mut run_keys, entry, lane(&keys, c));
@@ -302,7 +302,7 @@ fn closest_tree<L: Lanes>(
 pub fn occluded<L: Lanes>(
     l: L,
     b: &Bindings,
-    wide: &[WideNode],
+    wide: &Tree,
     rows: &Rows,
     packet: u32,
     hint: Option<u32>,
@@ -334,26 +334,28 @@ pub fn occluded<L: Lanes>(
     let tmax_hi = l.max_of(tmax, packet);
     let mut stack = Stack::new();
     let mut next = Some(Entry {
-        child: 0,
-        count: 0,
+        link: Link::ROOT,
         reach: alive,
     });
     while let Some(e) = next {
         let lanes = e.reach & alive;
         if lanes == 0 {
-        } else if e.count > 0 {
-            if e.count != EMPTY {
-                leaf::occlusion(l, b, &r, rows, (e.child, e.count), lanes, &mut out);
+        } else if e.link.count() > 0 {
+            if e.link.count() != EMPTY {
+                let leaf = (e.link.first(), e.link.count());
+                leaf::occlusion(l, b, &r, rows, leaf, lanes, &mut out);
                 alive = out.open(alive);
             }
         } else if lanes.count_ones() <= alone_occluded::<L>() {
             for k in lanes_of(lanes) {
                 let (ray, inv) = (rows.ray(k), r.inv_of(k));
-                single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.child, k, &mut out);
+                single::occluded_from(b, wide, &ray, inv, rows.tmax[k], e.link, k, &mut out);
             }
             alive = out.open(alive);
         } else {
-            let n = &wide[e.child as usize];
+            // SAFETY: `e` is the root of a tree that is not empty (above) or came from one of
+            // its nodes, and leads to an inner child.
+            let n = unsafe { e.link.node(wide) };
             out.nodes += 1;
             let (children, _) = frustum.cull(n, tmin_lo, tmax_hi);
             let active = l.mask(lanes);
@@ -365,8 +367,7 @@ pub fn occluded<L: Lanes>(
                 let hit = l.bits(l.and(hit, active));
                 if hit != 0 {
                     stack.push(Entry {
-                        child: n.child[c],
-                        count: n.count[c],
+                        link: n.link(c),
                         reach: hit,
                     });
                 }
