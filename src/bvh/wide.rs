@@ -87,9 +87,8 @@ impl Link {
     /// The wide node of an inner child (`count() == 0`) of the tree `wide`.
     ///
     /// # Safety
-    /// The link is `ROOT` of a tree that is not empty (one over no primitives is), or an
-    /// inner child's read from a node of `wide`: `build` checks that each of those starts
-    /// a node of its tree. Unchecked here because a bounds check
+    /// The link is `ROOT` or an inner child's read from a node of `wide`: `build` checks
+    /// that each of those starts a node of its tree. Unchecked here because a bounds check
     /// in the walks (a compare, and one more value to keep at hand in a loop short of
     /// registers) made the packets' walks 4 to 7% slower (teapot-6's primary packets,
     /// AVX-512).
@@ -104,8 +103,8 @@ impl Link {
         unsafe { &*wide.0.as_ptr().cast::<u32>().add(word).cast::<WideNode>() }
     }
 
-    /// Whether the link leads to a node of `wide` (the root of a tree that is not empty,
-    /// or any inner child's link read from the tree): where a walk may start.
+    /// Whether the link leads to a node of `wide` (the root, or any inner child's link read
+    /// from the tree): where a walk may start.
     pub fn leads_into(self, wide: &Tree) -> bool {
         self.count() == 0 && self.0.is_multiple_of(NODE_WORDS) && self.index() < wide.len() as u32
     }
@@ -117,9 +116,10 @@ impl Link {
     }
 }
 
-/// The CPU renderer's eight-wide tree as `build` made it, the root first (empty where the
-/// scene has no primitives in a tree): whole, so that every link to a node read from it
-/// leads to one of its nodes (`Link::node`). Read as the slice of its nodes.
+/// The CPU renderer's eight-wide tree as `build` made it, the root first (a root of empty
+/// lanes where the scene has no primitives in a tree, so that `Link::ROOT` always leads
+/// to a node and a walk from it needs no check): whole, so that every link to a node read
+/// from it leads to one of its nodes (`Link::node`). Read as the slice of its nodes.
 #[derive(Clone, Debug)]
 pub struct Tree(Vec<WideNode>);
 
@@ -425,7 +425,11 @@ fn collapse_into<N: Copy>(
 pub fn build(nodes: &[GpuNode]) -> Tree {
     let optimal = Optimal::new(nodes, WIDTH);
     let children = |i, kids: &mut Vec<u32>| optimal.children_into(i, kids);
-    let wide = collapse(nodes, children, WideNode::empty(), set_lane).expect("every lane is taken");
+    let mut wide =
+        collapse(nodes, children, WideNode::empty(), set_lane).expect("every lane is taken");
+    if wide.is_empty() {
+        wide.push(WideNode::empty()); // the root of no primitives
+    }
     // What `Link::node` relies on: every inner child's link starts a node of the tree.
     let links = wide.iter().flat_map(|n| n.links);
     let inner = |l: &Link| l.count() == 0;
@@ -703,7 +707,8 @@ mod tests {
             .collect();
         let binary = bvh::build(&wide, Quality::Medium);
         check(&binary, &cpu_lanes(&build(&binary.nodes)), false);
-        assert!(build(&[]).is_empty());
+        let none = build(&[]);
+        assert!(none.len() == 1 && none[0].leaves().next().is_none());
         assert!(gpu_nodes(&[], Collapse::Optimal).is_none());
     }
 

@@ -234,7 +234,8 @@ pub fn walk<const NEAREST_FIRST: bool>(
     nodes: &mut u32,
     leaf: impl FnMut(u32, u32) -> Option<f32>,
 ) {
-    walk_from::<NEAREST_FIRST>(wide, slabs, Link::ROOT, tmin, tmax, nodes, leaf);
+    // SAFETY: every tree has a root (`Tree`).
+    unsafe { walk_tree::<NEAREST_FIRST>(wide, slabs, Link::ROOT, tmin, tmax, nodes, leaf) };
 }
 
 /// `walk` of the subtree under the wide node `node` (its children, not its own box): where
@@ -245,16 +246,32 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
     slabs: &impl Boxes,
     node: Link,
     tmin: f32,
+    tmax: f32,
+    nodes: &mut u32,
+    leaf: impl FnMut(u32, u32) -> Option<f32>,
+) {
+    // Checked once a walk: every link the walk reads after it comes from the tree's own
+    // nodes, which `build` checked.
+    assert!(node.leads_into(wide), "a walk from outside the tree");
+    // SAFETY: checked above.
+    unsafe { walk_tree::<NEAREST_FIRST>(wide, slabs, node, tmin, tmax, nodes, leaf) };
+}
+
+/// `walk_from`, unchecked.
+///
+/// # Safety
+/// `node` leads into the tree (`Link::leads_into`): the root, or an inner child's link read
+/// from one of its nodes.
+#[inline(always)]
+unsafe fn walk_tree<const NEAREST_FIRST: bool>(
+    wide: &Tree,
+    slabs: &impl Boxes,
+    node: Link,
+    tmin: f32,
     mut tmax: f32,
     nodes: &mut u32,
     mut leaf: impl FnMut(u32, u32) -> Option<f32>,
 ) {
-    if wide.is_empty() {
-        return; // no primitives in a tree, and no root
-    }
-    // Checked once a walk: every link the walk reads after it comes from the tree's own
-    // nodes, which `build` checked.
-    assert!(node.leads_into(wide), "a walk from outside the tree");
     // Not zeroed: a ray's walk touches a few of these 193 entries, and clearing all
     // 2.3 KB for every ray made the walk 20 to 30% slower (teapot-6, tree-11). Only
     // entries below `sp` are ever read.
@@ -283,8 +300,8 @@ pub fn walk_from<const NEAREST_FIRST: bool>(
                 }
             }
         } else {
-            // SAFETY: `next` is `node`, which leads into the tree (above), or came from one
-            // of the tree's nodes and leads to an inner child (its count is 0).
+            // SAFETY: `next` is `node`, which leads into the tree (`walk_tree`'s contract),
+            // or came from one of the tree's nodes and leads to an inner child.
             let n = unsafe { next.link.node(wide) };
             *nodes += 1;
             let (near, mut mask) = slabs.test(n, tmin, tmax);
