@@ -46,7 +46,7 @@ fn reported_peak_mib_with(args: &[&str], dir: &Path, fault: Option<&str>) -> (f6
 
 /// Bytes a primitive the CPU renderer's peak may hold beyond a one-sphere scene's: the
 /// records (48), the eight-wide tree and the triangle blocks make a 980,000-triangle
-/// terrain's 103 at its peak (while the frame renders), a field of 980,100 spheres' 90
+/// terrain's 101 at its peak (while the frame renders), a field of 980,100 spheres' 90
 /// (while its tree is built: the records, the binary tree, one group of the builder),
 /// docs/farm.md. 110 is this guard's bound (and the floor the docs promise): a copy of
 /// the terrain's primitives (48 more) or the triangle blocks' first layout (46) does not
