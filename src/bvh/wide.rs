@@ -41,11 +41,6 @@ const NODE_WORDS: u32 = (size_of::<WideNode>() / 4) as u32;
 
 const _: () = assert!(NODE_WORDS.is_multiple_of(1 << COUNT_BITS));
 
-/// Most wide nodes a tree can link: an inner child's link is its index times `NODE_WORDS`.
-/// 76 million, where a 2M-triangle terrain's tree holds 17 primitives a node
-/// (docs/bvh.md): scenes of up to `MAX_PRIMITIVES` stay far below it.
-pub const MAX_NODES: usize = (u32::MAX / NODE_WORDS) as usize;
-
 /// Where a lane of a `WideNode` leads, in one word: a leaf's first primitive and count
 /// (`first << COUNT_BITS | count`), an inner child's wide node as where it starts in the
 /// tree's words (its index times `NODE_WORDS`, the count bits clear), or nothing
@@ -62,9 +57,12 @@ impl Link {
     pub const ROOT: Link = Link(0);
     const NONE: Link = Link(u32::MAX);
 
+    /// The link of the wide node at `index`. A tree can link 76 million nodes (`u32::MAX`
+    /// words), where a 2M-triangle terrain's tree holds 17 primitives a node (docs/bvh.md):
+    /// scenes of up to `MAX_PRIMITIVES` stay far below it.
     fn inner(index: u32) -> Link {
         let words = index.checked_mul(NODE_WORDS);
-        Link(words.expect("a CPU tree of more than MAX_NODES wide nodes"))
+        Link(words.expect("a CPU tree of more than 76 million wide nodes"))
     }
 
     fn leaf(first: u32, count: u32) -> Link {

@@ -206,7 +206,7 @@ pub fn closest<L: Lanes>(
     found.traced = lanes;
     let mut best = Best::new(l, rows);
     best.planes(l, b, &r, lanes);
-    if b.globals.n_nodes > 0 && !wide.is_empty() {
+    if b.globals.n_nodes > 0 {
         closest_tree(l, b, wide, rows, lanes, &r, &mut best, found);
     }
     best.store(l, found);
@@ -272,8 +272,8 @@ fn closest_tree<L: Lanes>(
             best.reload(l, found);
             tmax_hi = l.max_of(best.t, packet);
         } else {
-            // SAFETY: `e` is the root of a tree that is not empty (above) or came from one of
-            // its nodes, and leads to an inner child.
+            // SAFETY: `e` is the root (every tree has one) or came from one of the tree's
+            // nodes, and leads to an inner child.
             let n = unsafe { e.link.node(wide) };
             found.nodes += 1;
             let (children, keys) = frustum.cull(n, tmin_lo, tmax_hi);
@@ -313,7 +313,7 @@ pub fn occluded<L: Lanes>(
         traced: packet,
         ..Occluded::default()
     };
-    if b.globals.n_nodes == 0 || wide.is_empty() || packet == 0 {
+    if b.globals.n_nodes == 0 || packet == 0 {
         return out;
     }
     let mut alive = packet;
@@ -353,8 +353,8 @@ pub fn occluded<L: Lanes>(
             }
             alive = out.open(alive);
         } else {
-            // SAFETY: `e` is the root of a tree that is not empty (above) or came from one of
-            // its nodes, and leads to an inner child.
+            // SAFETY: `e` is the root (every tree has one) or came from one of the tree's
+            // nodes, and leads to an inner child.
             let n = unsafe { e.link.node(wide) };
             out.nodes += 1;
             let (children, _) = frustum.cull(n, tmin_lo, tmax_hi);
