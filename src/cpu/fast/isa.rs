@@ -5,6 +5,8 @@
 
 use std::sync::LazyLock;
 
+use super::simd::Isa;
+
 /// x86-64-v3: the features the v3 copies are compiled with
 /// (`#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt")]`).
 pub fn x86_64_v3() -> bool {
@@ -31,10 +33,10 @@ pub fn x86_64_v4() -> bool {
 /// Read once.
 pub fn single_ray_v4() -> bool {
     static V4: LazyLock<bool> = LazyLock::new(|| {
-        let narrower = matches!(
-            std::env::var("GPURT_SIMD").as_deref(),
-            Ok("avx2" | "sse" | "portable")
-        );
+        let held = std::env::var("GPURT_SIMD")
+            .ok()
+            .and_then(|v| Isa::named(&v));
+        let narrower = held.is_some_and(|isa| isa != Isa::Avx512);
         !narrower
             && x86_64_v4()
             && is_x86_feature_detected!("avx512vl")

@@ -3,8 +3,8 @@
 //!
 //! - `wide`: the walk of the CPU's eight-wide tree (`bvh::wide`), a ray at a time, its
 //!   boxes in SIMD lanes; `wide_ray` one ray's closest hit and transmission through it;
-//!   `leaf` its leaves' primitives several at once; `isa` the x86-64-v3 copies chosen at
-//!   run time.
+//!   `leaf` its leaves' primitives several at once; `isa` the x86-64-v3 and v4 copies
+//!   chosen at run time; `simd` the instruction sets' names in `GPURT_SIMD`.
 //! - `packet`: coherent rays in SIMD lanes (packets of 4 to 16) through the same tree;
 //!   `coherent` renders tiles with them, `lights` their shadow rays.
 //! - `tracer`: the seam where `shade` gets its rays' answers, from one ray's walk or from
@@ -16,6 +16,7 @@ pub(crate) mod isa;
 pub(crate) mod leaf;
 pub(crate) mod lights;
 pub mod packet;
+pub mod simd;
 pub mod tracer;
 pub mod wide;
 pub mod wide_ray;

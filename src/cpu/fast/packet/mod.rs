@@ -7,7 +7,7 @@
 //! - `walk`: the closest-hit and occlusion walks, written once over `Lanes`; `frustum`:
 //!   the interval test that culls children for the whole packet; `leaf`: primitives
 //!   against the lanes; `single`: lanes that walk on alone where few are left.
-//! - here: the instruction set chosen at run time (`Isa`, `Kernels`, `GPURT_SIMD`), and the
+//! - here: the kernels chosen at run time (`Kernels`, of a `simd::Isa`, `GPURT_SIMD`), and the
 //!   packet API the renderer calls, which answers exactly what `closest_hit` and
 //!   `transmission` answer for each ray: the lanes whose answer depends on the order of
 //!   the walk (two surfaces at one distance; a shadow ray through transmitting surfaces
@@ -34,6 +34,7 @@ mod x86_walks;
 
 use glam::Vec3;
 
+pub use super::simd::Isa;
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::types::{Bindings, Hit, Ray};
 use crate::util::error::{Error, Result};
@@ -41,38 +42,9 @@ pub use lanes::MAX_LANES;
 use lanes::Row;
 use rays::Rows;
 
-/// The instruction sets the packet kernels are compiled for, widest first.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Isa {
-    Avx512,
-    Avx2,
-    Sse,
-    /// Plain arrays of four (NEON on AArch64, through LLVM).
-    Portable,
-}
-
+/// Which of the instruction sets the kernels run here: the kernels' own question (their
+/// tokens, `x86`), so asked here.
 impl Isa {
-    pub const ALL: [Isa; 4] = [Isa::Avx512, Isa::Avx2, Isa::Sse, Isa::Portable];
-
-    /// Its name in `GPURT_SIMD` and `--stats`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Isa::Avx512 => "avx512",
-            Isa::Avx2 => "avx2",
-            Isa::Sse => "sse",
-            Isa::Portable => "portable",
-        }
-    }
-
-    /// Rays a packet holds.
-    pub fn lanes(self) -> usize {
-        match self {
-            Isa::Avx512 => 16,
-            Isa::Avx2 => 8,
-            Isa::Sse | Isa::Portable => 4,
-        }
-    }
-
     /// Whether this machine runs it.
     pub fn available(self) -> bool {
         Kernels::new(self).is_some()
@@ -132,15 +104,12 @@ impl Kernels {
             return Ok(None);
         }
         let names: Vec<&str> = Isa::ALL.iter().map(|i| i.name()).collect();
-        let isa = Isa::ALL
-            .into_iter()
-            .find(|i| i.name() == v)
-            .ok_or_else(|| {
-                Error::Render(format!(
-                    "GPURT_SIMD={v}: expected none or one of {}",
-                    names.join(", ")
-                ))
-            })?;
+        let isa = Isa::named(&v).ok_or_else(|| {
+            Error::Render(format!(
+                "GPURT_SIMD={v}: expected none or one of {}",
+                names.join(", ")
+            ))
+        })?;
         Kernels::new(isa)
             .map(Some)
             .ok_or_else(|| Error::Render(format!("GPURT_SIMD={v}: this processor lacks {v}")))
