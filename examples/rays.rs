@@ -26,7 +26,10 @@
 //! (p0, r0, p1, r1: 8), primary rays (origin, direction, tnear, and our hit distance,
 //! infinity for a miss: 8), shadow rays in groups of 16 slots, a group per block and
 //! light (origin, direction, tfar, and whether ours found the light blocked, 0 or 1: 8; an
-//! empty slot has tfar -1), mirror rays (as primary rays, tnear 0).
+//! empty slot has tfar -1), mirror rays (as primary rays, tnear 0); then what a crossing
+//! of each triangle, sphere and cone lets through (r, g, b: 3, zero for an opaque one;
+//! three arrays in the order of the primitives' own), and the light each shadow ray let
+//! through on our side (r, g, b: 3, zero where blocked; one a slot).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -324,7 +327,7 @@ fn main() -> anyhow::Result<()> {
             .filter(|p| buffers.copies == 0 || seen.insert(bytemuck::bytes_of(*p)))
             .collect();
         count(&mut w, triangles.len())?;
-        for p in triangles {
+        for p in &triangles {
             // Triangles are stored as a vertex and two edges.
             let (v1, v2) = (p.p0 + p.p1, p.p0 + p.p2);
             floats(
@@ -372,6 +375,29 @@ fn main() -> anyhow::Result<()> {
             floats(&mut w, &record.concat())?;
         }
         closest(&mut w, &mirror, &mirror_hits, 0.0)?;
+        // What a crossing of each primitive lets through, as `leaf::transmit_leaf`
+        // multiplies it in (zero for an opaque one), kind by kind in the order above; then
+        // the light each shadow ray lets through, so that Embree, letting its shadow rays
+        // through the same surfaces, can be held to the same answers.
+        let through = |p: &GpuPrim| {
+            let m = &buffers.materials[p.material() as usize];
+            if m.t > 0.0 { m.t * m.color } else { Vec3::ZERO }.to_array()
+        };
+        for prims in [
+            triangles.into_iter().map(through).collect::<Vec<_>>(),
+            of(PRIM_SPHERE).map(through).collect(),
+            of(PRIM_CONE).map(through).collect(),
+        ] {
+            count(&mut w, prims.len())?;
+            floats(&mut w, prims.as_flattened())?;
+        }
+        count(&mut w, shadow.len())?;
+        for r in &shadow {
+            let light = r.map_or(Vec3::ZERO, |(r, tmax)| {
+                transmission(&b, &r, tmax, &mut 0, &mut None)
+            });
+            floats(&mut w, &light.to_array())?;
+        }
         w.flush()?;
     }
     Ok(())
