@@ -22,7 +22,7 @@
 //! (the others print 0).
 //!
 //! The file (little-endian): "GPRTRAYS", then counted arrays, each a u32 count and its
-//! f32 records: triangles (v0, v1, v2: 9 floats), spheres (centre, radius: 4), cones
+//! f32 records: triangles (v0, v1, v2: 9 floats; a box's faces as two each), spheres (centre, radius: 4), cones
 //! (p0, r0, p1, r1: 8), primary rays (origin, direction, tnear, and our hit distance,
 //! infinity for a miss: 8), shadow rays in groups of 16 slots, a group per block and
 //! light (origin, direction, tfar, and whether ours found the light blocked, 0 or 1: 8; an
@@ -90,6 +90,32 @@ fn process_time() -> Duration {
     START.get_or_init(Instant::now).elapsed()
 }
 
+/// The twelve triangles of the faces of the box from `lo` to `hi`, two a face.
+fn box_triangles(lo: Vec3, hi: Vec3) -> impl Iterator<Item = [Vec3; 3]> {
+    let corner = move |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Each face's corners in order round it: x = lo, x = hi, y = lo, y = hi, z = lo, z = hi.
+    let faces = [
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+    ];
+    faces.into_iter().flat_map(move |[a, b, c, d]| {
+        [
+            [corner(a), corner(b), corner(c)],
+            [corner(a), corner(c), corner(d)],
+        ]
+    })
+}
+
 /// A shadow ray and its interval's end; `None` for an empty slot of a group.
 type Shadow = Option<(Ray, f32)>;
 
@@ -110,10 +136,8 @@ fn main() -> anyhow::Result<()> {
     let read = gpurt::run::read(&scene, None, &Default::default())?;
     let buffers = gpurt::run::pack(read, u64::from(size) * u64::from(size) * spp)?.buffers;
     anyhow::ensure!(
-        buffers.planes.is_empty()
-            && buffers.prims.iter().all(|p| p.kind() != PRIM_BOX)
-            && buffers.camera.aperture <= 0.0,
-        "{}: infinite planes, boxes and thin lenses have no Embree counterpart here",
+        buffers.planes.is_empty() && buffers.camera.aperture <= 0.0,
+        "{}: infinite planes and thin lenses have no Embree counterpart here",
         scene.display()
     );
     let opts = RenderOptions {
@@ -322,18 +346,17 @@ fn main() -> anyhow::Result<()> {
         // The scene's triangles once each: a triangle that spatial splits put in several
         // leaves has a record in each (`SceneBuffers::copies`), which Embree, building its
         // own tree, should not have to trace.
+        // Then each box's faces as two triangles each, which Embree meets where we meet
+        // the box. Triangles are stored as a vertex and two edges.
         let mut seen = std::collections::HashSet::new();
-        let triangles: Vec<&GpuPrim> = of(PRIM_TRIANGLE)
+        let triangles: Vec<([Vec3; 3], &GpuPrim)> = of(PRIM_TRIANGLE)
             .filter(|p| buffers.copies == 0 || seen.insert(bytemuck::bytes_of(*p)))
+            .map(|p| ([p.p0, p.p0 + p.p1, p.p0 + p.p2], p))
+            .chain(of(PRIM_BOX).flat_map(|p| box_triangles(p.p0, p.p1).map(move |t| (t, p))))
             .collect();
         count(&mut w, triangles.len())?;
-        for p in &triangles {
-            // Triangles are stored as a vertex and two edges.
-            let (v1, v2) = (p.p0 + p.p1, p.p0 + p.p2);
-            floats(
-                &mut w,
-                &[p.p0.to_array(), v1.to_array(), v2.to_array()].concat(),
-            )?;
+        for (t, _) in &triangles {
+            floats(&mut w, &t.map(|v| v.to_array()).concat())?;
         }
         count(&mut w, of(PRIM_SPHERE).count())?;
         for p in of(PRIM_SPHERE) {
@@ -384,7 +407,10 @@ fn main() -> anyhow::Result<()> {
             if m.t > 0.0 { m.t * m.color } else { Vec3::ZERO }.to_array()
         };
         for prims in [
-            triangles.into_iter().map(through).collect::<Vec<_>>(),
+            triangles
+                .iter()
+                .map(|(_, p)| through(p))
+                .collect::<Vec<_>>(),
             of(PRIM_SPHERE).map(through).collect(),
             of(PRIM_CONE).map(through).collect(),
         ] {
