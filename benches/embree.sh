@@ -66,7 +66,8 @@ tables() {
     primary=() shadow=() mirror=() agree=()
     lanes="" isa=""
     for scene in "$@"; do
-        name=$(basename "$scene" .nff)
+        name=$(basename "$scene" .gz)
+        name=${name%.nff}
         echo "== $name ($set)" >&2
         ours="" theirs="" high=""
         for _ in $(seq "$REPEAT"); do
