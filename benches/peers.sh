@@ -12,9 +12,10 @@
 # Tachyon reads the NFF files themselves (-numthreads THREADS, -raydepth 5 as gpurt's default
 # depth); it does no refraction, and draws gears-4 all white.
 #
-# With SPP=n (a square: 4, 9, 16) gpurt traces n jittered samples a pixel and POV-Ray
+# With SPP=n (a square: 4, 9, 16) gpurt traces n jittered samples a pixel, POV-Ray
 # supersamples every pixel n times (+A0.0 +AM1 +R<sqrt n>: its threshold 0 makes it
-# supersample all pixels, adding its corner samples); Tachyon stays at one.
+# supersample all pixels, adding its corner samples), and Tachyon traces n - 1 jittered
+# samples beside its first (-aasamples n-1: its tracing time grows with them as ours does).
 #
 # Usage: benches/peers.sh            (from anywhere; needs povray, tachyon and ../shared)
 #        REPEAT=5 benches/peers.sh
@@ -113,7 +114,7 @@ for s in "${SCENES[@]}"; do
     fi
 
     out=$(timed tachyon "$SCENES_DIR/$s.nff" -res "$WIDTH" "$HEIGHT" -numthreads "$THREADS" -raydepth 5 \
-        -format PNG -o "$WORK/$s-tachyon.png") || { echo "tachyon failed on $s" >&2; exit 1; }
+        -aasamples $((SPP - 1)) -format PNG -o "$WORK/$s-tachyon.png") || { echo "tachyon failed on $s" >&2; exit 1; }
     read -r t_wall t_kb _ <<<"$out"
 
     gunzip -c "$POV_DIR/$s.pov.gz" >"$WORK/$s.pov"
