@@ -141,9 +141,14 @@ typedef struct {
     float light[16][3];
 } Through;
 
+/* Whether a crossing that lets `through` (3 floats; NULL: nothing) through transmits. */
+static int transmits(const float *through) {
+    return through && (through[0] != 0.0f || through[1] != 0.0f || through[2] != 0.0f);
+}
+
 /* Multiplies the ray's light by `through` (3 floats), and says whether the ray goes on. */
 static int let_through(const struct RTCIntersectContext *ctx, unsigned id, const float *through) {
-    if (through[0] == 0.0f && through[1] == 0.0f && through[2] == 0.0f) return 0;
+    if (!transmits(through)) return 0;
     float *light = ((Through *)ctx)->light[id];
     for (int c = 0; c < 3; c++) light[c] *= through[c];
     return 1;
@@ -174,7 +179,7 @@ static void cone_occluded(const struct RTCOccludedFunctionNArguments *args) {
         cone_hits(c, o, d, t);
         for (int j = 0; j < 2; j++) {
             if (!(t[j] > ray[3 * N + i] && t[j] < ray[8 * N + i])) continue;
-            if (through && let_through(args->context, ((unsigned *)ray)[10 * N + i], through)) continue;
+            if (let_through(args->context, ((unsigned *)ray)[10 * N + i], through)) continue;
             ray[8 * N + i] = -INFINITY;
             break;
         }
@@ -190,8 +195,7 @@ static void attach(RTCDevice device, RTCScene scene, int high, Array prims, int 
                    const float *through, int transmitting) {
     unsigned floats = sphere ? 4 : 9, n = 0;
     for (unsigned i = 0; i < prims.n; i++) {
-        const float *k = through ? through + 3 * (size_t)i : NULL;
-        n += (k && (k[0] != 0.0f || k[1] != 0.0f || k[2] != 0.0f)) == transmitting;
+        n += transmits(through ? through + 3 * (size_t)i : NULL) == transmitting;
     }
     if (n == 0) return;
     RTCGeometry g = rtcNewGeometry(device, sphere ? RTC_GEOMETRY_TYPE_SPHERE_POINT : RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -202,7 +206,7 @@ static void attach(RTCDevice device, RTCScene scene, int high, Array prims, int 
     unsigned j = 0;
     for (unsigned i = 0; i < prims.n; i++) {
         const float *k = through ? through + 3 * (size_t)i : NULL;
-        if ((k && (k[0] != 0.0f || k[1] != 0.0f || k[2] != 0.0f)) != transmitting) continue;
+        if (transmits(k) != transmitting) continue;
         memcpy(v + (size_t)floats * j, prims.data + (size_t)floats * i, floats * sizeof(float));
         if (kept) memcpy(kept + 3 * (size_t)j, k, 3 * sizeof(float));
         j++;
