@@ -43,6 +43,7 @@ use gpurt::cpu::shade::{light_ray, offset_origin, reflect_dir, surface};
 use gpurt::cpu::types::{Bindings, Hit, Ray};
 use gpurt::frame::{self, RenderOptions};
 use gpurt::gpu_types::*;
+use gpurt::scene::place::box_triangles;
 use rayon::prelude::*;
 
 /// Rays per task: rayon's unit of work, and Embree's in the C harness.
@@ -88,32 +89,6 @@ fn process_time() -> Duration {
 #[cfg(not(target_os = "linux"))]
 fn process_time() -> Duration {
     START.get_or_init(Instant::now).elapsed()
-}
-
-/// The twelve triangles of the faces of the box from `lo` to `hi`, two a face.
-fn box_triangles(lo: Vec3, hi: Vec3) -> impl Iterator<Item = [Vec3; 3]> {
-    let corner = move |i: usize| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    // Each face's corners in order round it: x = lo, x = hi, y = lo, y = hi, z = lo, z = hi.
-    let faces = [
-        [0, 2, 6, 4],
-        [1, 3, 7, 5],
-        [0, 1, 5, 4],
-        [2, 3, 7, 6],
-        [0, 1, 3, 2],
-        [4, 5, 7, 6],
-    ];
-    faces.into_iter().flat_map(move |[a, b, c, d]| {
-        [
-            [corner(a), corner(b), corner(c)],
-            [corner(a), corner(c), corner(d)],
-        ]
-    })
 }
 
 /// A shadow ray and its interval's end; `None` for an empty slot of a group.

@@ -166,8 +166,8 @@ impl Placement {
 }
 
 /// The twelve triangles of the box `lo..hi`, each wound counter-clockwise seen from
-/// outside.
-fn box_triangles(lo: Vec3, hi: Vec3) -> [[Vec3; 3]; 12] {
+/// outside (also how `examples/rays.rs` hands a box to Embree).
+pub fn box_triangles(lo: Vec3, hi: Vec3) -> [[Vec3; 3]; 12] {
     let c = |i: usize| {
         Vec3::new(
             if i & 1 != 0 { hi.x } else { lo.x },
