@@ -159,6 +159,10 @@ pub fn intersect_spheres4(leaf: &[GpuPrim], ray: &Ray) -> Option<(Vec4, Vec4)> {
 /// Side of a truncated cone (or cylinder) between `p0` (radius `f0`) and `p1` (radius `f1`).
 /// Solved from the ray's closest approach to the cone's middle, as `sphere` is: far from a
 /// thin cone the quadratic's terms would otherwise cancel away the hit's precision.
+/// Inlined into the walks: a call in a walk's loop may overwrite every vector register,
+/// and the compiler then kept the ray's constants on the stack from the start of every
+/// walk, a cone in its leaves or not (docs/bvh.md).
+#[inline(always)]
 pub fn intersect_cone(p: &GpuPrim, ray: &Ray) -> Vec2 {
     let axis = p.p1 - p.p0;
     let height = axis.length();
