@@ -156,14 +156,15 @@ pub fn render(args: RenderArgs) -> gpurt::Result<ExitCode> {
         ));
         if let Some(k) = r.kinds {
             report.push(format!(
-                "rays        eye {} ({} in packets), shadow {} ({}), reflected {} ({}), refracted {}",
+                "rays        eye {} ({} in packets), shadow {} ({}), reflected {} ({}), refracted {} ({})",
                 k.eye,
                 k.eye_packed,
                 k.shadow,
                 k.shadow_packed,
                 k.reflected,
                 k.reflected_packed,
-                k.refracted
+                k.refracted,
+                k.refracted_packed
             ));
         }
         if let Some(counted) = renderer.counters() {

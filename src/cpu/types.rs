@@ -159,6 +159,7 @@ pub struct RayCounts {
     pub eye_packed: u64,
     pub shadow_packed: u64,
     pub reflected_packed: u64,
+    pub refracted_packed: u64,
     pub eye_nodes: u64,
     pub shadow_nodes: u64,
     /// Of reflected and refracted rays.
@@ -177,6 +178,7 @@ impl RayCounts {
         self.eye_packed += o.eye_packed;
         self.shadow_packed += o.shadow_packed;
         self.reflected_packed += o.reflected_packed;
+        self.refracted_packed += o.refracted_packed;
         self.eye_nodes += o.eye_nodes;
         self.shadow_nodes += o.shadow_nodes;
         self.secondary_nodes += o.secondary_nodes;

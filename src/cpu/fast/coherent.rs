@@ -1,13 +1,15 @@
 //! The CPU renderer's tiles traced with packets where rays are coherent: for each sample,
 //! the camera rays of a block of pixels (4x4, 4x2 or 2x2, as many as the kernels' lanes)
 //! go as one packet, then their shadow rays to each point or directional light as an
-//! occlusion packet, then the mirror rays off the surfaces they met as another, and those
-//! rays' shadow rays to each light as more (a `Stage` each: the camera rays, their
-//! mirror rays); every other ray (refraction, area light samples, deeper bounces) is
-//! walked alone when the shading asks for it. Mirror rays off curved surfaces diverge,
-//! but a block's still share most of their path through the tree: traced in packets,
-//! teapot-6's 1080p render took 15% less time and balls-4's 3% less (one run each way,
-//! alternating), and lanes that part from the rest go on alone (`packet::single`).
+//! occlusion packet, then the mirror rays off the surfaces they met as another, and the
+//! refracted rays as a third, and those rays' shadow rays to each light as more (a
+//! `Stage` each: the camera rays, their mirror rays, their refracted rays); every other
+//! ray (area light samples, deeper bounces) is walked alone when the shading asks for it.
+//! Mirror rays off curved surfaces diverge, but a block's still share most of their path
+//! through the tree: traced in packets, teapot-6's 1080p render took 15% less time and
+//! balls-4's 3% less (one run each way, alternating), and lanes that part from the rest go
+//! on alone (`packet::single`). So do the rays that enter glass: gears-4's 1080p render
+//! took 9% less time with them and their shadow rays in packets (docs/bvh.md).
 //!
 //! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
 //! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
@@ -32,8 +34,8 @@ use super::wide_ray;
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::pixel::{aov, sample_ray};
 use crate::cpu::shade::{
-    Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, surface, trace,
-    unlit,
+    Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, refracted_dir,
+    surface, trace, unlit,
 };
 use crate::cpu::texture::textured;
 use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
@@ -93,13 +95,13 @@ const NO_HIT_YET: Hit = Hit {
     nodes: 0,
 };
 
-/// One generation of a block's rays (its camera rays, or their mirror rays) traced as a
-/// packet and shaded ahead of the pixels' own shading: each lane's ray and hit, the
-/// surface it met, and what each point or directional light gives that surface, its
-/// shadow rays traced as one packet a light. Kept from block to block and written in
-/// place: arrays built afresh for each block were copied through temporaries a field at a
-/// time, and the wide loads after the narrow stores stalled (a tenth of teapot-6's
-/// render, by `perf`).
+/// One kind of a block's rays (its camera rays, their mirror rays or their refracted
+/// rays) traced as a packet and shaded ahead of the pixels' own shading: each lane's ray
+/// and hit, the surface it met, and what each point or directional light gives that
+/// surface, its shadow rays traced as one packet a light. Kept from block to block and
+/// written in place: arrays built afresh for each block were copied through temporaries a
+/// field at a time, and the wide loads after the narrow stores stalled (a tenth of
+/// teapot-6's render, by `perf`).
 struct Stage {
     rays: [Ray; MAX_LANES],
     tmin: f32,
@@ -228,6 +230,31 @@ impl Stage {
         textured(b, m, &self.hits[k])
     }
 
+    /// Sets `packet` to the `kind` rays that the shading sends on from the surfaces the
+    /// stage's rays met, as `trace` makes them (`shade::secondary`), in the lanes of those
+    /// rays. A ray made otherwise would be walked alone, not answered wrongly: the
+    /// shading's rays are matched to the packets' bit for bit (`holds`).
+    fn secondary(&self, b: &Bindings, kind: Secondary, packet: &mut Packet) {
+        packet.clear();
+        for k in lanes_of(self.met) {
+            let s = &self.surfaces[k];
+            let m = &b.materials[s.material as usize];
+            let dir = match kind {
+                Secondary::Mirror if m.ks > 0.0 => reflect_dir(self.rays[k].dir, s.ns),
+                // `trace`'s material, textured: the same index of refraction to the bit.
+                Secondary::Refracted if m.t > 0.0 => {
+                    refracted_dir(s, &self.material(b, k), self.rays[k].dir)
+                }
+                _ => continue,
+            };
+            let ray = Ray {
+                origin: offset_origin(s, dir, b.globals.epsilon),
+                dir,
+            };
+            packet.set(k, &ray, 0.0, NO_HIT);
+        }
+    }
+
     /// Whether `(ray, tmin, tmax)` is lane `k`'s ray, bit for bit (its answer, then, is
     /// lane `k`'s hit).
     fn holds(&self, k: usize, ray: &Ray, tmin: f32, tmax: f32) -> bool {
@@ -240,17 +267,28 @@ impl Stage {
     }
 }
 
-/// The generations of rays traced ahead: the camera rays and their mirror rays; deeper
-/// ones are walked alone. A third and a fourth (the mirror rays' mirror rays) were
-/// measured on a Zen 4 EPYC (2026-11-29): 1080p, 4 spp, five alternating runs each, no
-/// change beyond the machine's swing on balls-4, teapot-6 and gears-4, and 0.3 to 11%
-/// more instructions (valgrind, 480x270): more of balls-4's rays in packets (its shadow
-/// rays 27.7 of 27.8 M with five), but each generation's packets emptier.
-const STAGES: usize = 2;
+/// The stages of rays traced ahead: the camera rays (`EYE`), their mirror rays
+/// (`MIRROR`) and their refracted rays (`REFRACTED`); deeper ones are walked alone. The
+/// mirror rays' mirror rays, and theirs, were measured as further stages on a Zen 4 EPYC
+/// (2026-11-29): 1080p, 4 spp, five alternating runs each, no change beyond the machine's
+/// swing on balls-4, teapot-6 and gears-4, and 0.3 to 11% more instructions (valgrind,
+/// 480x270): more of balls-4's rays in packets (its shadow rays 27.7 of 27.8 M with
+/// five), but each stage's packets emptier.
+const STAGES: usize = 3;
+const EYE: usize = 0;
+const MIRROR: usize = 1;
+const REFRACTED: usize = 2;
 
-/// One pixel's rays traced beforehand (its camera ray and its mirror rays, lane `k` of
-/// each stage, with their surfaces and what each point or directional light gives
-/// them); any other ray is walked alone.
+/// The rays a stage after the camera rays' holds.
+#[derive(Clone, Copy)]
+enum Secondary {
+    Mirror,
+    Refracted,
+}
+
+/// One pixel's rays traced beforehand (its camera ray, its mirror and its refracted ray,
+/// lane `k` of each stage, with their surfaces and what each point or directional light
+/// gives them); any other ray is walked alone.
 struct Known<'a> {
     stages: &'a [Stage],
     k: usize,
@@ -315,10 +353,11 @@ impl Tracer for Known<'_> {
             self.waiting &= !(1 << i);
             self.next = (stage.met & 1 << k != 0).then_some(i);
             let packed = u64::from(stage.packed & 1 << k != 0);
-            if i == 0 {
-                self.counts.eye_packed += packed;
-            } else {
-                self.counts.reflected_packed += packed;
+            match i {
+                EYE => self.counts.eye_packed += packed,
+                MIRROR => self.counts.reflected_packed += packed,
+                REFRACTED => self.counts.refracted_packed += packed,
+                _ => unreachable!("{STAGES} stages"),
             }
             return stage.hits[k];
         }
@@ -385,12 +424,12 @@ impl Tracer for Known<'_> {
 fn traced_ahead(b: &Bindings, stages: &[Stage], k: usize, counts: &mut RayCounts) -> Option<Vec3> {
     let g = b.globals;
     let sends_on = |m: &GpuMaterial, depth: u32| depth < g.max_depth && (m.ks > 0.0 || m.t > 0.0);
-    let eye = &stages[0];
+    let eye = &stages[EYE];
     let m = eye.material(b, k);
     // The mirror ray's stage, and its surface's material where it met one.
     let mut mirror = None;
     if sends_on(&m, 1) {
-        let next = stages.get(1).filter(|_| m.t <= 0.0)?;
+        let next = stages.get(MIRROR).filter(|_| m.t <= 0.0)?;
         debug_assert!(next.traced & 1 << k != 0, "a mirror ray traced ahead");
         let met = next.met & 1 << k != 0;
         let next_m = met.then(|| next.material(b, k));
@@ -479,8 +518,15 @@ fn render_tile_with<const AHEAD: bool>(
     // all traced ahead is shaded from the stages alone: `traced_ahead`).
     let all_packed = AHEAD && shadowed.len() == b.lights.len();
     let mut packet = Packet::default();
-    // The camera rays, then their mirror rays as deep as the shading traces them.
-    let depth = (g.max_depth as usize).clamp(1, STAGES);
+    // The camera rays, then, where the shading traces deeper, their mirror rays and, where
+    // a material refracts, their refracted rays: an empty stage for every block of a
+    // scene without glass cost balls-4's and teapot-6's renders 1% (1080p, 4 spp).
+    let refracts = b.materials.iter().any(|m| m.t > 0.0);
+    let depth = match g.max_depth {
+        0 | 1 => 1,
+        _ if refracts => STAGES,
+        _ => STAGES - 1,
+    };
     let mut stages: Vec<Stage> = (0..depth).map(|_| Stage::new(shadowed.len())).collect();
     let mut blockers = vec![None; b.lights.len() * HINTS];
     for s in samples {
@@ -500,9 +546,9 @@ fn render_tile_with<const AHEAD: bool>(
                     }
                 }
                 counts.eye += n as u64;
-                stages[0].trace(b, kernels, &packet, g.hither);
+                stages[EYE].trace(b, kernels, &packet, g.hither);
                 if g.aov != AOV_COLOR {
-                    let eye = &stages[0];
+                    let eye = &stages[EYE];
                     for (k, &(i, _)) in pixels[..n].iter().enumerate() {
                         let mut known = Known::new(&stages[..1], k, &mut blockers);
                         sums[i] += aov(b, &mut known, &eye.rays[k], counts);
@@ -510,27 +556,17 @@ fn render_tile_with<const AHEAD: bool>(
                     }
                     continue;
                 }
-                stages[0].light(b, kernels, &shadowed, &mut packet);
-                for d in 1..depth {
-                    // The mirror rays of the surfaces the last stage met.
-                    let (last, next) = stages.split_at_mut(d);
-                    let last = &last[d - 1];
-                    packet.clear();
-                    for k in lanes_of(last.met) {
-                        let s = &last.surfaces[k];
-                        if b.materials[s.material as usize].ks > 0.0 {
-                            let dir = reflect_dir(last.rays[k].dir, s.ns);
-                            let ray = Ray {
-                                origin: offset_origin(s, dir, g.epsilon),
-                                dir,
-                            };
-                            packet.set(k, &ray, 0.0, NO_HIT);
-                        }
-                    }
-                    next[0].trace(b, kernels, &packet, 0.0);
-                    next[0].light(b, kernels, &shadowed, &mut packet);
+                stages[EYE].light(b, kernels, &shadowed, &mut packet);
+                let (eye, secondary) = stages.split_at_mut(1);
+                for (next, kind) in secondary
+                    .iter_mut()
+                    .zip([Secondary::Mirror, Secondary::Refracted])
+                {
+                    eye[0].secondary(b, kind, &mut packet);
+                    next.trace(b, kernels, &packet, 0.0);
+                    next.light(b, kernels, &shadowed, &mut packet);
                 }
-                let eye = &stages[0];
+                let eye = &stages[EYE];
                 for (k, &(i, rng)) in pixels[..n].iter().enumerate() {
                     if eye.met & 1 << k == 0 {
                         // A camera ray that met nothing (most of a scene with sky around
