@@ -694,7 +694,8 @@ fn renders_with_packets_are_the_single_ray_renders_to_the_bit() {
 /// The mirror and refracted rays off every surface, curved or flat, go in packets, and so
 /// do their shadow rays to point lights: on spheres.nff (a mirror sphere and a glass one
 /// on a floor of quads, two point lights) at depth 2, where every ray is a camera ray, its
-/// shadow rays, its mirror or refracted ray or that ray's shadow rays.
+/// shadow rays, its mirror or refracted ray or that ray's shadow rays; and at depth 3 the
+/// refracted rays' refracted rays.
 #[test]
 fn mirror_and_refracted_rays_and_their_shadow_rays_go_in_packets() {
     let buffers = load(&own_scenes().join("spheres.nff"));
@@ -723,6 +724,17 @@ fn mirror_and_refracted_rays_and_their_shadow_rays_go_in_packets() {
     // Walked alone: a few lone lanes. With the refracted rays' shadow rays walked alone
     // too, 6% of them; without the mirror rays' shadow packets, about twice that.
     assert!(two.shadow - two.shadow_packed <= two.shadow / 50, "{two:?}");
+    // At depth 3 the rays that leave the glass sphere go in packets too: with only those
+    // that enter it, half of the refracted rays did.
+    let (want, alone) = render(&buffers, &opts(3), None);
+    let (got, three) = render(&buffers, &opts(3), Some(&kernels));
+    assert_eq!(got, want, "the images at depth 3");
+    assert_eq!(kinds(&three), kinds(&alone), "rays by kind at depth 3");
+    assert!(three.refracted > two.refracted, "{three:?}");
+    assert!(
+        three.refracted_packed * 10 >= three.refracted * 9,
+        "{three:?}"
+    );
 }
 
 /// `gpurt SCENE --stats` on the CPU with `GPURT_SIMD` set to `simd`.

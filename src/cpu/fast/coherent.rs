@@ -3,13 +3,15 @@
 //! go as one packet, then their shadow rays to each point or directional light as an
 //! occlusion packet, then the mirror rays off the surfaces they met as another, and the
 //! refracted rays as a third, and those rays' shadow rays to each light as more (a
-//! `Stage` each: the camera rays, their mirror rays, their refracted rays); every other
-//! ray (area light samples, deeper bounces) is walked alone when the shading asks for it.
+//! `Stage` each: the camera rays, their mirror rays, their refracted rays and those rays'
+//! refracted rays); every other ray (area light samples, deeper bounces) is walked alone
+//! when the shading asks for it.
 //! Mirror rays off curved surfaces diverge, but a block's still share most of their path
 //! through the tree: traced in packets, teapot-6's 1080p render took 15% less time and
 //! balls-4's 3% less (one run each way, alternating), and lanes that part from the rest go
-//! on alone (`packet::single`). So do the rays that enter glass: gears-4's 1080p render
-//! took 9% less time with them and their shadow rays in packets (docs/bvh.md).
+//! on alone (`packet::single`). So do the rays through glass: gears-4's 1080p render took
+//! 9% less time with the rays that enter it and their shadow rays in packets, and 7% less
+//! again with the rays that leave it (docs/bvh.md).
 //!
 //! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
 //! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
@@ -95,8 +97,8 @@ const NO_HIT_YET: Hit = Hit {
     nodes: 0,
 };
 
-/// One kind of a block's rays (its camera rays, their mirror rays or their refracted
-/// rays) traced as a packet and shaded ahead of the pixels' own shading: each lane's ray
+/// One kind of a block's rays (its camera rays, their mirror rays, their refracted rays
+/// or those rays' refracted rays) traced as a packet and shaded ahead of the pixels' own shading: each lane's ray
 /// and hit, the surface it met, and what each point or directional light gives that
 /// surface, its shadow rays traced as one packet a light. Kept from block to block and
 /// written in place: arrays built afresh for each block were copied through temporaries a
@@ -268,16 +270,25 @@ impl Stage {
 }
 
 /// The stages of rays traced ahead: the camera rays (`EYE`), their mirror rays
-/// (`MIRROR`) and their refracted rays (`REFRACTED`); deeper ones are walked alone. The
-/// mirror rays' mirror rays, and theirs, were measured as further stages on a Zen 4 EPYC
+/// (`MIRROR`), their refracted rays (`REFRACTED`) and those rays' refracted rays
+/// (`REFRACTED_TWICE`: through a pane or a gear of glass and out, as coherent as the rays
+/// that went in; gears-4's 1080p render 7% faster with them); other rays are walked alone.
+/// The mirror rays' mirror rays, and theirs, were measured as further stages on a Zen 4 EPYC
 /// (2026-11-29): 1080p, 4 spp, five alternating runs each, no change beyond the machine's
 /// swing on balls-4, teapot-6 and gears-4, and 0.3 to 11% more instructions (valgrind,
 /// 480x270): more of balls-4's rays in packets (its shadow rays 27.7 of 27.8 M with
 /// five), but each stage's packets emptier.
-const STAGES: usize = 3;
+const STAGES: usize = 4;
 const EYE: usize = 0;
 const MIRROR: usize = 1;
 const REFRACTED: usize = 2;
+const REFRACTED_TWICE: usize = 3;
+/// Each stage after the camera rays': the stage whose surfaces send its rays, and which.
+const FOLLOW: [(usize, Secondary); STAGES - 1] = [
+    (EYE, Secondary::Mirror),
+    (EYE, Secondary::Refracted),
+    (REFRACTED, Secondary::Refracted),
+];
 
 /// The rays a stage after the camera rays' holds.
 #[derive(Clone, Copy)]
@@ -286,9 +297,9 @@ enum Secondary {
     Refracted,
 }
 
-/// One pixel's rays traced beforehand (its camera ray, its mirror and its refracted ray,
-/// lane `k` of each stage, with their surfaces and what each point or directional light
-/// gives them); any other ray is walked alone.
+/// One pixel's rays traced beforehand (lane `k` of each stage: its camera ray, its mirror
+/// and its refracted ray and that ray's refracted ray, with their surfaces and what each
+/// point or directional light gives them); any other ray is walked alone.
 struct Known<'a> {
     stages: &'a [Stage],
     k: usize,
@@ -356,7 +367,7 @@ impl Tracer for Known<'_> {
             match i {
                 EYE => self.counts.eye_packed += packed,
                 MIRROR => self.counts.reflected_packed += packed,
-                REFRACTED => self.counts.refracted_packed += packed,
+                REFRACTED | REFRACTED_TWICE => self.counts.refracted_packed += packed,
                 _ => unreachable!("{STAGES} stages"),
             }
             return stage.hits[k];
@@ -519,13 +530,15 @@ fn render_tile_with<const AHEAD: bool>(
     let all_packed = AHEAD && shadowed.len() == b.lights.len();
     let mut packet = Packet::default();
     // The camera rays, then, where the shading traces deeper, their mirror rays and, where
-    // a material refracts, their refracted rays: an empty stage for every block of a
-    // scene without glass cost balls-4's and teapot-6's renders 1% (1080p, 4 spp).
+    // a material refracts, their refracted rays and (deeper still) those rays' refracted
+    // rays: an empty stage for every block of a scene without glass cost balls-4's and
+    // teapot-6's renders 1% (1080p, 4 spp).
     let refracts = b.materials.iter().any(|m| m.t > 0.0);
     let depth = match g.max_depth {
         0 | 1 => 1,
-        _ if refracts => STAGES,
-        _ => STAGES - 1,
+        _ if !refracts => 2,
+        2 => 3,
+        _ => STAGES,
     };
     let mut stages: Vec<Stage> = (0..depth).map(|_| Stage::new(shadowed.len())).collect();
     let mut blockers = vec![None; b.lights.len() * HINTS];
@@ -557,14 +570,11 @@ fn render_tile_with<const AHEAD: bool>(
                     continue;
                 }
                 stages[EYE].light(b, kernels, &shadowed, &mut packet);
-                let (eye, secondary) = stages.split_at_mut(1);
-                for (next, kind) in secondary
-                    .iter_mut()
-                    .zip([Secondary::Mirror, Secondary::Refracted])
-                {
-                    eye[0].secondary(b, kind, &mut packet);
-                    next.trace(b, kernels, &packet, 0.0);
-                    next.light(b, kernels, &shadowed, &mut packet);
+                for (i, &(from, kind)) in FOLLOW.iter().enumerate().take(depth - 1) {
+                    let (done, next) = stages.split_at_mut(i + 1);
+                    done[from].secondary(b, kind, &mut packet);
+                    next[0].trace(b, kernels, &packet, 0.0);
+                    next[0].light(b, kernels, &shadowed, &mut packet);
                 }
                 let eye = &stages[EYE];
                 for (k, &(i, rng)) in pixels[..n].iter().enumerate() {
