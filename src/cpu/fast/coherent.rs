@@ -4,14 +4,14 @@
 //! occlusion packet, then the mirror rays off the surfaces they met as another, and the
 //! refracted rays as a third, and those rays' shadow rays to each light as more (a
 //! `Stage` each: the camera rays, their mirror rays, their refracted rays and those rays'
-//! refracted rays); every other ray (area light samples, deeper bounces) is walked alone
-//! when the shading asks for it.
-//! Mirror rays off curved surfaces diverge, but a block's still share most of their path
-//! through the tree: traced in packets, teapot-6's 1080p render took 15% less time and
-//! balls-4's 3% less (one run each way, alternating), and lanes that part from the rest go
-//! on alone (`packet::single`). So do the rays through glass: gears-4's 1080p render took
-//! 9% less time with the rays that enter it and their shadow rays in packets, and 7% less
-//! again with the rays that leave it (docs/bvh.md).
+//! refracted rays: `stage.rs`); every other ray (area light samples, deeper bounces) is
+//! walked alone when the shading asks for it. Mirror rays off curved surfaces diverge, but
+//! a block's still share most of their path through the tree: traced in packets,
+//! teapot-6's 1080p render took 15% less time and balls-4's 3% less (one run each way,
+//! alternating), and lanes that part from the rest go on alone (`packet::single`). So do
+//! the rays through glass: gears-4's 1080p render took 9% less time with the rays that
+//! enter it and their shadow rays in packets, and 7% less again with the rays that leave
+//! it (docs/bvh.md).
 //!
 //! Each pixel is then shaded by `shade::trace`, the code every pixel runs, with a `Tracer`
 //! (`Known`) that answers the rays traced beforehand from the packets' answers, which are
@@ -29,249 +29,20 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::lights::{Surfaces, light_rays, packed};
+use super::lights::packed;
 use super::packet::{Kernels, MAX_LANES, Packet};
+use super::stage::{Lit, Secondary, Stage};
 use super::tracer::Alone;
 use super::wide_ray;
 use crate::cpu::intersect::lanes_of;
 use crate::cpu::pixel::{aov, sample_ray};
-use crate::cpu::shade::{
-    Shaded, Surface, Tracer, count_nodes, light_sample, offset_origin, reflect_dir, refracted_dir,
-    surface, trace, unlit,
-};
-use crate::cpu::texture::textured;
+use crate::cpu::shade::{Shaded, Surface, Tracer, count_nodes, light_sample, surface, trace};
 use crate::cpu::types::{Bindings, Hit, Ray, RayCounts};
 use crate::gpu_types::*;
 
-/// What a point or directional light gives a surface met by a packet's ray, worked out
-/// from its shadow packet: `light_sample`'s answer, with the node fetches of its shadow
-/// ray and whether the packet traced it (rather than a walk of its own).
-#[derive(Clone, Copy)]
-struct Lit {
-    sample: Option<Vec3>,
-    nodes: u32,
-    packed: bool,
-}
-
-impl Lit {
-    /// Its sample, with its shadow ray's node fetches, and whether a packet traced it,
-    /// added to `counts` as `light_sample` counts a shadow ray (which `direct` then
-    /// counts as a ray).
-    #[inline(always)]
-    fn counted(&self, counts: &mut RayCounts) -> Option<Vec3> {
-        if self.sample.is_some() {
-            counts.shadow_nodes += u64::from(self.nodes);
-            counts.shadow_packed += u64::from(self.packed);
-        }
-        self.sample
-    }
-}
-
-const UNLIT: Lit = Lit {
-    sample: None,
-    nodes: 0,
-    packed: false,
-};
-
-/// What a lane without a surface holds in a stage's array of surfaces.
-const NO_SURFACE: Surface = Surface {
-    point: Vec3::ZERO,
-    ng: Vec3::ZERO,
-    ns: Vec3::ZERO,
-    entering: false,
-    material: 0,
-};
-
-const NO_RAY: Ray = Ray {
-    origin: Vec3::ZERO,
-    dir: Vec3::X,
-};
-
-/// What a lane holds in a stage's array of hits before a packet answers it.
-const NO_HIT_YET: Hit = Hit {
-    t: 0.0,
-    prim: NO_PRIM,
-    u: 0.0,
-    v: 0.0,
-    cost: 0,
-    nodes: 0,
-};
-
-/// One kind of a block's rays (its camera rays, their mirror rays, their refracted rays
-/// or those rays' refracted rays) traced as a packet and shaded ahead of the pixels' own shading: each lane's ray
-/// and hit, the surface it met, and what each point or directional light gives that
-/// surface, its shadow rays traced as one packet a light. Kept from block to block and
-/// written in place: arrays built afresh for each block were copied through temporaries a
-/// field at a time, and the wide loads after the narrow stores stalled (a tenth of
-/// teapot-6's render, by `perf`).
-struct Stage {
-    rays: [Ray; MAX_LANES],
-    tmin: f32,
-    /// The lanes holding a ray.
-    traced: u32,
-    hits: [Hit; MAX_LANES],
-    /// The lanes the packet answered (rather than walks of their own).
-    packed: u32,
-    /// The surfaces of the lanes in `met` (those whose ray met one).
-    surfaces: [Surface; MAX_LANES],
-    met: u32,
-    /// `lights.len() / MAX_LANES` a lane: one a point or directional light, in the
-    /// lights' order.
-    lights: Vec<Lit>,
-    /// The primitive that blocked a lane of the last shadow packet to each of the
-    /// `shadowed` lights, tested first by the next (`Kernels::transmissions`' hint).
-    blockers: Vec<Option<u32>>,
-}
-
-impl Stage {
-    fn new(shadowed: usize) -> Self {
-        Stage {
-            rays: [NO_RAY; MAX_LANES],
-            tmin: 0.0,
-            traced: 0,
-            hits: [NO_HIT_YET; MAX_LANES],
-            packed: 0,
-            surfaces: [NO_SURFACE; MAX_LANES],
-            met: 0,
-            lights: vec![UNLIT; MAX_LANES * shadowed],
-            blockers: vec![None; shadowed],
-        }
-    }
-
-    /// Traces the rays of `packet` (each from `tmin`), and keeps them with their hits.
-    fn trace(&mut self, b: &Bindings, kernels: &Kernels, packet: &Packet, tmin: f32) {
-        self.traced = packet.lanes();
-        self.tmin = tmin;
-        self.met = 0;
-        for k in lanes_of(self.traced) {
-            // Field by field: a copy whole read the ray back in loads that straddled the
-            // packet's stores.
-            let ray = packet.ray(k);
-            (self.rays[k].origin, self.rays[k].dir) = (ray.origin, ray.dir);
-        }
-        self.packed = if self.traced == 0 {
-            0
-        } else {
-            kernels.closest_hits(b, packet, &mut self.hits)
-        };
-    }
-
-    /// Finds the surfaces the rays met and lights them with each of the `shadowed` lights
-    /// (`packet` is the scratch for the shadow rays).
-    fn light(&mut self, b: &Bindings, kernels: &Kernels, shadowed: &[usize], packet: &mut Packet) {
-        match kernels.lanes() {
-            4 => self.light_lanes::<4>(b, kernels, shadowed, packet),
-            8 => self.light_lanes::<8>(b, kernels, shadowed, packet),
-            _ => self.light_lanes::<MAX_LANES>(b, kernels, shadowed, packet),
-        }
-    }
-
-    /// `light` for packets of `N` lanes: the lights' arithmetic worked out for those lanes
-    /// only (`Surfaces`).
-    fn light_lanes<const N: usize>(
-        &mut self,
-        b: &Bindings,
-        kernels: &Kernels,
-        shadowed: &[usize],
-        packet: &mut Packet,
-    ) {
-        self.met = 0;
-        for k in lanes_of(self.traced).filter(|&k| self.hits[k].prim != NO_PRIM) {
-            self.surfaces[k] = surface(b, &self.rays[k], &self.hits[k]);
-            self.met |= 1 << k;
-        }
-        if self.met == 0 {
-            return;
-        }
-        let dirs = self.rays.map(|ray| ray.dir);
-        let lit = Surfaces::new::<N>(b, (&self.surfaces, self.met), &self.hits, &dirs);
-        let mut light = [Vec3::ZERO; MAX_LANES];
-        let mut nodes = [0; MAX_LANES];
-        for (j, &li) in shadowed.iter().enumerate() {
-            let rays = light_rays::<N>(b, &lit, &b.lights[li], packet);
-            let packed = if packet.lanes() == 0 {
-                0
-            } else {
-                kernels.transmissions(b, packet, &mut light, &mut nodes, &mut self.blockers[j])
-            };
-            for k in lanes_of(self.met) {
-                self.lights[k * shadowed.len() + j] = if rays.live & 1 << k != 0 {
-                    // `light_sample`'s product, in its order.
-                    Lit {
-                        sample: Some(light[k] * rays.intensity * rays.term(k)),
-                        nodes: nodes[k],
-                        packed: packed & 1 << k != 0,
-                    }
-                } else {
-                    UNLIT
-                };
-            }
-        }
-    }
-
-    /// `direct` at lane `k`'s surface (of material `m`, `textured`), summed from the
-    /// stage's light samples in the lights' order and counted as `light_sample` and
-    /// `direct` count them: every light is packed.
-    #[inline(always)]
-    fn direct(&self, b: &Bindings, k: usize, m: &GpuMaterial, counts: &mut RayCounts) -> Vec3 {
-        let shadowed = self.lights.len() / MAX_LANES;
-        let mut colour = unlit(b.globals, &self.surfaces[k], m);
-        for lit in &self.lights[k * shadowed..(k + 1) * shadowed] {
-            if let Some(c) = lit.counted(counts) {
-                counts.shadow += 1;
-                colour += c;
-            }
-        }
-        colour
-    }
-
-    /// Lane `k`'s surface material (`textured`).
-    #[inline(always)]
-    fn material(&self, b: &Bindings, k: usize) -> GpuMaterial {
-        let m = &b.materials[self.surfaces[k].material as usize];
-        textured(b, m, &self.hits[k])
-    }
-
-    /// Sets `packet` to the `kind` rays that the shading sends on from the surfaces the
-    /// stage's rays met, as `trace` makes them (`shade::secondary`), in the lanes of those
-    /// rays. A ray made otherwise would be walked alone, not answered wrongly: the
-    /// shading's rays are matched to the packets' bit for bit (`holds`).
-    fn secondary(&self, b: &Bindings, kind: Secondary, packet: &mut Packet) {
-        packet.clear();
-        for k in lanes_of(self.met) {
-            let s = &self.surfaces[k];
-            let m = &b.materials[s.material as usize];
-            let dir = match kind {
-                Secondary::Mirror if m.ks > 0.0 => reflect_dir(self.rays[k].dir, s.ns),
-                // `trace`'s material, textured: the same index of refraction to the bit.
-                Secondary::Refracted if m.t > 0.0 => {
-                    refracted_dir(s, &self.material(b, k), self.rays[k].dir)
-                }
-                _ => continue,
-            };
-            let ray = Ray {
-                origin: offset_origin(s, dir, b.globals.epsilon),
-                dir,
-            };
-            packet.set(k, &ray, 0.0, NO_HIT);
-        }
-    }
-
-    /// Whether `(ray, tmin, tmax)` is lane `k`'s ray, bit for bit (its answer, then, is
-    /// lane `k`'s hit).
-    fn holds(&self, k: usize, ray: &Ray, tmin: f32, tmax: f32) -> bool {
-        let same =
-            |a: Vec3, b: Vec3| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits);
-        same(self.rays[k].origin, ray.origin)
-            && same(self.rays[k].dir, ray.dir)
-            && self.tmin.to_bits() == tmin.to_bits()
-            && NO_HIT.to_bits() == tmax.to_bits()
-    }
-}
-
 /// The stages of rays traced ahead: the camera rays (`EYE`), their mirror rays
 /// (`MIRROR`), their refracted rays (`REFRACTED`) and those rays' refracted rays
-/// (`REFRACTED_TWICE`: through a pane or a gear of glass and out, as coherent as the rays
+/// (through a pane or a gear of glass and out, as coherent as the rays
 /// that went in; gears-4's 1080p render 7% faster with them); other rays are walked alone.
 /// The mirror rays' mirror rays, and theirs, were measured as further stages on a Zen 4 EPYC
 /// (2026-11-29): 1080p, 4 spp, five alternating runs each, no change beyond the machine's
@@ -282,20 +53,12 @@ const STAGES: usize = 4;
 const EYE: usize = 0;
 const MIRROR: usize = 1;
 const REFRACTED: usize = 2;
-const REFRACTED_TWICE: usize = 3;
 /// Each stage after the camera rays': the stage whose surfaces send its rays, and which.
 const FOLLOW: [(usize, Secondary); STAGES - 1] = [
     (EYE, Secondary::Mirror),
     (EYE, Secondary::Refracted),
     (REFRACTED, Secondary::Refracted),
 ];
-
-/// The rays a stage after the camera rays' holds.
-#[derive(Clone, Copy)]
-enum Secondary {
-    Mirror,
-    Refracted,
-}
 
 /// One pixel's rays traced beforehand (lane `k` of each stage: its camera ray, its mirror
 /// and its refracted ray and that ray's refracted ray, with their surfaces and what each
@@ -364,11 +127,10 @@ impl Tracer for Known<'_> {
             self.waiting &= !(1 << i);
             self.next = (stage.met & 1 << k != 0).then_some(i);
             let packed = u64::from(stage.packed & 1 << k != 0);
-            match i {
-                EYE => self.counts.eye_packed += packed,
-                MIRROR => self.counts.reflected_packed += packed,
-                REFRACTED | REFRACTED_TWICE => self.counts.refracted_packed += packed,
-                _ => unreachable!("{STAGES} stages"),
+            match stage.kind {
+                None => self.counts.eye_packed += packed,
+                Some(Secondary::Mirror) => self.counts.reflected_packed += packed,
+                Some(Secondary::Refracted) => self.counts.refracted_packed += packed,
             }
             return stage.hits[k];
         }
@@ -540,7 +302,11 @@ fn render_tile_with<const AHEAD: bool>(
         2 => 3,
         _ => STAGES,
     };
-    let mut stages: Vec<Stage> = (0..depth).map(|_| Stage::new(shadowed.len())).collect();
+    let kinds = std::iter::once(None).chain(FOLLOW.map(|(_, kind)| Some(kind)));
+    let mut stages: Vec<Stage> = kinds
+        .take(depth)
+        .map(|kind| Stage::new(shadowed.len(), kind))
+        .collect();
     let mut blockers = vec![None; b.lights.len() * HINTS];
     for s in samples {
         for by in rows.clone().step_by(bh as usize) {

@@ -6,7 +6,8 @@
 //!   `leaf` its leaves' primitives several at once; `isa` the x86-64-v3 and v4 copies
 //!   chosen at run time; `simd` the instruction sets' names in `GPURT_SIMD`.
 //! - `packet`: coherent rays in SIMD lanes (packets of 4 to 16) through the same tree;
-//!   `coherent` renders tiles with them, `lights` their shadow rays.
+//!   `coherent` renders tiles with them, a `stage` a kind of ray at a time, `lights`
+//!   their shadow rays.
 //! - `tracer`: the seam where `shade` gets its rays' answers, from one ray's walk or from
 //!   a packet's.
 
@@ -17,6 +18,7 @@ pub(crate) mod leaf;
 pub(crate) mod lights;
 pub mod packet;
 pub mod simd;
+mod stage;
 pub mod tracer;
 pub mod wide;
 pub mod wide_ray;
