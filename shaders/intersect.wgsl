@@ -40,27 +40,30 @@ fn intersect_triangle(v0: vec3<f32>, e1: vec3<f32>, e2: vec3<f32>, ray: Ray) -> 
     return vec3<f32>(dot(e2, qvec) * inv, u, v);
 }
 
-fn cone_valid(t: f32, cv: f32, dv: f32, height: f32, r0: f32, k: f32) -> bool {
+fn cone_valid(t: f32, cv: f32, dv: f32, r0: f32, delta: f32) -> bool {
     let s = cv + t * dv;
-    return t != NO_HIT && s >= 0.0 && s <= height && r0 + k * s >= 0.0;
+    return t != NO_HIT && s >= 0.0 && s <= 1.0 && r0 + delta * s >= 0.0;
 }
 
 // Solved from the ray's closest approach to the cone's middle, as the sphere is: far from
-// a thin cone the quadratic's terms would otherwise cancel away the hit's precision.
+// a thin cone the quadratic's terms would otherwise cancel away the hit's precision. Along
+// the axis by `s`, 0 at the base and 1 at the apex (a point's offset from the base dotted
+// with the axis, over the axis's squared length), where the radius is `r0 + delta * s`:
+// one division, where a unit axis and the height took a square root and two.
 fn intersect_cone(base: vec3<f32>, r0: f32, apex: vec3<f32>, r1: f32, ray: Ray) -> vec2<f32> {
     let axis = apex - base;
-    let height = length(axis);
-    let a = axis / height;
-    let k = (r1 - r0) / height;
+    let inv = 1.0 / dot(axis, axis);
+    let delta = r1 - r0;
     let tc = dot(0.5 * (base + apex) - ray.origin, ray.dir);
     let co = ray.origin + tc * ray.dir - base;
-    let dv = dot(ray.dir, a);
-    let cv = dot(co, a);
-    let dp = ray.dir - dv * a;
-    let cp = co - cv * a;
-    let rr = r0 + k * cv;
-    let qa = dot(dp, dp) - k * k * dv * dv;
-    let qb = dot(cp, dp) - k * rr * dv;
+    let dv = dot(ray.dir, axis) * inv;
+    let cv = dot(co, axis) * inv;
+    let dp = ray.dir - dv * axis;
+    let cp = co - cv * axis;
+    let rr = r0 + delta * cv;
+    let kd = delta * dv;
+    let qa = dot(dp, dp) - kd * kd;
+    let qb = dot(cp, dp) - rr * kd;
     let qc = dot(cp, cp) - rr * rr;
     var t = vec2<f32>(NO_HIT);
     if (abs(qa) < 1e-12) {
@@ -73,12 +76,12 @@ fn intersect_cone(base: vec3<f32>, r0: f32, apex: vec3<f32>, r1: f32, ray: Ray) 
             return t;
         }
         let sq = sqrt(disc);
-        let r0 = (-qb - sq) / qa;
-        let r1 = (-qb + sq) / qa;
-        t = vec2<f32>(min(r0, r1), max(r0, r1));
+        let t0 = (-qb - sq) / qa;
+        let t1 = (-qb + sq) / qa;
+        t = vec2<f32>(min(t0, t1), max(t0, t1));
     }
-    let ok0 = cone_valid(t.x, cv, dv, height, r0, k);
-    let ok1 = cone_valid(t.y, cv, dv, height, r0, k);
+    let ok0 = cone_valid(t.x, cv, dv, r0, delta);
+    let ok1 = cone_valid(t.y, cv, dv, r0, delta);
     if (ok0 && ok1) {
         return t + vec2<f32>(tc);
     } else if (ok0) {

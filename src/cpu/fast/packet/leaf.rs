@@ -93,13 +93,12 @@ pub fn sphere<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
 #[inline(always)]
 pub fn cone<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
     let s = |x: f32| l.splat(x);
-    // The cone's own constants, once for all lanes.
+    // The cone's own constants, once for all lanes (`inv`, `delta`: `intersect_cone`'s).
     let axis = p.p1 - p.p0;
-    let height = axis.length();
-    let a = axis / height;
-    let k = (p.f1 - p.f0) / height;
+    let inv = s(1.0 / axis.dot(axis));
+    let delta = p.f1 - p.f0;
     let mid = 0.5 * (p.p0 + p.p1);
-    let a = [s(a.x), s(a.y), s(a.z)];
+    let a = [s(axis.x), s(axis.y), s(axis.z)];
     let dot = |u: &[L::F; 3], v: &[L::F; 3]| dot(l, u, v);
     let [o, d] = [&r.o, &r.d];
     let to_mid = [
@@ -113,8 +112,8 @@ pub fn cone<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
         l.sub(l.add(o[1], l.mul(tc, d[1])), s(p.p0.y)),
         l.sub(l.add(o[2], l.mul(tc, d[2])), s(p.p0.z)),
     ];
-    let dv = dot(d, &a);
-    let cv = dot(&co, &a);
+    let dv = l.mul(dot(d, &a), inv);
+    let cv = l.mul(dot(&co, &a), inv);
     let dp = [
         l.sub(d[0], l.mul(dv, a[0])),
         l.sub(d[1], l.mul(dv, a[1])),
@@ -125,9 +124,10 @@ pub fn cone<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
         l.sub(co[1], l.mul(cv, a[1])),
         l.sub(co[2], l.mul(cv, a[2])),
     ];
-    let rr = l.add(s(p.f0), l.mul(s(k), cv));
-    let qa = l.sub(dot(&dp, &dp), l.mul(l.mul(s(k * k), dv), dv));
-    let qb = l.sub(dot(&cp, &dp), l.mul(l.mul(s(k), rr), dv));
+    let rr = l.add(s(p.f0), l.mul(s(delta), cv));
+    let kd = l.mul(s(delta), dv);
+    let qa = l.sub(dot(&dp, &dp), l.mul(kd, kd));
+    let qb = l.sub(dot(&cp, &dp), l.mul(rr, kd));
     let qc = l.sub(dot(&cp, &cp), l.mul(rr, rr));
     let (zero, no) = (s(0.0), s(NO_HIT));
     // |qa| < 1e-12 (a NaN `qa` fails it, as the scalar's `abs` does).
@@ -144,8 +144,8 @@ pub fn cone<L: Lanes>(l: L, p: &GpuPrim, r: &Rays<L>) -> (L::F, L::F) {
     // no root (the scalar returns before this test there).
     let no_roots = l.and_not(l.lt(disc, zero), parallel);
     let (ok0, ok1) = (
-        l.and_not(cone_valid(l, t0, (cv, dv), height, (p.f0, k)), no_roots),
-        l.and_not(cone_valid(l, t1, (cv, dv), height, (p.f0, k)), no_roots),
+        l.and_not(cone_valid(l, t0, (cv, dv), (p.f0, delta)), no_roots),
+        l.and_not(cone_valid(l, t1, (cv, dv), (p.f0, delta)), no_roots),
     );
     let (t0, t1) = (l.add(t0, tc), l.add(t1, tc));
     (
@@ -166,20 +166,17 @@ fn dot<L: Lanes>(l: L, a: &[L::F; 3], b: &[L::F; 3]) -> L::F {
 }
 
 /// `intersect_cone`'s test of a crossing `t`: between the caps (the axis coordinate `cv +
-/// t dv` in `[0, height]`) where the radius `f0 + k s` is not negative.
+/// t dv` in `[0, 1]`) where the radius `f0 + delta s` is not negative.
 #[inline(always)]
-fn cone_valid<L: Lanes>(
-    l: L,
-    t: L::F,
-    (cv, dv): (L::F, L::F),
-    height: f32,
-    (f0, k): (f32, f32),
-) -> L::M {
+fn cone_valid<L: Lanes>(l: L, t: L::F, (cv, dv): (L::F, L::F), (f0, delta): (f32, f32)) -> L::M {
     let zero = l.splat(0.0);
     let sv = l.add(cv, l.mul(t, dv));
     let ok = l.and(l.ne(t, l.splat(NO_HIT)), l.le(zero, sv));
-    let ok = l.and(ok, l.le(sv, l.splat(height)));
-    l.and(ok, l.le(zero, l.add(l.splat(f0), l.mul(l.splat(k), sv))))
+    let ok = l.and(ok, l.le(sv, l.splat(1.0)));
+    l.and(
+        ok,
+        l.le(zero, l.add(l.splat(f0), l.mul(l.splat(delta), sv))),
+    )
 }
 
 /// `intersect_plane` with every lane.
