@@ -5,7 +5,7 @@
 # `gpurt-tests` (the integration tests), `gpurt-debug` (the binary the CLI tests run) and
 # `shared.tar.xz` (the scenes the tests read); `.gl/` holds the Vulkan loader packages.
 #
-# Usage: benches/gpu-device.sh [collapse] [wavefront] [pooled] [goals] [compile] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
+# Usage: benches/gpu-device.sh [collapse] [stack] [wavefront] [pooled] [goals] [compile] [qwide] [tune] [images] [bench] [quick] [tests] [loss] [huge]
 #        (default: wavefront images bench tests, run in that order whatever the order given)
 # Output goes to $OUT (or ./device-out): wavefront-*.md, images.log, bench.md, bench.log,
 # tests.log, huge.log. `wavefront` times the seven scenes on the GPU through the one
@@ -22,7 +22,10 @@
 # tree and on the high-quality one. `collapse` benches the seven scenes, GPU only, at
 # 1080p and 4K, 1 and 16 spp, on the wide trees of the greedy collapse (the default)
 # and then of the SAH-optimal one (GPURT_COLLAPSE=optimal), each capped at
-# COLLAPSE_TIMEOUT seconds (150 by default). `compile` prints each walk's and kernel's cold
+# COLLAPSE_TIMEOUT seconds (150 by default). `stack` benches balls-4, gears-4, mount-7
+# and teapot-6 at 4K, 1 and 16 spp, GPU only, on the greedy trees, then on the greedy
+# trees with a stack of at least 40 entries (GPURT_STACK), then on the optimal trees,
+# each capped at STACK_TIMEOUT seconds (120). `compile` prints each walk's and kernel's cold
 # compile time (the driver's shader cache off) on five scenes. `qwide` times the seven scenes on the quantised four-wide
 # walk (GPURT_TRAVERSAL=qwide) through `main` and `pooled`, at 1 and 16 spp, beside the
 # `pooled` step's rows on the wide walk. `tune` runs `gpurt tune` on the seven scenes at
@@ -124,6 +127,23 @@ if [[ $what == *collapse* ]]; then
         echo "$c: exit $?"
         grep -E '^(adapter|traversal|bvh) ' "$OUT/collapse-$c.log"
         cat "$OUT/collapse-$c.md"
+    done
+fi
+
+if [[ $what == *stack* ]]; then
+    # Whether the stack's size is what slowed balls-4 and gears-4 on the optimal trees
+    # (docs/speed.md): the greedy trees with the stack they need, then with the 40 entries
+    # gears-4's optimal tree needs (32 on the others'), then the optimal trees, one binary.
+    echo "== stack"
+    four=("${scenes[@]:0:4}")
+    for run in "greedy -" "greedy 40" "optimal -"; do
+        set -- $run
+        GPURT_COLLAPSE=$1 GPURT_STACK=${2#-} timeout "${STACK_TIMEOUT:-120}" ./.device/gpurt bench \
+            "${four[@]}" --sizes 3840x2160 --spp "$spps" --frames 3 --backend gpu \
+            >"$OUT/stack-$1-$2.md" 2>"$OUT/stack-$1-$2.log"
+        echo "$1, stack floor $2: exit $?"
+        grep -E '^(adapter|stack|bvh) ' "$OUT/stack-$1-$2.log"
+        cat "$OUT/stack-$1-$2.md"
     done
 fi
 

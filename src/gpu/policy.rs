@@ -255,6 +255,17 @@ const GPU_DISPATCH_SAMPLES: u64 = 1 << 24;
 
 /// A positive whole number from the environment variable `name`; `None` where it is
 /// unset or empty.
+/// `GPURT_STACK`: the fewest entries of each invocation's traversal stack, rounded up to a
+/// multiple of 8 as the stack a tree needs is (`Specialization::stack`); never fewer than
+/// the tree needs, which the walk could overflow. For measuring what the stack's size
+/// costs a GPU apart from the tree (the SAH-optimal collapse's trees need deeper stacks
+/// on some scenes, docs/speed.md); 0, no floor, by default.
+pub(super) fn stack_floor() -> Result<u32> {
+    let n = count_from_env("GPURT_STACK")?.unwrap_or(0);
+    // At most the fixed stack the walks once had, which every tree fits.
+    Ok(n.min(crate::gpu_types::TRAVERSAL_STACK as u64) as u32)
+}
+
 fn count_from_env(name: &str) -> Result<Option<u64>> {
     match std::env::var(name).as_deref() {
         Err(_) | Ok("") => Ok(None),

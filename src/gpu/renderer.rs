@@ -44,6 +44,9 @@ pub struct GpuRenderer {
     compile_time: Mutex<Duration>,
     /// The work of a dispatch and of a submission on this device (`policy::shape_for`).
     shape: Shape,
+    /// Entries of the traversal stack at least, whatever the scene's tree needs
+    /// (`policy::stack_floor`, `GPURT_STACK`); 0 by default.
+    stack_floor: u32,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
     /// How its shaders read the scene's nodes, primitives and normals.
@@ -73,11 +76,13 @@ pub struct GpuRenderer {
 impl GpuRenderer {
     /// The pipeline a frame of `scene` needs on this renderer.
     fn spec(&self, scene: &SceneBuffers, globals: &GpuGlobals) -> Specialization {
+        let spec = Specialization::of(scene, globals);
         Specialization {
             layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
             pooled: pooled_for(self.pooled, globals),
             shadow_rays: self.shadow_rays,
-            ..Specialization::of(scene, globals)
+            stack: spec.stack.max(self.stack_floor.next_multiple_of(8)),
+            ..spec
         }
     }
 
@@ -86,6 +91,11 @@ impl GpuRenderer {
     /// use the walk `frame` gives for its scene.
     pub fn traversal(&self) -> u32 {
         self.traversal
+    }
+
+    /// The fewest entries of its traversal stack (`GPURT_STACK`; 0: what each tree needs).
+    pub fn stack_floor(&self) -> u32 {
+        self.stack_floor
     }
 
     /// `globals` with this renderer's traversal for `scene` (`SceneBuffers::traversal_for`)

@@ -132,6 +132,11 @@ pub fn run(config: &BenchConfig) -> Result<()> {
             TRAVERSAL_NAMES[t as usize],
             TRAVERSAL_NAMES.join("|")
         );
+        let stack = match r.stack_floor() {
+            0 => "as each scene's tree needs".to_string(),
+            n => format!("at least {} entries", n.next_multiple_of(8)),
+        };
+        eprintln!("stack       {stack} (GPURT_STACK=N for at least N)");
         eprintln!(
             "scene data  {} (GPURT_FETCH=textures|buffers to choose)",
             r.fetch().name()

@@ -15,7 +15,7 @@ use crate::gpu::pipeline::{
     DiskCache, Modules, ResumePipelines, bind_group_layout, pipeline_layouts, resume_group_layout,
 };
 use crate::gpu::policy::{
-    Kernels, Strategy, defaults, fetch_for, kernels_for, shape_for, traversal_for,
+    Kernels, Strategy, defaults, fetch_for, kernels_for, shape_for, stack_floor, traversal_for,
 };
 use crate::gpu::shaders::Fetch;
 use crate::gpu::tuning;
@@ -118,6 +118,7 @@ impl GpuRenderer {
             pipelines: Mutex::new(HashMap::new()),
             compile_time: Mutex::new(start.elapsed()),
             shape: shape_for(software)?,
+            stack_floor: stack_floor()?,
             traversal: traversal_for(chosen.traversal)?,
             fetch,
             tuning,

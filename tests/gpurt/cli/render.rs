@@ -350,7 +350,7 @@ fn the_default_backend_is_the_cpu_on_software_adapters_and_the_gpu_on_hardware_a
 /// scene the high one unless `medium` is; the same image either way (the trees differ,
 /// the hits do not), and a value it does not know is refused before anything is written.
 #[test]
-fn gpurt_bvh_and_gpurt_collapse_choose_the_trees_for_measuring() {
+fn gpurt_bvh_collapse_and_stack_choose_the_trees_and_the_stack_for_measuring() {
     let d = workdir("bvh-quality");
     std::fs::write(d.join("ball.nff"), SCENE).unwrap();
     let n = gpurt::bvh::THOROUGH_BUILD_MAX_PRIMS + 1;
@@ -421,6 +421,43 @@ fn gpurt_bvh_and_gpurt_collapse_choose_the_trees_for_measuring() {
     assert_ne!(walk("optimal", "optimal.png"), greedy);
     let same = gpurt(&["diff", "greedy.png", "optimal.png"], &d);
     assert!(same.status.success(), "{}", stderr(&same));
+
+    // A floor under the traversal stack (`GPURT_STACK`) changes its size, never what the
+    // walk finds: the largest stack renders the same pixels and fetches the same nodes.
+    let stacked = |floor: &str, out: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["many.nff", "--backend", "gpu", "--stats", "-o", out])
+            .args(["--width", "48", "--height", "48"])
+            .current_dir(&d)
+            .env("GPURT_CACHE_DIR", "")
+            .env("GPURT_TRAVERSAL", "wide")
+            .env("GPURT_STACK", floor)
+            .output()
+            .expect("gpurt runs");
+        assert!(o.status.success(), "{floor}: {}", stderr(&o));
+        let err = stderr(&o);
+        let line = err.lines().find(|l| l.starts_with("gpu eye"));
+        line.expect("an eye-ray line").to_string()
+    };
+    assert_eq!(stacked("64", "stack-64.png"), greedy);
+    let same = gpurt(
+        &["diff", "greedy.png", "stack-64.png", "--max-bad", "0"],
+        &d,
+    );
+    assert!(same.status.success(), "{}", stderr(&same));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+        .args(["ball.nff", "--backend", "gpu", "-o", "bad.png"])
+        .current_dir(&d)
+        .env("GPURT_STACK", "deep")
+        .output()
+        .expect("gpurt runs");
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(
+        err.contains("GPURT_STACK=deep: expected a whole number above 0"),
+        "{err}"
+    );
+    assert!(!d.join("bad.png").exists());
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
         .args(["ball.nff", "--backend", "gpu", "-o", "bad.png"])
         .current_dir(&d)
