@@ -68,22 +68,23 @@ static void cone_bounds(const struct RTCBoundsFunctionArguments *args) {
 
 static float dot3(const float *a, const float *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
-/* Our intersect_cone: the two crossings of the side between the caps, or INFINITY. */
+/* Our intersect_cone: the two crossings of the side between the caps, or INFINITY. The
+ * axis measured by s, 0 at the base and 1 at the apex, as ours is (one division). */
 static void cone_hits(const Cone *c, const float *o, const float *d, float t[2]) {
     float axis[3] = {c->p1[0] - c->p0[0], c->p1[1] - c->p0[1], c->p1[2] - c->p0[2]};
-    float height = sqrtf(dot3(axis, axis));
-    float a[3] = {axis[0] / height, axis[1] / height, axis[2] / height};
-    float k = (c->r1 - c->r0) / height;
+    float inv = 1.0f / dot3(axis, axis);
+    float delta = c->r1 - c->r0;
     float mid[3] = {0.5f * (c->p0[0] + c->p1[0]) - o[0], 0.5f * (c->p0[1] + c->p1[1]) - o[1],
                     0.5f * (c->p0[2] + c->p1[2]) - o[2]};
     float tc = dot3(mid, d);
     float co[3], dp[3], cp[3];
     for (int i = 0; i < 3; i++) co[i] = o[i] + tc * d[i] - c->p0[i];
-    float dv = dot3(d, a), cv = dot3(co, a);
-    for (int i = 0; i < 3; i++) { dp[i] = d[i] - dv * a[i]; cp[i] = co[i] - cv * a[i]; }
-    float rr = c->r0 + k * cv;
-    float qa = dot3(dp, dp) - k * k * dv * dv;
-    float qb = dot3(cp, dp) - k * rr * dv;
+    float dv = dot3(d, axis) * inv, cv = dot3(co, axis) * inv;
+    for (int i = 0; i < 3; i++) { dp[i] = d[i] - dv * axis[i]; cp[i] = co[i] - cv * axis[i]; }
+    float rr = c->r0 + delta * cv;
+    float kd = delta * dv;
+    float qa = dot3(dp, dp) - kd * kd;
+    float qb = dot3(cp, dp) - rr * kd;
     float qc = dot3(cp, cp) - rr * rr;
     float r[2] = {INFINITY, INFINITY};
     if (fabsf(qa) < 1e-12f) {
@@ -97,7 +98,7 @@ static void cone_hits(const Cone *c, const float *o, const float *d, float t[2])
     }
     for (int i = 0; i < 2; i++) {
         float s = cv + r[i] * dv;
-        int ok = r[i] != INFINITY && s >= 0.0f && s <= height && c->r0 + k * s >= 0.0f;
+        int ok = r[i] != INFINITY && s >= 0.0f && s <= 1.0f && c->r0 + delta * s >= 0.0f;
         t[i] = ok ? r[i] + tc : INFINITY;
     }
 }
