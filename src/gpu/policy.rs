@@ -263,7 +263,7 @@ const GPU_DISPATCH_SAMPLES: u64 = 1 << 24;
 pub(super) fn stack_floor() -> Result<u32> {
     let n = count_from_env("GPURT_STACK")?.unwrap_or(0);
     // At most the fixed stack the walks once had, which every tree fits.
-    Ok(n.min(crate::gpu_types::TRAVERSAL_STACK as u64) as u32)
+    Ok((n.min(crate::gpu_types::TRAVERSAL_STACK as u64) as u32).next_multiple_of(8))
 }
 
 fn count_from_env(name: &str) -> Result<Option<u64>> {

@@ -44,8 +44,8 @@ pub struct GpuRenderer {
     compile_time: Mutex<Duration>,
     /// The work of a dispatch and of a submission on this device (`policy::shape_for`).
     shape: Shape,
-    /// Entries of the traversal stack at least, whatever the scene's tree needs
-    /// (`policy::stack_floor`, `GPURT_STACK`); 0 by default.
+    /// Entries of the traversal stack at least, a multiple of 8, whatever the scene's
+    /// tree needs (`policy::stack_floor`, `GPURT_STACK`); 0 by default.
     stack_floor: u32,
     /// How this renderer's frames walk the BVH (`GpuGlobals::traversal`).
     traversal: u32,
@@ -81,7 +81,7 @@ impl GpuRenderer {
             layer_shift: TEXTURE_WIDTH.ilog2() + self.layer_rows.ilog2(),
             pooled: pooled_for(self.pooled, globals),
             shadow_rays: self.shadow_rays,
-            stack: spec.stack.max(self.stack_floor.next_multiple_of(8)),
+            stack: spec.stack.max(self.stack_floor),
             ..spec
         }
     }

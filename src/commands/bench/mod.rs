@@ -134,7 +134,7 @@ pub fn run(config: &BenchConfig) -> Result<()> {
         );
         let stack = match r.stack_floor() {
             0 => "as each scene's tree needs".to_string(),
-            n => format!("at least {} entries", n.next_multiple_of(8)),
+            n => format!("at least {n} entries"),
         };
         eprintln!("stack       {stack} (GPURT_STACK=N for at least N)");
         eprintln!(

@@ -385,92 +385,66 @@ fn gpurt_bvh_collapse_and_stack_choose_the_trees_and_the_stack_for_measuring() {
     let same = gpurt(&["diff", "a.png", "b.png", "--max-bad", "0"], &d);
     assert!(same.status.success(), "{}", stderr(&same));
 
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(["ball.nff", "--backend", "cpu", "-o", "bad.png"])
-        .current_dir(&d)
-        .env("GPURT_BVH", "mid")
-        .output()
-        .expect("gpurt runs");
-    assert_eq!(o.status.code(), Some(2));
-    assert!(
-        stderr(&o).contains("GPURT_BVH=mid: expected medium or high"),
-        "{}",
-        stderr(&o)
-    );
-    assert!(!d.join("bad.png").exists());
+    // A setting the renderer does not know: exit 2, the variable named, no image.
+    let refused = |backend: &str, var: &str, value: &str, message: &str| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
+            .args(["ball.nff", "--backend", backend, "-o", "bad.png"])
+            .current_dir(&d)
+            .env(var, value)
+            .output()
+            .expect("gpurt runs");
+        assert_eq!(o.status.code(), Some(2), "{var}={value}");
+        let err = stderr(&o);
+        assert!(err.contains(&format!("{var}={value}: {message}")), "{err}");
+        assert!(!d.join("bad.png").exists(), "{var}={value}");
+    };
+    refused("cpu", "GPURT_BVH", "mid", "expected medium or high");
 
-    // The GPU's wide tree, gathered greedily (the default) or SAH-optimally: another
-    // tree, so other node counts, and the same image.
-    let walk = |collapse: &str, out: &str| {
+    // The GPU's wide walk of many.nff with `var` set to `value`: its eye rays' line of
+    // `--stats`.
+    let walk = |var: &str, value: &str, out: &str| {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
             .args(["many.nff", "--backend", "gpu", "--stats", "-o", out])
             .args(["--width", "48", "--height", "48"])
             .current_dir(&d)
             .env("GPURT_CACHE_DIR", "")
             .env("GPURT_TRAVERSAL", "wide")
-            .env("GPURT_COLLAPSE", collapse)
+            .env(var, value)
             .output()
             .expect("gpurt runs");
-        assert!(o.status.success(), "{collapse}: {}", stderr(&o));
+        assert!(o.status.success(), "{var}={value}: {}", stderr(&o));
         let err = stderr(&o);
         let line = err.lines().find(|l| l.starts_with("gpu eye"));
         line.expect("an eye-ray line").to_string()
     };
-    let greedy = walk("", "greedy.png");
-    assert_eq!(walk("greedy", "greedy-named.png"), greedy);
-    assert_ne!(walk("optimal", "optimal.png"), greedy);
+    // The GPU's wide tree, gathered greedily (the default) or SAH-optimally: another
+    // tree, so other node counts, and the same image.
+    let greedy = walk("GPURT_COLLAPSE", "", "greedy.png");
+    assert_eq!(walk("GPURT_COLLAPSE", "greedy", "greedy-named.png"), greedy);
+    assert_ne!(walk("GPURT_COLLAPSE", "optimal", "optimal.png"), greedy);
     let same = gpurt(&["diff", "greedy.png", "optimal.png"], &d);
     assert!(same.status.success(), "{}", stderr(&same));
+    refused(
+        "gpu",
+        "GPURT_COLLAPSE",
+        "best",
+        "expected greedy or optimal",
+    );
 
     // A floor under the traversal stack (`GPURT_STACK`) changes its size, never what the
     // walk finds: the largest stack renders the same pixels and fetches the same nodes.
-    let stacked = |floor: &str, out: &str| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
-            .args(["many.nff", "--backend", "gpu", "--stats", "-o", out])
-            .args(["--width", "48", "--height", "48"])
-            .current_dir(&d)
-            .env("GPURT_CACHE_DIR", "")
-            .env("GPURT_TRAVERSAL", "wide")
-            .env("GPURT_STACK", floor)
-            .output()
-            .expect("gpurt runs");
-        assert!(o.status.success(), "{floor}: {}", stderr(&o));
-        let err = stderr(&o);
-        let line = err.lines().find(|l| l.starts_with("gpu eye"));
-        line.expect("an eye-ray line").to_string()
-    };
-    assert_eq!(stacked("64", "stack-64.png"), greedy);
+    assert_eq!(walk("GPURT_STACK", "64", "stack-64.png"), greedy);
     let same = gpurt(
         &["diff", "greedy.png", "stack-64.png", "--max-bad", "0"],
         &d,
     );
     assert!(same.status.success(), "{}", stderr(&same));
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(["ball.nff", "--backend", "gpu", "-o", "bad.png"])
-        .current_dir(&d)
-        .env("GPURT_STACK", "deep")
-        .output()
-        .expect("gpurt runs");
-    assert_eq!(o.status.code(), Some(2));
-    let err = stderr(&o);
-    assert!(
-        err.contains("GPURT_STACK=deep: expected a whole number above 0"),
-        "{err}"
+    refused(
+        "gpu",
+        "GPURT_STACK",
+        "deep",
+        "expected a whole number above 0",
     );
-    assert!(!d.join("bad.png").exists());
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_gpurt"))
-        .args(["ball.nff", "--backend", "gpu", "-o", "bad.png"])
-        .current_dir(&d)
-        .env("GPURT_COLLAPSE", "best")
-        .output()
-        .expect("gpurt runs");
-    assert_eq!(o.status.code(), Some(2));
-    let err = stderr(&o);
-    assert!(
-        err.contains("GPURT_COLLAPSE=best: expected greedy or optimal"),
-        "{err}"
-    );
-    assert!(!d.join("bad.png").exists());
 }
 
 /// The node bytes a secondary ray fetches on the high-quality tree, held where docs/bvh.md
