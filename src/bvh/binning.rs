@@ -1,13 +1,17 @@
 //! Binned surface-area heuristic over references (`Ref`: a primitive, or the part of one
 //! that a spatial split left on one side), as the high-quality build (`spatial`) weighs
-//! splits: `BINS` bins an axis (`Bins`), the cheapest plane between them (`sweep`), and
+//! splits: bins along an axis (`Bins`), the cheapest plane between them (`sweep`), and
 //! the splits by centroid (`object_split`, `partition_objects`, `median`); the spatial
 //! split's own binning, which cuts triangles, stays with the builder.
 
 use obvhs::aabb::Aabb;
 
-/// Bins an axis, for centroid and spatial splits alike.
+/// Bins an axis, for a split by centroids and a spatial split of a large node.
 pub(super) const BINS: usize = 32;
+
+/// Bins an axis for a spatial split of a node of few references (`spatial::FEW_REFS`):
+/// its triangles span more of its bins, and each is cut at every plane it crosses.
+pub(super) const FEW_BINS: usize = 16;
 
 /// A primitive, or its part inside `b`.
 #[derive(Clone, Copy, Debug)]
@@ -16,35 +20,37 @@ pub(super) struct Ref {
     pub(super) prim: u32,
 }
 
-/// `BINS` equal bins along `axis` from `lo` over `extent`: over the centroids for an
+/// `count` equal bins along `axis` from `lo` over `extent`: over the centroids for an
 /// object split, over the node's box for a spatial one.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Bins {
     pub(super) axis: usize,
     pub(super) lo: f32,
     pub(super) extent: f32,
+    pub(super) count: usize,
 }
 
 impl Bins {
-    /// The bins over `b` on each axis where it has an extent.
-    pub(super) fn over(b: &Aabb) -> impl Iterator<Item = Bins> + '_ {
+    /// `count` bins over `b` on each axis where it has an extent.
+    pub(super) fn over(b: &Aabb, count: usize) -> impl Iterator<Item = Bins> + '_ {
         (0..3)
-            .map(|axis| Bins {
+            .map(move |axis| Bins {
                 axis,
                 lo: b.min[axis],
                 extent: b.max[axis] - b.min[axis],
+                count,
             })
             .filter(|bins| bins.extent > 0.0)
     }
 
     /// The bin of coordinate `x` (the last holds `lo + extent` itself).
     pub(super) fn index(&self, x: f32) -> usize {
-        (((x - self.lo) * (BINS as f32 / self.extent)) as usize).min(BINS - 1)
+        (((x - self.lo) * (self.count as f32 / self.extent)) as usize).min(self.count - 1)
     }
 
     /// Where bin `k` starts.
     pub(super) fn plane(&self, k: usize) -> f32 {
-        self.lo + self.extent * k as f32 / BINS as f32
+        self.lo + self.extent * k as f32 / self.count as f32
     }
 }
 
@@ -101,7 +107,7 @@ pub(super) fn median(mut refs: Vec<Ref>) -> Vec<Ref> {
 /// axis; `None` where every centroid is in one place.
 pub(super) fn object_split(refs: &[Ref]) -> Option<Split> {
     let mut best: Option<Split> = None;
-    for bins in Bins::over(&centroid_bounds(refs)) {
+    for bins in Bins::over(&centroid_bounds(refs), BINS) {
         let mut boxes = [Aabb::empty(); BINS];
         let mut counts = [0u32; BINS];
         for r in refs {
@@ -119,19 +125,20 @@ pub(super) fn object_split(refs: &[Ref]) -> Option<Split> {
 pub(super) fn sweep(
     best: &mut Option<Split>,
     bins: Bins,
-    boxes: &[Aabb; BINS],
-    entry: &[u32; BINS],
-    exit: &[u32; BINS],
+    boxes: &[Aabb],
+    entry: &[u32],
+    exit: &[u32],
 ) {
+    let n = bins.count;
     let mut right = [(Aabb::empty(), 0u32); BINS];
     let (mut rb, mut rc) = (Aabb::empty(), 0);
-    for k in (1..BINS).rev() {
+    for k in (1..n).rev() {
         rb = rb.union(&boxes[k]);
         rc += exit[k];
         right[k] = (rb, rc);
     }
     let (mut lb, mut lc) = (Aabb::empty(), 0);
-    for k in 1..BINS {
+    for k in 1..n {
         lb = lb.union(&boxes[k - 1]);
         lc += entry[k - 1];
         let (rb, rc) = right[k];
