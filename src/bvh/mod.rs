@@ -68,7 +68,7 @@ impl Quality {
 
     /// The build that makes a render of `samples` camera samples (pixels times samples
     /// per pixel, over all its frames) over `prims` primitives fastest from start to end:
-    /// `High` for small scenes, where it costs at most 45 ms, and for renders of at least
+    /// `High` for small scenes, where it costs at most about 50 ms, and for renders of at least
     /// `HIGH_QUALITY_SAMPLES_PER_PRIM` samples per primitive, where the faster tracing
     /// repays the slower build on machines without a GPU (docs/bvh.md has the figures).
     pub fn for_work(prims: usize, samples: u64) -> Quality {
@@ -225,11 +225,11 @@ pub fn build_chunk(count: usize) -> usize {
 pub const BUILD_CHUNK_MIN: usize = 1 << 16;
 pub const BUILD_CHUNK_MAX: usize = 1 << 19;
 
-/// Scenes up to this many primitives always get obvhs' most thorough build: at about 2 us
-/// a primitive it costs at most 45 ms, and it traced balls-4 13% faster on lavapipe
+/// Scenes up to this many primitives always get the high-quality build: at about 2.5 us
+/// a primitive it costs at most about 50 ms, and it traced balls-4 13% faster on lavapipe
 /// (0.80 s against 0.92 s). Larger scenes get it when the render is long enough to repay
-/// it (`Quality::for_work`); the medium build is about 5 times faster to build (mount-9:
-/// 0.29 s against 1.46 s on two cores).
+/// it (`Quality::for_work`); the medium build is 2 to 5 times faster to build (mount-9:
+/// 0.46 s against 1.13 s on two cores, docs/bvh.md).
 pub const THOROUGH_BUILD_MAX_PRIMS: usize = 20_000;
 
 /// obvhs' settings for `quality`, leaves of at most `MAX_LEAF_PRIMS`.
