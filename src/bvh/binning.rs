@@ -125,10 +125,11 @@ pub(super) fn object_split(refs: &[Ref]) -> Option<Split> {
 pub(super) fn sweep(
     best: &mut Option<Split>,
     bins: Bins,
-    boxes: &[Aabb],
-    entry: &[u32],
-    exit: &[u32],
+    boxes: &[Aabb; BINS],
+    entry: &[u32; BINS],
+    exit: &[u32; BINS],
 ) {
+    // The bins in use: `bins.count` of the arrays' `BINS`.
     let n = bins.count;
     let mut right = [(Aabb::empty(), 0u32); BINS];
     let (mut rb, mut rc) = (Aabb::empty(), 0);

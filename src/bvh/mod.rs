@@ -68,9 +68,10 @@ impl Quality {
 
     /// The build that makes a render of `samples` camera samples (pixels times samples
     /// per pixel, over all its frames) over `prims` primitives fastest from start to end:
-    /// `High` for small scenes, where it costs at most about 50 ms, and for renders of at least
-    /// `HIGH_QUALITY_SAMPLES_PER_PRIM` samples per primitive, where the faster tracing
-    /// repays the slower build on machines without a GPU (docs/bvh.md has the figures).
+    /// `High` for small scenes, where it costs at most about 50 ms, and for renders of at
+    /// least `HIGH_QUALITY_SAMPLES_PER_PRIM` samples per primitive, where the faster
+    /// tracing repays the slower build on machines without a GPU (docs/bvh.md has the
+    /// figures).
     pub fn for_work(prims: usize, samples: u64) -> Quality {
         if prims <= THOROUGH_BUILD_MAX_PRIMS
             || samples >= HIGH_QUALITY_SAMPLES_PER_PRIM.saturating_mul(prims as u64)

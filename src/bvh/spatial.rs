@@ -257,13 +257,7 @@ impl Builder<'_> {
                 }
                 boxes[b1] = boxes[b1].union(&rest);
             }
-            sweep(
-                &mut best,
-                bins,
-                &boxes[..count],
-                &entry[..count],
-                &exit[..count],
-            );
+            sweep(&mut best, bins, &boxes, &entry, &exit);
         }
         best
     }
